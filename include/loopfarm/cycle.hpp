@@ -1,0 +1,87 @@
+// The cycle energy: the input joint driven through a full turn (or a range
+// around theta0) in N samples, each sample's stiff-limit equilibrium solved by
+// continuation from the previous one.
+//
+// E_mean, the mean of the sample energies, is the smooth objective of the
+// geometry search; E_max is the paper's peak energy. Their derivatives with
+// respect to the geometry come from the solved multipliers (envelope theorem,
+// cycle_energy_gradient), and the Jacobian of the stacked, stiffness-weighted
+// deformations from implicit differentiation of each sample's KKT system
+// (cycle_deformation_jacobian), for Gauss-Newton on the outer problem.
+#pragma once
+
+#include <vector>
+
+#include "loopfarm/equilibrium.hpp"
+
+namespace loopfarm {
+
+struct CycleOptions {
+  int samples = 32;              // N, at least 2
+  // Input range covered: a full turn (2 pi, the default) samples
+  // theta0 + 2 pi j / N; a smaller range samples [theta0 - range/2,
+  // theta0 + range/2] at N evenly spaced points, walked outward from theta0.
+  double range = 2.0 * 3.14159265358979323846;
+  // A step whose passive angles move by more than this [rad] is refined by
+  // bisection, as is a step whose solve fails.
+  double max_passive_step = 0.5;
+  int max_refinements = 8;       // bisection depth per step
+  bool secant_predictor = true;  // extrapolate the previous two samples
+
+  bool full_turn() const;
+  // Throws std::invalid_argument naming the first invalid option.
+  void validate() const;
+};
+
+enum class SampleStatus {
+  converged,    // solved from the continuation, no refinement needed
+  refined,      // solved after the step was bisected
+  branch_jump,  // solved, but the passive angles jumped even at the finest step
+  failed,       // the equilibrium solve did not converge (energy unreliable)
+};
+const char* to_string(SampleStatus status);
+
+struct CycleSample {
+  double theta_in = 0.0;          // input angle [rad]
+  double energy = 0.0;            // E / (k_a L^2)
+  SampleStatus status = SampleStatus::failed;
+  SolveStatus solve_status = SolveStatus::max_iterations;
+  int iterations = 0;             // Newton iterations, refinement steps included
+  int refinements = 0;            // bisections spent reaching this sample
+  double closure_residual = 0.0;
+  EquilibriumState state;         // angles, deformations, multipliers
+};
+
+struct CycleSummary {
+  double E_mean = 0.0;
+  double E_max = 0.0;
+  int failed_samples = 0;
+  int branch_jumps = 0;
+  int total_iterations = 0;
+  int refinements = 0;
+  double max_closure_residual = 0.0;
+  std::vector<CycleSample> samples;  // in input-angle order
+};
+
+// Drives the loop from `start` (an assembled state at theta0, e.g. from
+// assemble()) through the cycle. `summary` is reused: with the same N it does
+// not allocate. The workspace must belong to `model`.
+void cycle_energy(const LoopModel& model, EquilibriumWorkspace& workspace, double theta0,
+                  const EquilibriumState& start, const CycleOptions& options,
+                  CycleSummary& summary);
+
+// dE_mean / d(a, alpha, d) in GeometryVector order, in the geometry's own units
+// (per unit length, per radian), from each sample's multipliers.
+GeometryVector cycle_energy_gradient(const LoopModel& model, EquilibriumWorkspace& workspace,
+                                     const CycleSummary& summary);
+
+// The residual vector r of the outer least-squares problem, E_mean = 1/2 |r|^2:
+// sample j's deformations weighted by sqrt(stiffness / N), stacked.
+Eigen::VectorXd cycle_weighted_deformations(const LoopModel& model, const CycleSummary& summary);
+
+// d r / d(a, alpha, d): (N * deformation_count) x 3n, by implicit
+// differentiation of every sample's KKT system.
+Eigen::MatrixXd cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& workspace,
+                                           const CycleSummary& summary);
+
+}  // namespace loopfarm

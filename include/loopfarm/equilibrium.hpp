@@ -1,0 +1,172 @@
+// The stiff-limit equilibrium of an elastic loop at one input angle.
+//
+// With springs along each link's length a_i and about its twist alpha_i (the
+// paper's model; optionally along the offsets d_i too), the loop held at input
+// angle theta_in settles where the elastic energy is least. In the stiff limit
+// that is the equality-constrained least-norm problem (DESIGN.md)
+//
+//     E(theta_in) = min over passive angles q and deformations delta of
+//                   1/2 delta^T K delta   subject to   closure(theta_in, q, p + delta) = 0,
+//
+// solved exactly (no penalty stiffness to tune). Everything is dimensionless:
+// lengths are measured in the loop's length scale L (see length_scale), so a
+// length deformation enters as delta_a / L with stiffness 1, and a twist
+// deformation (radians) with stiffness k_t / (k_a L^2) = torsion_stiffness_ratio.
+// The energy is E / (k_a L^2).
+//
+// The solver is a primal-dual Newton (SQP) method on the KKT system with the
+// exact constraint curvature, made robust where the closure Jacobian loses
+// rank (flat-folded poses) by a stabilised, regularised KKT system and an
+// augmented-Lagrangian merit line search. See src/equilibrium.cpp.
+#pragma once
+
+#include <string>
+
+#include "loopfarm/loop.hpp"
+#include "loopfarm/types.hpp"
+
+namespace loopfarm {
+
+// Which geometric parameters are springy.
+enum class Compliance {
+  paper,  // a_i and alpha_i: the paper's axial and torsion springs (default)
+  full,   // a_i, alpha_i and d_i
+};
+const char* to_string(Compliance compliance);
+// Parses "paper" or "full"; throws std::invalid_argument otherwise.
+Compliance compliance_from_string(const std::string& text);
+
+enum class SolveStatus {
+  converged,           // KKT conditions met to the tolerances
+  max_iterations,      // iteration limit reached first
+  line_search_failed,  // no step decreased the merit function
+  singular,            // the KKT system could not be factorised even when regularised
+  non_finite,          // a NaN or infinity appeared (bad input or overflow)
+};
+const char* to_string(SolveStatus status);
+
+struct EquilibriumOptions {
+  Compliance compliance = Compliance::paper;
+  // k_t / (k_a L^2): torsion stiffness relative to the axial one.
+  double torsion_stiffness_ratio = 1.0;
+  // The driven joint (0-based); every other joint is passive.
+  int input_joint = 0;
+  // Converged when the closure residual (rotation [rad], translation / L) has
+  // max-norm <= closure_tolerance and the gradient of the Lagrangian has
+  // max-norm <= stationarity_tolerance.
+  double closure_tolerance = 1e-13;
+  double stationarity_tolerance = 1e-11;
+  int max_iterations = 100;
+
+  // Throws std::invalid_argument naming the first invalid option.
+  void validate() const;
+};
+
+// The constant part of the problem: the geometry, normalised to L = 1, and the
+// layout of the unknowns. Built once per geometry; const afterwards.
+//
+// Deformations are ordered by kind: (delta a_1..a_n, delta alpha_1..alpha_n)
+// and, for Compliance::full, then (delta d_1..d_n). Length deformations are in
+// units of L, twist deformations in radians.
+class LoopModel {
+ public:
+  LoopModel(const LoopGeometry& geometry, const EquilibriumOptions& options = {});
+
+  const LoopGeometry& geometry() const { return geometry_; }
+  // The geometry with every length divided by length_scale().
+  const LoopGeometry& normalized_geometry() const { return normalized_; }
+  double length_scale() const { return length_scale_; }
+  const EquilibriumOptions& options() const { return options_; }
+  int joints() const { return geometry_.joints(); }
+  int deformation_count() const { return deformation_count_; }
+  // Unknowns of one solve: n - 1 passive angles plus the deformations.
+  int unknown_count() const { return unknown_count_; }
+
+  // Chain element of unknown u (ascending chain order).
+  int unknown_element(int u) const { return unknown_element_[u]; }
+  // For unknown u: its deformation slot, or -1 for a passive angle.
+  int unknown_deformation(int u) const { return unknown_deformation_[u]; }
+  // For unknown u: the joint whose angle it is, or -1 for a deformation.
+  int unknown_joint(int u) const { return unknown_joint_[u]; }
+  // Chain element deformed by deformation slot k.
+  int deformation_element(int k) const { return deformation_element_[k]; }
+  // Stiffness of deformation slot k (1 for lengths, the torsion ratio for twists).
+  double deformation_stiffness(int k) const { return deformation_stiffness_[k]; }
+  // The unknowns' chain elements as a list (for residual_hessian).
+  std::span<const int> unknown_elements() const {
+    return {unknown_element_.data(), static_cast<size_t>(unknown_count_)};
+  }
+
+ private:
+  LoopGeometry geometry_;
+  LoopGeometry normalized_;
+  double length_scale_ = 1.0;
+  EquilibriumOptions options_;
+  int deformation_count_ = 0;
+  int unknown_count_ = 0;
+  std::array<int, kMaxUnknowns> unknown_element_{};
+  std::array<int, kMaxUnknowns> unknown_deformation_{};
+  std::array<int, kMaxUnknowns> unknown_joint_{};
+  std::array<int, kMaxDeformations> deformation_element_{};
+  std::array<double, kMaxDeformations> deformation_stiffness_{};
+};
+
+// A point of the problem: every joint angle (the input joint's entry is the
+// input angle), the deformations and the closure multipliers. A solve's answer
+// and the next solve's warm start.
+struct EquilibriumState {
+  JointVector theta;
+  DeformationVector deformations;
+  Vector6 multipliers = Vector6::Zero();
+
+  // Angles as given, deformations and multipliers zero.
+  static EquilibriumState at_angles(const LoopModel& model, const JointVector& theta);
+};
+
+struct EquilibriumSummary {
+  SolveStatus status = SolveStatus::max_iterations;
+  int iterations = 0;            // Newton iterations
+  int residual_evaluations = 0;  // evaluations of the loop product
+  double energy = 0.0;           // E / (k_a L^2)
+  double closure_residual = 0.0;  // max-norm of (rotation, translation / L)
+  double stationarity = 0.0;      // max-norm of the Lagrangian gradient
+  double max_regularization = 0.0;  // largest primal regularisation used
+  EquilibriumState state;            // the solution (deformations, angles, multipliers)
+};
+
+// Every buffer a solve needs, allocated once for a model's size.
+struct EquilibriumWorkspace {
+  explicit EquilibriumWorkspace(const LoopModel& model);
+
+  ChainKinematics chain;
+  ChainMatrix chain_hessian;
+  UnknownMatrix hessian;      // Hessian of the Lagrangian (+ augmentation)
+  UnknownMatrix factor;       // its Cholesky factor storage
+  Matrix6U jacobian;          // closure Jacobian with respect to the unknowns
+  Matrix6U solved;            // H^-1 A^T, transposed
+  UnknownVector gradient;     // gradient of the Lagrangian
+  UnknownVector step;
+  UnknownVector scratch;
+  Matrix6 schur;
+  EquilibriumState trial;
+  JointVector theta;          // deformed-geometry buffers
+  LoopGeometry deformed;
+};
+
+// Solves the stiff-limit equilibrium at input angle theta_in from `guess`
+// (whose input-joint angle is ignored). Never throws for a failed solve: the
+// status says what happened. No heap allocation.
+EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& workspace,
+                                     double theta_in, const EquilibriumState& guess);
+
+// The normalised geometry deformed by `deformations`, in `out` (same size).
+void deformed_geometry(const LoopModel& model, const DeformationVector& deformations,
+                       LoopGeometry& out);
+
+// Physical deformation of slot k: length deformations times L, twists in radians.
+double physical_deformation(const LoopModel& model, const DeformationVector& deformations, int k);
+
+// Name of deformation slot k, 1-based as people read it: "a1", "alpha3", "d2".
+std::string deformation_name(const LoopModel& model, int k);
+
+}  // namespace loopfarm

@@ -1,0 +1,335 @@
+#include "loopfarm/cycle.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+namespace loopfarm {
+namespace {
+
+constexpr double kTwoPi = 6.28318530717958647692;
+
+[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(what); }
+
+// Largest change of a passive angle between two states, modulo 2 pi.
+double passive_change(const LoopModel& model, const EquilibriumState& a, const EquilibriumState& b) {
+  double change = 0.0;
+  for (int i = 0; i < model.joints(); ++i) {
+    if (i == model.options().input_joint) continue;
+    change = std::max(change, std::abs(wrap_angle(a.theta[i] - b.theta[i])));
+  }
+  return change;
+}
+
+// Secant prediction: prev + ratio * (prev - before), angles differenced modulo 2 pi.
+void extrapolate(const EquilibriumState& prev, const EquilibriumState& before, double ratio,
+                 EquilibriumState& out) {
+  out.theta = prev.theta;
+  for (int i = 0; i < prev.theta.size(); ++i) {
+    out.theta[i] += ratio * wrap_angle(prev.theta[i] - before.theta[i]);
+  }
+  out.deformations = prev.deformations + ratio * (prev.deformations - before.deformations);
+  out.multipliers = prev.multipliers + ratio * (prev.multipliers - before.multipliers);
+}
+
+// Continuation from one solved input angle to the next, with bisection where a
+// solve fails or the passive angles move too far for one step.
+class Stepper {
+ public:
+  Stepper(const LoopModel& model, EquilibriumWorkspace& ws, const CycleOptions& options)
+      : model_(model), ws_(ws), options_(options) {}
+
+  struct Result {
+    EquilibriumSummary solve;
+    SampleStatus status = SampleStatus::failed;
+    int iterations = 0;
+    int refinements = 0;
+  };
+
+  // Steps from `from` (solved at from_theta; `before`, if given, solved at
+  // before_theta, for the secant predictor) to target.
+  Result step(const EquilibriumState& from, double from_theta, const EquilibriumState* before,
+              double before_theta, double target, int depth) const {
+    Result r;
+    EquilibriumState guess = from;
+    const double h = target - from_theta;
+    const double h_prev = from_theta - before_theta;
+    const bool predict = options_.secant_predictor && before != nullptr && h_prev != 0.0 && h * h_prev > 0.0;
+    if (predict) extrapolate(from, *before, h / h_prev, guess);
+    r.solve = solve_equilibrium(model_, ws_, target, guess);
+    r.iterations += r.solve.iterations;
+    if (predict && !acceptable(r.solve, from)) {
+      // The prediction can overshoot near a turning point: retry from `from`.
+      r.solve = solve_equilibrium(model_, ws_, target, from);
+      r.iterations += r.solve.iterations;
+    }
+    if (acceptable(r.solve, from)) {
+      r.status = SampleStatus::converged;
+      return r;
+    }
+    if (depth >= options_.max_refinements) {
+      r.status = r.solve.status == SolveStatus::converged ? SampleStatus::branch_jump : SampleStatus::failed;
+      return r;
+    }
+    // Bisect: reach the midpoint, then the target from there.
+    const double mid = 0.5 * (from_theta + target);
+    Result half = step(from, from_theta, before, before_theta, mid, depth + 1);
+    r.iterations += half.iterations;
+    r.refinements += 1 + half.refinements;
+    if (half.status == SampleStatus::failed) {
+      half.iterations = r.iterations;
+      half.refinements = r.refinements;
+      return half;
+    }
+    Result rest = step(half.solve.state, mid, &from, from_theta, target, depth + 1);
+    rest.iterations += r.iterations;
+    rest.refinements += r.refinements;
+    if (rest.status == SampleStatus::converged) rest.status = SampleStatus::refined;
+    if (half.status == SampleStatus::branch_jump && rest.status != SampleStatus::failed) {
+      rest.status = SampleStatus::branch_jump;
+    }
+    return rest;
+  }
+
+ private:
+  bool acceptable(const EquilibriumSummary& s, const EquilibriumState& from) const {
+    return s.status == SolveStatus::converged && passive_change(model_, s.state, from) <= options_.max_passive_step;
+  }
+
+  const LoopModel& model_;
+  EquilibriumWorkspace& ws_;
+  const CycleOptions& options_;
+};
+
+// d normalised parameter / d parameter: p~ = p / L(p) for lengths, alpha unchanged.
+Eigen::MatrixXd normalization_jacobian(const LoopModel& model) {
+  const LoopGeometry& g = model.geometry();
+  const int n = g.joints();
+  const double L = model.length_scale();
+  const GeometryVector dL = length_scale_gradient(g);
+  Eigen::MatrixXd D = Eigen::MatrixXd::Identity(3 * n, 3 * n);
+  for (int i = 0; i < n; ++i) {
+    D(i, i) = 1.0 / L;
+    D(2 * n + i, 2 * n + i) = 1.0 / L;
+  }
+  for (int j = 0; j < 3 * n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      D(i, j) -= g.a[i] / (L * L) * dL[j];
+      D(2 * n + i, j) -= g.d[i] / (L * L) * dL[j];
+    }
+  }
+  return D;
+}
+
+// Chain element of geometric parameter j in GeometryVector order.
+int parameter_element(int n, int j) {
+  const int joint = j % n;
+  switch (j / n) {
+    case 0: return chain_index(joint, ChainParameter::a);
+    case 1: return chain_index(joint, ChainParameter::alpha);
+    default: return chain_index(joint, ChainParameter::d);
+  }
+}
+
+}  // namespace
+
+bool CycleOptions::full_turn() const { return range >= kTwoPi; }
+
+void CycleOptions::validate() const {
+  if (samples < 2) fail("samples: must be >= 2, got " + std::to_string(samples));
+  if (!(range > 0.0) || !(range <= kTwoPi + 1e-12)) {
+    fail("range: must be in (0, 360] degrees, got " + std::to_string(range * 360.0 / kTwoPi) + " degrees");
+  }
+  if (!(max_passive_step > 0.0) || !std::isfinite(max_passive_step)) {
+    fail("max_passive_step: must be a finite number > 0, got " + std::to_string(max_passive_step));
+  }
+  if (max_refinements < 0 || max_refinements > 30) {
+    fail("max_refinements: must be in [0, 30], got " + std::to_string(max_refinements));
+  }
+}
+
+const char* to_string(SampleStatus status) {
+  switch (status) {
+    case SampleStatus::converged: return "converged";
+    case SampleStatus::refined: return "refined";
+    case SampleStatus::branch_jump: return "branch_jump";
+    case SampleStatus::failed: return "failed";
+  }
+  return "unknown";
+}
+
+void cycle_energy(const LoopModel& model, EquilibriumWorkspace& ws, double theta0, const EquilibriumState& start,
+                  const CycleOptions& options, CycleSummary& summary) {
+  options.validate();
+  const int N = options.samples;
+  summary.samples.resize(static_cast<size_t>(N));
+  const bool full = options.full_turn();
+  for (int j = 0; j < N; ++j) {
+    summary.samples[static_cast<size_t>(j)].theta_in =
+        full ? theta0 + kTwoPi * j / N : theta0 + options.range * (static_cast<double>(j) / (N - 1) - 0.5);
+  }
+
+  const Stepper stepper(model, ws, options);
+  // The anchor: the equilibrium at theta0 itself, from the given start.
+  const EquilibriumSummary anchor = solve_equilibrium(model, ws, theta0, start);
+  summary.total_iterations = 0;
+  summary.refinements = 0;
+
+  auto record = [&](int j, const Stepper::Result& r) {
+    CycleSample& s = summary.samples[static_cast<size_t>(j)];
+    s.energy = r.solve.energy;
+    s.status = r.status;
+    s.solve_status = r.solve.status;
+    s.iterations = r.iterations;
+    s.refinements = r.refinements;
+    s.closure_residual = r.solve.closure_residual;
+    s.state = r.solve.state;
+    summary.total_iterations += r.iterations;
+    summary.refinements += r.refinements;
+  };
+
+  bool anchor_recorded = false;
+  // Walk outward from the anchor: forward over the samples at or after theta0,
+  // then backward over those before it (a partial range only). A failed
+  // sample is skipped over: the walk goes on from the last solved one.
+  for (int direction : {+1, -1}) {
+    EquilibriumState from = anchor.state;
+    EquilibriumState previous;  // the sample before `from`, for the secant predictor
+    double from_theta = theta0;
+    double previous_theta = theta0;
+    bool have_previous = false;
+    const int first = direction > 0 ? 0 : N - 1;
+    for (int j = first; j >= 0 && j < N; j += direction) {
+      const double target = summary.samples[static_cast<size_t>(j)].theta_in;
+      if ((direction > 0) != (target >= theta0)) continue;
+      Stepper::Result r;
+      if (target == theta0) {
+        r.solve = anchor;
+        r.status = anchor.status == SolveStatus::converged ? SampleStatus::converged : SampleStatus::failed;
+        r.iterations = anchor.iterations;
+        anchor_recorded = true;
+        record(j, r);
+        continue;
+      }
+      r = stepper.step(from, from_theta, have_previous ? &previous : nullptr, previous_theta, target, 0);
+      record(j, r);
+      if (r.status == SampleStatus::failed) continue;
+      previous = from;
+      previous_theta = from_theta;
+      have_previous = true;
+      from = r.solve.state;
+      from_theta = target;
+    }
+  }
+
+  if (!anchor_recorded) summary.total_iterations += anchor.iterations;
+
+  summary.E_mean = 0.0;
+  summary.E_max = 0.0;
+  summary.failed_samples = 0;
+  summary.branch_jumps = 0;
+  summary.max_closure_residual = 0.0;
+  for (const CycleSample& s : summary.samples) {
+    summary.E_mean += s.energy / N;
+    summary.E_max = std::max(summary.E_max, s.energy);
+    summary.failed_samples += s.status == SampleStatus::failed;
+    summary.branch_jumps += s.status == SampleStatus::branch_jump;
+    summary.max_closure_residual = std::max(summary.max_closure_residual, s.closure_residual);
+  }
+}
+
+GeometryVector cycle_energy_gradient(const LoopModel& model, EquilibriumWorkspace& ws, const CycleSummary& summary) {
+  const int n = model.joints();
+  const int N = static_cast<int>(summary.samples.size());
+  Eigen::VectorXd normalized_gradient = Eigen::VectorXd::Zero(3 * n);
+  for (const CycleSample& s : summary.samples) {
+    // Envelope theorem: dE/dp~ = lambda^T dc/dp~ at the solution (the energy
+    // itself does not depend on the geometry in normalised units).
+    deformed_geometry(model, s.state.deformations, ws.deformed);
+    compute_chain(ws.deformed, s.state.theta, ws.chain);
+    for (int j = 0; j < 3 * n; ++j) {
+      normalized_gradient[j] += s.state.multipliers.dot(residual_derivative(ws.chain, parameter_element(n, j))) / N;
+    }
+  }
+  const Eigen::VectorXd gradient = normalization_jacobian(model).transpose() * normalized_gradient;
+  return GeometryVector(gradient);
+}
+
+Eigen::VectorXd cycle_weighted_deformations(const LoopModel& model, const CycleSummary& summary) {
+  const int m = model.deformation_count();
+  const int N = static_cast<int>(summary.samples.size());
+  Eigen::VectorXd r(N * m);
+  for (int j = 0; j < N; ++j) {
+    for (int k = 0; k < m; ++k) {
+      r[j * m + k] = std::sqrt(model.deformation_stiffness(k) / N) * summary.samples[static_cast<size_t>(j)].state.deformations[k];
+    }
+  }
+  return r;
+}
+
+Eigen::MatrixXd cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& ws,
+                                           const CycleSummary& summary) {
+  const int n = model.joints();
+  const int m = model.deformation_count();
+  const int nu = model.unknown_count();
+  const int np = 3 * n;
+  const int N = static_cast<int>(summary.samples.size());
+  Eigen::MatrixXd jacobian(N * m, np);
+
+  // Every chain element: unknowns and parameters share elements, so one
+  // Hessian over the whole chain gives both W and the mixed block.
+  std::array<int, kMaxChain> all{};
+  for (int e = 0; e < kElementsPerJoint * n; ++e) all[static_cast<size_t>(e)] = e;
+  const std::span<const int> elements(all.data(), static_cast<size_t>(kElementsPerJoint * n));
+
+  Eigen::MatrixXd W(nu, nu), Lxp(nu, np), A(6, nu), Ap(6, np);
+  for (int j = 0; j < N; ++j) {
+    const CycleSample& s = summary.samples[static_cast<size_t>(j)];
+    deformed_geometry(model, s.state.deformations, ws.deformed);
+    compute_chain(ws.deformed, s.state.theta, ws.chain);
+    residual_hessian(ws.chain, s.state.multipliers, elements, ws.chain_hessian);
+    for (int u = 0; u < nu; ++u) {
+      const int eu = model.unknown_element(u);
+      A.col(u) = residual_derivative(ws.chain, eu);
+      for (int v = 0; v < nu; ++v) W(u, v) = ws.chain_hessian(eu, model.unknown_element(v));
+      const int k = model.unknown_deformation(u);
+      if (k >= 0) W(u, u) += model.deformation_stiffness(k);
+      for (int p = 0; p < np; ++p) Lxp(u, p) = ws.chain_hessian(eu, parameter_element(n, p));
+    }
+    for (int p = 0; p < np; ++p) Ap.col(p) = residual_derivative(ws.chain, parameter_element(n, p));
+
+    // Differentiate the KKT conditions: [W Aᵀ; A 0] [dx; dl] = -[Lxp; Ap].
+    // Solved through H = W + sigma AᵀA (positive definite at a regular
+    // minimum), the right-hand side shifted by sigma Aᵀ Ap to match.
+    double sigma = 1.0;
+    Eigen::LLT<Eigen::MatrixXd> llt;
+    for (int attempt = 0; attempt < 12; ++attempt, sigma *= 10.0) {
+      llt.compute(W + sigma * A.transpose() * A);
+      if (llt.info() == Eigen::Success) break;
+    }
+    const Eigen::MatrixXd Y = llt.solve(A.transpose());
+    const Eigen::MatrixXd Z = llt.solve(-Lxp - sigma * A.transpose() * Ap);
+    // The Schur complement is singular only where the closure Jacobian loses
+    // rank; there the sensitivity is not defined and a pseudo-inverse is used.
+    const Eigen::MatrixXd S = A * Y;
+    const Eigen::MatrixXd rhs = A * Z + Ap;
+    Eigen::MatrixXd dual;
+    Eigen::LLT<Eigen::MatrixXd> schur(S);
+    if (schur.info() == Eigen::Success) {
+      dual = schur.solve(rhs);
+    } else {
+      dual = S.completeOrthogonalDecomposition().solve(rhs);
+    }
+    const Eigen::MatrixXd dx = Z - Y * dual;
+    for (int u = 0; u < nu; ++u) {
+      const int k = model.unknown_deformation(u);
+      if (k >= 0) jacobian.row(j * m + k) = std::sqrt(model.deformation_stiffness(k) / N) * dx.row(u);
+    }
+  }
+  return jacobian * normalization_jacobian(model);
+}
+
+}  // namespace loopfarm

@@ -1,0 +1,375 @@
+#include "loopfarm/equilibrium.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+
+namespace loopfarm {
+namespace {
+
+[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(what); }
+
+// Tuning of the Newton iteration. None of these changes the answer (every
+// fixed point is an exact KKT point); they only decide how fast and how
+// robustly it is reached.
+constexpr double kInitialAugmentation = 1.0;   // sigma: weight of A^T A added to the Hessian
+constexpr double kMaxAugmentation = 1e6;
+constexpr double kMaxRegularization = 1e10;    // rho: primal (Levenberg) regularisation cap
+constexpr double kMinDualRegularization = 1e-14;  // mu: stabilisation of the dual block
+constexpr double kMaxDualRegularization = 1e-2;
+constexpr double kMaxStep = 1.0;               // cap on |dx|_inf [rad, or units of L]
+constexpr double kArmijo = 1e-4;
+constexpr int kMaxBacktracks = 40;
+
+double max_abs(const Vector6& v) { return v.cwiseAbs().maxCoeff(); }
+
+// Loads the residual, the energy and (optionally) the closure Jacobian of
+// `state` into the workspace. Returns the energy.
+double evaluate(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& state,
+                bool with_jacobian) {
+  deformed_geometry(model, state.deformations, ws.deformed);
+  compute_chain(ws.deformed, state.theta, ws.chain);
+  double energy = 0.0;
+  for (int k = 0; k < model.deformation_count(); ++k) {
+    energy += 0.5 * model.deformation_stiffness(k) * state.deformations[k] * state.deformations[k];
+  }
+  if (with_jacobian) {
+    for (int u = 0; u < model.unknown_count(); ++u) {
+      ws.jacobian.col(u) = residual_derivative(ws.chain, model.unknown_element(u));
+    }
+  }
+  return energy;
+}
+
+// Gradient of the Lagrangian f + lambda^T c with respect to the unknowns.
+void lagrangian_gradient(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& s) {
+  ws.gradient.noalias() = ws.jacobian.transpose() * s.multipliers;
+  for (int u = 0; u < model.unknown_count(); ++u) {
+    const int k = model.unknown_deformation(u);
+    if (k >= 0) ws.gradient[u] += model.deformation_stiffness(k) * s.deformations[k];
+  }
+}
+
+// Moves `from` by `scale * step` (unknowns) and `scale * dual` (multipliers) into `to`.
+void take_step(const LoopModel& model, const EquilibriumState& from, const UnknownVector& step,
+               const Vector6& dual, double scale, EquilibriumState& to) {
+  to.theta = from.theta;
+  to.deformations = from.deformations;
+  for (int u = 0; u < model.unknown_count(); ++u) {
+    const int k = model.unknown_deformation(u);
+    if (k >= 0) {
+      to.deformations[k] += scale * step[u];
+    } else {
+      to.theta[model.unknown_joint(u)] += scale * step[u];
+    }
+  }
+  to.multipliers = from.multipliers + scale * dual;
+}
+
+bool finite(const EquilibriumState& s) {
+  return s.theta.allFinite() && s.deformations.allFinite() && s.multipliers.allFinite();
+}
+
+}  // namespace
+
+const char* to_string(Compliance compliance) {
+  switch (compliance) {
+    case Compliance::paper: return "paper";
+    case Compliance::full: return "full";
+  }
+  return "unknown";
+}
+
+Compliance compliance_from_string(const std::string& text) {
+  if (text == "paper") return Compliance::paper;
+  if (text == "full") return Compliance::full;
+  fail("compliance: expected 'paper' or 'full', got '" + text + "'");
+}
+
+const char* to_string(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::converged: return "converged";
+    case SolveStatus::max_iterations: return "max_iterations";
+    case SolveStatus::line_search_failed: return "line_search_failed";
+    case SolveStatus::singular: return "singular";
+    case SolveStatus::non_finite: return "non_finite";
+  }
+  return "unknown";
+}
+
+void EquilibriumOptions::validate() const {
+  if (!(torsion_stiffness_ratio > 0.0) || !std::isfinite(torsion_stiffness_ratio)) {
+    fail("torsion_stiffness_ratio: must be a finite number > 0, got " + std::to_string(torsion_stiffness_ratio));
+  }
+  if (!(closure_tolerance > 0.0) || !std::isfinite(closure_tolerance)) {
+    fail("closure_tolerance: must be a finite number > 0, got " + std::to_string(closure_tolerance));
+  }
+  if (!(stationarity_tolerance > 0.0) || !std::isfinite(stationarity_tolerance)) {
+    fail("stationarity_tolerance: must be a finite number > 0, got " + std::to_string(stationarity_tolerance));
+  }
+  if (max_iterations < 1) fail("max_iterations: must be >= 1, got " + std::to_string(max_iterations));
+}
+
+LoopModel::LoopModel(const LoopGeometry& geometry, const EquilibriumOptions& options)
+    : geometry_(geometry), options_(options) {
+  validate_geometry(geometry);
+  options.validate();
+  const int n = geometry.joints();
+  if (options.input_joint < 0 || options.input_joint >= n) {
+    fail("input_joint: must be in [0, " + std::to_string(n - 1) + "], got " + std::to_string(options.input_joint));
+  }
+  length_scale_ = loopfarm::length_scale(geometry);
+  normalized_ = scaled(geometry, length_scale_);
+
+  // Deformation slots, grouped by kind: a, alpha, then d for the full set.
+  const bool full = options.compliance == Compliance::full;
+  deformation_count_ = (full ? 3 : 2) * n;
+  for (int i = 0; i < n; ++i) {
+    deformation_element_[i] = chain_index(i, ChainParameter::a);
+    deformation_stiffness_[i] = 1.0;
+    deformation_element_[n + i] = chain_index(i, ChainParameter::alpha);
+    deformation_stiffness_[n + i] = options.torsion_stiffness_ratio;
+    if (full) {
+      deformation_element_[2 * n + i] = chain_index(i, ChainParameter::d);
+      deformation_stiffness_[2 * n + i] = 1.0;
+    }
+  }
+  // Unknowns in ascending chain order: the Hessian routine walks the chain.
+  unknown_count_ = 0;
+  for (int e = 0; e < kElementsPerJoint * n; ++e) {
+    const int joint = e / kElementsPerJoint;
+    const auto kind = static_cast<ChainParameter>(e % kElementsPerJoint);
+    int slot = -1;
+    for (int k = 0; k < deformation_count_; ++k) {
+      if (deformation_element_[k] == e) slot = k;
+    }
+    const bool passive_angle = kind == ChainParameter::theta && joint != options.input_joint;
+    if (!passive_angle && slot < 0) continue;
+    unknown_element_[unknown_count_] = e;
+    unknown_deformation_[unknown_count_] = slot;
+    unknown_joint_[unknown_count_] = passive_angle ? joint : -1;
+    ++unknown_count_;
+  }
+}
+
+EquilibriumState EquilibriumState::at_angles(const LoopModel& model, const JointVector& theta) {
+  if (theta.size() != model.joints()) {
+    fail("theta: expected " + std::to_string(model.joints()) + " joint angles, got " + std::to_string(theta.size()));
+  }
+  EquilibriumState s;
+  s.theta = theta;
+  s.deformations = DeformationVector::Zero(model.deformation_count());
+  s.multipliers.setZero();
+  return s;
+}
+
+EquilibriumWorkspace::EquilibriumWorkspace(const LoopModel& model) {
+  const int m = model.unknown_count();
+  chain_hessian.resize(m, m);
+  hessian.resize(m, m);
+  factor.resize(m, m);
+  jacobian.resize(6, m);
+  solved.resize(6, m);
+  gradient.resize(m);
+  step.resize(m);
+  scratch.resize(m);
+  trial = EquilibriumState::at_angles(model, JointVector::Zero(model.joints()));
+  theta = JointVector::Zero(model.joints());
+  deformed = model.normalized_geometry();
+}
+
+void deformed_geometry(const LoopModel& model, const DeformationVector& deformations, LoopGeometry& out) {
+  const LoopGeometry& g = model.normalized_geometry();
+  out.a = g.a;
+  out.alpha = g.alpha;
+  out.d = g.d;
+  for (int k = 0; k < model.deformation_count(); ++k) {
+    const int e = model.deformation_element(k);
+    const int joint = e / kElementsPerJoint;
+    switch (static_cast<ChainParameter>(e % kElementsPerJoint)) {
+      case ChainParameter::a: out.a[joint] += deformations[k]; break;
+      case ChainParameter::alpha: out.alpha[joint] += deformations[k]; break;
+      case ChainParameter::d: out.d[joint] += deformations[k]; break;
+      case ChainParameter::theta: break;
+    }
+  }
+}
+
+double physical_deformation(const LoopModel& model, const DeformationVector& deformations, int k) {
+  const auto kind = static_cast<ChainParameter>(model.deformation_element(k) % kElementsPerJoint);
+  return kind == ChainParameter::alpha ? deformations[k] : deformations[k] * model.length_scale();
+}
+
+std::string deformation_name(const LoopModel& model, int k) {
+  const int e = model.deformation_element(k);
+  const std::string joint = std::to_string(e / kElementsPerJoint + 1);
+  switch (static_cast<ChainParameter>(e % kElementsPerJoint)) {
+    case ChainParameter::a: return "a" + joint;
+    case ChainParameter::alpha: return "alpha" + joint;
+    case ChainParameter::d: return "d" + joint;
+    case ChainParameter::theta: break;
+  }
+  return "theta" + joint;
+}
+
+EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& ws, double theta_in,
+                                     const EquilibriumState& guess) {
+  const int m = model.unknown_count();
+  const EquilibriumOptions& opt = model.options();
+  EquilibriumSummary summary;
+  EquilibriumState& x = summary.state;
+  x.theta = guess.theta;
+  x.deformations = guess.deformations;
+  x.multipliers = guess.multipliers;
+  x.theta[opt.input_joint] = theta_in;
+
+  double sigma = kInitialAugmentation;  // augmentation weight, grows only when needed
+  double rho_last = 0.0;                // last primal regularisation that worked
+  double merit_weight = 0.0;            // nu of the merit function, nondecreasing
+
+  double energy = evaluate(model, ws, x, true);
+  ++summary.residual_evaluations;
+  Eigen::LLT<UnknownMatrix> llt(m);
+  Eigen::LLT<Matrix6> schur_llt;
+
+  for (;;) {
+    const Vector6 c = ws.chain.residual;
+    lagrangian_gradient(model, ws, x);
+    summary.energy = energy;
+    summary.closure_residual = max_abs(c);
+    summary.stationarity = m > 0 ? ws.gradient.cwiseAbs().maxCoeff() : 0.0;
+    if (!std::isfinite(energy) || !c.allFinite() || !std::isfinite(summary.stationarity) || !finite(x)) {
+      summary.status = SolveStatus::non_finite;
+      break;
+    }
+    if (summary.closure_residual <= opt.closure_tolerance && summary.stationarity <= opt.stationarity_tolerance) {
+      summary.status = SolveStatus::converged;
+      break;
+    }
+    if (summary.iterations >= opt.max_iterations) {
+      summary.status = SolveStatus::max_iterations;
+      break;
+    }
+    ++summary.iterations;
+
+    // Hessian of the Lagrangian: constraint curvature weighted by the
+    // multipliers, plus the springs' stiffness on the deformations.
+    residual_hessian(ws.chain, x.multipliers, model.unknown_elements(), ws.chain_hessian);
+    const double kkt_residual = std::max(summary.closure_residual, summary.stationarity);
+    // Stabilised SQP: a dual regularisation proportional to the KKT residual
+    // keeps the step defined where the closure Jacobian loses rank, and
+    // vanishes at the solution so that convergence stays quadratic.
+    const double mu = std::clamp(kkt_residual, kMinDualRegularization, kMaxDualRegularization);
+
+    // Solve [H Aᵀ; A -mu I] [dx; dl] = -[g; c] through H = W + sigma AᵀA + rho I.
+    // Adding sigma AᵀA does not move the solution of the system's fixed point;
+    // it makes H positive definite wherever W is so on the null space of A
+    // (the second-order condition), and Cholesky then certifies the inertia.
+    // Where even that fails (far from a minimum), rho turns the step into a
+    // regularised descent step.
+    double rho = 0.0;
+    bool factored = false;
+    for (int attempt = 0; attempt < 60 && !factored; ++attempt) {
+      ws.hessian = ws.chain_hessian;
+      for (int u = 0; u < m; ++u) {
+        const int k = model.unknown_deformation(u);
+        if (k >= 0) ws.hessian(u, u) += model.deformation_stiffness(k);
+      }
+      ws.hessian.noalias() += sigma * ws.jacobian.transpose() * ws.jacobian;
+      ws.hessian.diagonal().array() += rho;
+      llt.compute(ws.hessian);
+      if (llt.info() == Eigen::Success) {
+        factored = true;
+        break;
+      }
+      if (sigma < kMaxAugmentation) {
+        sigma *= 10.0;
+      } else {
+        rho = rho == 0.0 ? (rho_last > 0.0 ? std::max(1e-10, rho_last / 4.0) : 1e-8) : rho * 10.0;
+        if (rho > kMaxRegularization) break;
+      }
+    }
+    if (!factored) {
+      summary.status = SolveStatus::singular;
+      break;
+    }
+    rho_last = rho;
+    summary.max_regularization = std::max(summary.max_regularization, rho);
+
+    ws.solved = llt.solve(ws.jacobian.transpose()).transpose();  // (H^-1 Aᵀ)ᵀ
+    ws.schur.noalias() = ws.jacobian * ws.solved.transpose();
+    ws.schur.diagonal().array() += mu;
+    schur_llt.compute(ws.schur);
+    if (schur_llt.info() != Eigen::Success) {
+      summary.status = SolveStatus::singular;
+      break;
+    }
+    ws.scratch = llt.solve(ws.gradient);  // H^-1 g
+    const Vector6 dual = schur_llt.solve(c - ws.jacobian * ws.scratch);
+    ws.step.noalias() = -ws.scratch - ws.solved.transpose() * dual;
+    if (!ws.step.allFinite() || !dual.allFinite()) {
+      summary.status = SolveStatus::non_finite;
+      break;
+    }
+
+    // Merit: augmented Lagrangian f + l+ᵀc + nu/2 |c|^2 with the new
+    // multipliers l+ = l + dl; nu grows until the step is a descent direction.
+    const Vector6 lambda_plus = x.multipliers + dual;
+    Vector6 jacobian_step = ws.jacobian * ws.step;
+    double energy_slope = 0.0;
+    for (int u = 0; u < m; ++u) {
+      const int k = model.unknown_deformation(u);
+      if (k >= 0) energy_slope += model.deformation_stiffness(k) * x.deformations[k] * ws.step[u];
+    }
+    const double slope0 = energy_slope + lambda_plus.dot(jacobian_step);
+    const double slope1 = c.dot(jacobian_step);
+    const double curvature = ws.step.dot(ws.hessian * ws.step);
+    merit_weight = std::max(merit_weight, sigma);
+    if (slope0 + merit_weight * slope1 > -0.1 * curvature && slope1 < 0.0) {
+      merit_weight = std::max(merit_weight, (slope0 + 0.1 * curvature) / -slope1 * 2.0);
+    }
+    const double slope = slope0 + merit_weight * slope1;
+    const double merit0 = energy + lambda_plus.dot(c) + 0.5 * merit_weight * c.squaredNorm();
+
+    // Cap the step: a Newton step of more than about a radian only happens far
+    // from the solution, where its length means nothing.
+    const double step_norm = ws.step.cwiseAbs().maxCoeff();
+    double alpha = step_norm > kMaxStep ? kMaxStep / step_norm : 1.0;
+    bool accepted = false;
+    for (int backtrack = 0; backtrack < kMaxBacktracks; ++backtrack) {
+      take_step(model, x, ws.step, dual, alpha, ws.trial);
+      const double trial_energy = evaluate(model, ws, ws.trial, false);
+      ++summary.residual_evaluations;
+      const Vector6& tc = ws.chain.residual;
+      const double merit = trial_energy + lambda_plus.dot(tc) + 0.5 * merit_weight * tc.squaredNorm();
+      if (std::isfinite(merit) && (merit <= merit0 + kArmijo * alpha * std::min(slope, 0.0) ||
+                                   (slope >= 0.0 && merit <= merit0))) {
+        accepted = true;
+        energy = trial_energy;
+        break;
+      }
+      alpha *= 0.5;
+    }
+    if (!accepted) {
+      // Restore the chain at x, then stop: no step along this direction helps.
+      energy = evaluate(model, ws, x, true);
+      ++summary.residual_evaluations;
+      lagrangian_gradient(model, ws, x);
+      summary.energy = energy;
+      summary.status = SolveStatus::line_search_failed;
+      break;
+    }
+    std::swap(x, ws.trial);
+    // The accepted trial point's chain is already in the workspace: only its
+    // Jacobian columns are new.
+    for (int u = 0; u < m; ++u) ws.jacobian.col(u) = residual_derivative(ws.chain, model.unknown_element(u));
+  }
+
+  for (int i = 0; i < model.joints(); ++i) x.theta[i] = wrap_angle(x.theta[i]);
+  x.theta[opt.input_joint] = theta_in;
+  return summary;
+}
+
+}  // namespace loopfarm

@@ -1,0 +1,311 @@
+#include "loopfarm/loop.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace loopfarm {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(what); }
+
+JointVector from_span(std::span<const double> values, double factor) {
+  JointVector out(static_cast<Eigen::Index>(values.size()));
+  for (size_t i = 0; i < values.size(); ++i) out[static_cast<Eigen::Index>(i)] = values[i] * factor;
+  return out;
+}
+
+// beta(t) = 1/t^2 - (1 + cos t) / (2 t sin t), the coefficient of phi^2 in the
+// inverse left Jacobian of SO(3), and beta'(t)/t. Series near 0, where the
+// closed forms cancel catastrophically.
+void log_jacobian_coefficients(double t, double& beta, double& dbeta_over_t) {
+  if (t < 0.1) {
+    const double t2 = t * t;
+    beta = 1.0 / 12.0 + t2 * (1.0 / 720.0 + t2 * (1.0 / 30240.0 + t2 * (1.0 / 1209600.0)));
+    dbeta_over_t = 1.0 / 360.0 + t2 * (1.0 / 7560.0 + t2 * (1.0 / 201600.0 + t2 * (1.0 / 5987520.0)));
+    return;
+  }
+  const double half = 0.5 * t;
+  const double cot_half = std::cos(half) / std::sin(half);
+  const double csc2_half = 1.0 / (std::sin(half) * std::sin(half));
+  beta = 1.0 / (t * t) - cot_half / (2.0 * t);
+  dbeta_over_t = -2.0 / (t * t * t * t) + csc2_half / (4.0 * t * t) + cot_half / (2.0 * t * t * t);
+}
+
+Matrix3 skew(const Vector3& w) {
+  Matrix3 m;
+  m << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
+  return m;
+}
+
+}  // namespace
+
+LoopGeometry LoopGeometry::from_degrees(std::span<const double> a, std::span<const double> alpha_deg,
+                                        std::span<const double> d) {
+  LoopGeometry g;
+  if (a.size() > static_cast<size_t>(kMaxJoints) || alpha_deg.size() > static_cast<size_t>(kMaxJoints) ||
+      d.size() > static_cast<size_t>(kMaxJoints)) {
+    fail("a loop has at most " + std::to_string(kMaxJoints) + " joints");
+  }
+  g.a = from_span(a, 1.0);
+  g.alpha = from_span(alpha_deg, kPi / 180.0);
+  g.d = from_span(d, 1.0);
+  return g;
+}
+
+void validate_geometry(const LoopGeometry& g) {
+  const int n = g.joints();
+  if (n < kMinJoints || n > kMaxJoints) {
+    fail("a: a loop needs " + std::to_string(kMinJoints) + " to " + std::to_string(kMaxJoints) +
+         " joints, got " + std::to_string(n));
+  }
+  if (g.alpha.size() != n) fail("alpha: expected " + std::to_string(n) + " values, got " + std::to_string(g.alpha.size()));
+  if (g.d.size() != n) fail("d: expected " + std::to_string(n) + " values, got " + std::to_string(g.d.size()));
+  for (int i = 0; i < n; ++i) {
+    const std::string k = std::to_string(i + 1);
+    if (!std::isfinite(g.a[i])) fail("a" + k + ": not a finite number");
+    if (g.a[i] < 0.0) fail("a" + k + ": a link length must be >= 0, got " + std::to_string(g.a[i]));
+    if (!std::isfinite(g.alpha[i])) fail("alpha" + k + ": not a finite number");
+    if (!std::isfinite(g.d[i])) fail("d" + k + ": not a finite number");
+  }
+}
+
+double length_scale(const LoopGeometry& g) {
+  const double mean_square = (g.a.squaredNorm() + g.d.squaredNorm()) / g.joints();
+  return mean_square > 0.0 ? std::sqrt(mean_square) : 1.0;
+}
+
+GeometryVector length_scale_gradient(const LoopGeometry& g) {
+  const int n = g.joints();
+  GeometryVector grad = GeometryVector::Zero(3 * n);
+  const double mean_square = (g.a.squaredNorm() + g.d.squaredNorm()) / n;
+  if (mean_square <= 0.0) return grad;  // L is the constant 1 there
+  const double L = std::sqrt(mean_square);
+  // dL/da_i = a_i / (n L), likewise for d_i.
+  grad.segment(0, n) = g.a / (n * L);
+  grad.segment(2 * n, n) = g.d / (n * L);
+  return grad;
+}
+
+LoopGeometry scaled(const LoopGeometry& g, double scale) {
+  LoopGeometry out = g;
+  out.a /= scale;
+  out.d /= scale;
+  return out;
+}
+
+LoopGeometry relabelled(const LoopGeometry& g, int shift) {
+  const int n = g.joints();
+  LoopGeometry out = g;
+  for (int k = 0; k < n; ++k) {
+    const int old = ((k + shift) % n + n) % n;
+    out.a[k] = g.a[old];
+    out.alpha[k] = g.alpha[old];
+    out.d[k] = g.d[old];
+  }
+  return out;
+}
+
+JointVector relabelled_angles(const JointVector& theta, int shift) {
+  const int n = static_cast<int>(theta.size());
+  JointVector out(n);
+  for (int k = 0; k < n; ++k) out[k] = theta[((k + shift) % n + n) % n];
+  return out;
+}
+
+LoopGeometry reversed(const LoopGeometry& g) {
+  // Inverting T_1...T_n = I and conjugating by Rz(pi) turns every factor
+  // Rx(-alpha) Tx(-a) Tz(-d) Rz(-theta) into Rx(alpha) Tx(a) Tz(-d) Rz(-theta);
+  // regrouping the product cyclically gives a DH chain over the joints in
+  // reverse order, where the link after old joint i is old link i - 1.
+  const int n = g.joints();
+  LoopGeometry out = g;
+  for (int k = 0; k < n; ++k) {
+    const int joint = n - 1 - k;
+    const int link = ((n - 2 - k) % n + n) % n;
+    out.d[k] = -g.d[joint];
+    out.a[k] = g.a[link];
+    out.alpha[k] = g.alpha[link];
+  }
+  return out;
+}
+
+JointVector reversed_angles(const JointVector& theta) {
+  const int n = static_cast<int>(theta.size());
+  JointVector out(n);
+  for (int k = 0; k < n; ++k) out[k] = -theta[n - 1 - k];
+  return out;
+}
+
+Eigen::Isometry3d joint_transform(double theta, double d, double a, double alpha) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.rotate(Eigen::AngleAxisd(theta, Vector3::UnitZ()));
+  t.translate(Vector3(a, 0.0, d));  // Tz(d) Tx(a) commute
+  t.rotate(Eigen::AngleAxisd(alpha, Vector3::UnitX()));
+  return t;
+}
+
+Eigen::Isometry3d forward_transform(const LoopGeometry& g, const JointVector& theta, int count) {
+  if (count < 0) count = g.joints();
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < count; ++i) t = t * joint_transform(theta[i], g.d[i], g.a[i], g.alpha[i]);
+  return t;
+}
+
+Vector3 so3_log(const Matrix3& R) {
+  const double cos_angle = std::clamp(0.5 * (R.trace() - 1.0), -1.0, 1.0);
+  const Vector3 axis_sin(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));  // 2 sin(t) u
+  const double sin_angle = 0.5 * axis_sin.norm();
+  const double angle = std::atan2(sin_angle, cos_angle);
+  if (angle < 1e-6) {
+    // t / (2 sin t) = 1/2 + t^2/12 + ...
+    return (0.5 + angle * angle / 12.0) * axis_sin;
+  }
+  if (angle < kPi - 1e-4) return (angle / (2.0 * sin_angle)) * axis_sin;
+  // Near pi the antisymmetric part vanishes: take the axis from the symmetric
+  // part, R + R^T = 2 cos t I + 2 (1 - cos t) u u^T, then its sign from axis_sin.
+  const Matrix3 B = 0.5 * (R + R.transpose()) - cos_angle * Matrix3::Identity();
+  int k = 0;
+  B.diagonal().maxCoeff(&k);
+  Vector3 u = B.col(k) / std::sqrt(std::max(B(k, k), 1e-300));
+  u.normalize();
+  if (u.dot(axis_sin) < 0.0) u = -u;
+  return angle * u;
+}
+
+double wrap_angle(double angle) {
+  double w = std::remainder(angle, 2.0 * kPi);  // in [-pi, pi]
+  if (w <= -kPi) w += 2.0 * kPi;
+  return w;
+}
+
+void compute_chain(const LoopGeometry& g, const JointVector& theta, ChainKinematics& out) {
+  const int n = g.joints();
+  out.elements = kElementsPerJoint * n;
+  Matrix3 R = Matrix3::Identity();
+  Vector3 p = Vector3::Zero();
+  for (int i = 0; i < n; ++i) {
+    const int e = kElementsPerJoint * i;
+    // Rz(theta_i): rotation about the current z axis through the current origin.
+    out.omega[e] = R.col(2);
+    out.v[e] = p.cross(out.omega[e]);
+    const double ct = std::cos(theta[i]), st = std::sin(theta[i]);
+    const Vector3 x = ct * R.col(0) + st * R.col(1);
+    const Vector3 y = -st * R.col(0) + ct * R.col(1);
+    R.col(0) = x;
+    R.col(1) = y;
+    // Tz(d_i) then Tx(a_i): translations along the current z and x axes.
+    out.omega[e + 1].setZero();
+    out.v[e + 1] = R.col(2);
+    p += g.d[i] * R.col(2);
+    out.omega[e + 2].setZero();
+    out.v[e + 2] = R.col(0);
+    p += g.a[i] * R.col(0);
+    // Rx(alpha_i): rotation about the current x axis through the current origin.
+    out.omega[e + 3] = R.col(0);
+    out.v[e + 3] = p.cross(out.omega[e + 3]);
+    const double ca = std::cos(g.alpha[i]), sa = std::sin(g.alpha[i]);
+    const Vector3 y2 = ca * R.col(1) + sa * R.col(2);
+    const Vector3 z2 = -sa * R.col(1) + ca * R.col(2);
+    R.col(1) = y2;
+    R.col(2) = z2;
+  }
+  out.rotation = R;
+  out.position = p;
+  out.phi = so3_log(R);
+  // Inverse left Jacobian: J^-1(phi) = I - phi^/2 + beta(|phi|) phi^2.
+  double beta = 0.0, dbeta_over_t = 0.0;
+  log_jacobian_coefficients(out.phi.norm(), beta, dbeta_over_t);
+  const Matrix3 phi_hat = skew(out.phi);
+  out.log_jacobian = Matrix3::Identity() - 0.5 * phi_hat + beta * phi_hat * phi_hat;
+  out.residual.head<3>() = out.phi;
+  out.residual.tail<3>() = p;
+}
+
+Vector6 residual_derivative(const ChainKinematics& c, int k) {
+  // A change ds of element k moves the product by exp(ds * xi_k^) on the left:
+  // dR = omega^ R, dp = omega x p + v; d log R = J_l^-1(phi) omega.
+  Vector6 col;
+  col.head<3>().noalias() = c.log_jacobian * c.omega[k];
+  col.tail<3>() = c.omega[k].cross(c.position) + c.v[k];
+  return col;
+}
+
+void residual_hessian(const ChainKinematics& c, const Vector6& lambda, std::span<const int> elements,
+                      ChainMatrix& out) {
+  // For chain elements k <= l (the screw of l depends on s_k through the
+  // bracket d xi_l / d s_k = [xi_k, xi_l]):
+  //   d2 phi / ds_k ds_l = M_{omega_l} u_k + J^-1 (omega_k x omega_l),  u_k = J^-1 omega_k,
+  //   d2 p   / ds_k ds_l = omega_k x (omega_l x p + v_l),
+  // where M_w = d(J^-1(phi) w)/d phi = w^/2 + (beta'/t) g_w phi^T + beta (phi w^T + (phi.w) I - 2 w phi^T)
+  // and g_w = phi x (phi x w). Contracted with lambda = (l_w, l_v) every term
+  // is a handful of dot products of per-element vectors precomputed below.
+  const int m = static_cast<int>(elements.size());
+  out.resize(m, m);
+  const Vector3 lw = lambda.head<3>();
+  const Vector3 lv = lambda.tail<3>();
+  const Vector3& phi = c.phi;
+  const double t = phi.norm();
+  double beta = 0.0, dbeta_over_t = 0.0;
+  log_jacobian_coefficients(t, beta, dbeta_over_t);
+  const Vector3 mu = c.log_jacobian.transpose() * lw;
+  const double lw_phi = lw.dot(phi);
+
+  // Per-element precomputation.
+  std::array<Vector3, kMaxChain> u, lw_cross_w, w_cross_mu, trans_cross_lv;
+  std::array<double, kMaxChain> phi_u, lw_u, phi_w, lw_w, lw_g;
+  for (int i = 0; i < m; ++i) {
+    const int e = elements[static_cast<size_t>(i)];
+    const Vector3& w = c.omega[e];
+    u[i] = c.log_jacobian * w;
+    phi_u[i] = phi.dot(u[i]);
+    lw_u[i] = lw.dot(u[i]);
+    phi_w[i] = phi.dot(w);
+    lw_w[i] = lw.dot(w);
+    lw_g[i] = lw_phi * phi_w[i] - t * t * lw_w[i];
+    lw_cross_w[i] = lw.cross(w);
+    w_cross_mu[i] = w.cross(mu);
+    trans_cross_lv[i] = (w.cross(c.position) + c.v[e]).cross(lv);
+  }
+  for (int j = 0; j < m; ++j) {
+    const Vector3& wl = c.omega[elements[static_cast<size_t>(j)]];
+    for (int i = 0; i <= j; ++i) {
+      const Vector3& wk = c.omega[elements[static_cast<size_t>(i)]];
+      // l_w . M_{w_l} u_k
+      double h = 0.5 * u[i].dot(lw_cross_w[j]) + dbeta_over_t * phi_u[i] * lw_g[j] +
+                 beta * (lw_phi * wl.dot(u[i]) + phi_w[j] * lw_u[i] - 2.0 * lw_w[j] * phi_u[i]);
+      // l_w . J^-1 (w_k x w_l) = w_k . (w_l x mu), and l_v . (w_k x t_l) = w_k . (t_l x l_v).
+      h += wk.dot(w_cross_mu[j]) + wk.dot(trans_cross_lv[j]);
+      out(i, j) = h;
+      out(j, i) = h;
+    }
+  }
+}
+
+void closure_jacobians(const LoopGeometry& g, const JointVector& theta, ClosureJacobians& out) {
+  ChainKinematics chain;
+  compute_chain(g, theta, chain);
+  const int n = g.joints();
+  out.theta.resize(6, n);
+  out.a.resize(6, n);
+  out.alpha.resize(6, n);
+  out.d.resize(6, n);
+  for (int i = 0; i < n; ++i) {
+    out.theta.col(i) = residual_derivative(chain, chain_index(i, ChainParameter::theta));
+    out.d.col(i) = residual_derivative(chain, chain_index(i, ChainParameter::d));
+    out.a.col(i) = residual_derivative(chain, chain_index(i, ChainParameter::a));
+    out.alpha.col(i) = residual_derivative(chain, chain_index(i, ChainParameter::alpha));
+  }
+}
+
+Vector6 closure_residual(const LoopGeometry& g, const JointVector& theta) {
+  const Eigen::Isometry3d t = forward_transform(g, theta);
+  Vector6 r;
+  r.head<3>() = so3_log(t.rotation());
+  r.tail<3>() = t.translation();
+  return r;
+}
+
+}  // namespace loopfarm
