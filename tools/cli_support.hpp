@@ -1,0 +1,118 @@
+// Pieces every loopfarm subcommand shares: the error kinds that decide the
+// exit code, strict parsing of numbers and comma-separated lists, number
+// formatting for CSV and JSON, and output files that appear only when the
+// whole command succeeded.
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace loopfarm::cli {
+
+// Exit codes: results were produced; something unexpected went wrong (or the
+// environment lacks a tool); the user's input was rejected.
+inline constexpr int kExitSuccess = 0;
+inline constexpr int kExitFailure = 1;
+inline constexpr int kExitUsage = 2;
+
+// Bad input: an option value, a geometry file, an output path. `where` names
+// the flag ("--a") or the file position ("geom.toml:3 key \"a\"") so the user
+// can find it; the message is "where: what". Exit code 2.
+class UsageError : public std::runtime_error {
+ public:
+  UsageError(const std::string& where, const std::string& what) : std::runtime_error(where + ": " + what) {}
+};
+
+// The input was fine but something the command relies on is missing or broke
+// (gnuplot not installed, gnuplot failed). Exit code 1.
+class EnvironmentError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// `text` in double quotes with control characters escaped, for messages that
+// quote what the user typed.
+std::string quote_text(std::string_view text);
+
+// Messages must stay on one line: newlines and tabs become spaces.
+std::string one_line(std::string_view text);
+
+// One finite decimal number: optional sign, digits, optional fraction and
+// exponent, nothing else (no spaces, no "nan", no "inf", no hex).
+double parse_number(std::string_view text, const std::string& where);
+
+// A whole decimal integer, optional leading '-', nothing else.
+long long parse_integer(std::string_view text, const std::string& where);
+
+// Comma-separated finite numbers ("2,4,2,4"). Rejects an empty list, empty
+// elements ("2,,4", "2,"), junk ("2,x", "4abc"), NaN and infinities.
+std::vector<double> parse_number_list(std::string_view text, const std::string& where);
+
+// %.17g: enough digits that the double reads back exactly.
+std::string format_double(double value);
+
+// A JSON number (%.17g), or null when the value is NaN or infinite, since JSON
+// has no tokens for those.
+std::string json_number(double value);
+
+// A JSON string literal with the required escapes.
+std::string json_string(std::string_view text);
+
+// An output file that is written in full or not at all. The constructor
+// creates a temporary file next to the target, which both proves the target
+// can be written before any work is done and lets commit() replace the target
+// in one rename, so a command that fails half-way leaves a previous file at
+// the target untouched. The destructor removes the temporary file unless it
+// was committed.
+class PendingOutput {
+ public:
+  // `flag` names the option the path came from, for error messages.
+  PendingOutput(std::filesystem::path target, std::string flag);
+  ~PendingOutput();
+  PendingOutput(const PendingOutput&) = delete;
+  PendingOutput& operator=(const PendingOutput&) = delete;
+
+  const std::filesystem::path& target() const { return target_; }
+  const std::filesystem::path& temporary() const { return temporary_; }
+  // The open temporary file, for writing; nullptr after close().
+  std::FILE* stream() const { return stream_; }
+
+  // Flushes and closes the stream (a program such as gnuplot may then write
+  // the temporary file itself). Throws UsageError if the data could not be
+  // written (disk full, I/O error).
+  void close();
+  // Closes if needed and renames the temporary file onto the target.
+  void commit();
+
+ private:
+  std::filesystem::path target_;
+  std::string flag_;
+  std::filesystem::path temporary_;
+  std::FILE* stream_ = nullptr;
+  bool committed_ = false;
+};
+
+// A temporary file in the system's temporary directory, removed when the
+// object goes away (gnuplot's data and script).
+class ScratchFile {
+ public:
+  explicit ScratchFile(const std::string& suffix);
+  ~ScratchFile();
+  ScratchFile(const ScratchFile&) = delete;
+  ScratchFile& operator=(const ScratchFile&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+  std::FILE* stream() const { return stream_; }
+  // Flushes and closes; throws EnvironmentError on a write error.
+  void close();
+
+ private:
+  std::filesystem::path path_;
+  std::FILE* stream_ = nullptr;
+};
+
+}  // namespace loopfarm::cli

@@ -1,0 +1,367 @@
+#include "energy_command.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cli_support.hpp"
+#include "geometry_input.hpp"
+#include "loopfarm/assembly.hpp"
+#include "loopfarm/cycle.hpp"
+#include "loopfarm/equilibrium.hpp"
+#include "loopfarm/loop.hpp"
+#include "plot.hpp"
+
+namespace loopfarm::cli {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegreesPerRadian = 180.0 / kPi;
+// A cycle keeps every sample's state in memory; beyond this a curve has no
+// more to show and a typo (an extra zero or three) would only eat memory.
+constexpr long long kMaxSamples = 100000;
+
+// The option texts exactly as given; everything is parsed and checked by
+// read_request so that every message has the same form.
+struct EnergyArguments {
+  std::string a, alpha_deg, d, geometry, theta_deg;
+  std::string theta0_deg = "0";
+  std::string samples = "32";
+  std::string compliance = "paper";
+  std::string torsion_ratio = "1";
+  std::string range_deg = "360";
+  std::string csv, plot;
+  bool json = false;
+  bool log = false;
+
+  CLI::Option* a_option = nullptr;
+  CLI::Option* alpha_option = nullptr;
+  CLI::Option* d_option = nullptr;
+  CLI::Option* geometry_option = nullptr;
+  CLI::Option* theta_option = nullptr;
+  CLI::Option* csv_option = nullptr;
+  CLI::Option* plot_option = nullptr;
+};
+
+// The checked request.
+struct EnergyRequest {
+  GeometryInput input;
+  LoopGeometry geometry;
+  std::optional<JointVector> theta;  // initial joint angles [rad], if given
+  double theta0_deg = 0.0;
+  int samples = 32;
+  Compliance compliance = Compliance::paper;
+  double torsion_ratio = 1.0;
+  double range_deg = 360.0;
+  bool json = false;
+  bool log = false;
+};
+
+bool given(const CLI::Option* option) { return option != nullptr && option->count() > 0; }
+
+EnergyRequest read_request(const EnergyArguments& args) {
+  EnergyRequest request;
+  if (given(args.geometry_option)) {
+    request.input = geometry_from_toml(args.geometry);
+  } else {
+    if (!given(args.a_option)) {
+      throw UsageError("--a", "missing: give the link lengths with --a and the twists with --alpha-deg "
+                              "(e.g. --a 2,4,2,4 --alpha-deg 30,90,30,90), or --geometry FILE.toml");
+    }
+    if (!given(args.alpha_option)) {
+      throw UsageError("--alpha-deg", "missing: give the twists in degrees, e.g. --alpha-deg 30,90,30,90");
+    }
+    request.input = geometry_from_flags(args.a, args.alpha_deg,
+                                        given(args.d_option) ? std::optional<std::string>(args.d) : std::nullopt);
+  }
+  request.geometry = make_geometry(request.input);
+  const int n = request.geometry.joints();
+
+  if (given(args.theta_option)) {
+    const std::vector<double> theta_deg = parse_number_list(args.theta_deg, "--theta-deg");
+    if (theta_deg.size() != static_cast<size_t>(n)) {
+      throw UsageError("--theta-deg", std::to_string(theta_deg.size()) + " values (" + format_list(theta_deg) +
+                                          ") but " + request.input.a.source + " has " + std::to_string(n) +
+                                          "; give one initial angle per joint, the input joint first");
+    }
+    JointVector theta(n);
+    for (int i = 0; i < n; ++i) theta[i] = theta_deg[static_cast<size_t>(i)] / kDegreesPerRadian;
+    request.theta = theta;
+    request.theta0_deg = theta_deg.front();
+  } else {
+    request.theta0_deg = parse_number(args.theta0_deg, "--theta0-deg");
+  }
+
+  const long long samples = parse_integer(args.samples, "--samples");
+  if (samples < 2 || samples > kMaxSamples) {
+    throw UsageError("--samples", "got " + std::to_string(samples) + "; must be in [2, " +
+                                      std::to_string(kMaxSamples) + "]");
+  }
+  request.samples = static_cast<int>(samples);
+
+  if (args.compliance != "paper" && args.compliance != "full") {
+    throw UsageError("--compliance", "got " + quote_text(args.compliance) +
+                                         "; expected paper (springy a and alpha) or full (a, alpha and d)");
+  }
+  request.compliance = compliance_from_string(args.compliance);
+
+  request.torsion_ratio = parse_number(args.torsion_ratio, "--torsion-ratio");
+  if (!(request.torsion_ratio > 0.0)) {
+    throw UsageError("--torsion-ratio", "got " + format_double(request.torsion_ratio) + "; must be > 0");
+  }
+
+  request.range_deg = parse_number(args.range_deg, "--range-deg");
+  if (!(request.range_deg > 0.0 && request.range_deg <= 360.0)) {
+    throw UsageError("--range-deg", "got " + format_double(request.range_deg) + "; must be in (0, 360]");
+  }
+
+  request.json = args.json;
+  request.log = args.log;
+  return request;
+}
+
+// Angle [rad] as people read it: degrees in (-180, 180].
+double wrapped_degrees(double radians) { return wrap_angle(radians) * kDegreesPerRadian; }
+
+bool is_twist(const LoopModel& model, int k) {
+  return model.deformation_element(k) % kElementsPerJoint == static_cast<int>(ChainParameter::alpha);
+}
+
+void write_csv(std::FILE* out, const LoopModel& model, const CycleSummary& cycle) {
+  const int n = model.joints();
+  std::fputs("theta_in_deg,energy,status,iterations,closure_residual", out);
+  for (int i = 0; i < n; ++i) std::fprintf(out, ",theta%d_deg", i + 1);
+  for (int k = 0; k < model.deformation_count(); ++k) {
+    const std::string name = deformation_name(model, k);
+    std::fprintf(out, ",d%s%s", name.c_str(), is_twist(model, k) ? "_deg" : "");
+  }
+  std::fputc('\n', out);
+  for (const CycleSample& sample : cycle.samples) {
+    std::fprintf(out, "%s,%s,%s,%d,%s", format_double(sample.theta_in * kDegreesPerRadian).c_str(),
+                 format_double(sample.energy).c_str(), to_string(sample.status), sample.iterations,
+                 format_double(sample.closure_residual).c_str());
+    for (int i = 0; i < n; ++i) std::fprintf(out, ",%s", format_double(wrapped_degrees(sample.state.theta[i])).c_str());
+    for (int k = 0; k < model.deformation_count(); ++k) {
+      const double value = physical_deformation(model, sample.state.deformations, k);
+      std::fprintf(out, ",%s", format_double(is_twist(model, k) ? value * kDegreesPerRadian : value).c_str());
+    }
+    std::fputc('\n', out);
+  }
+}
+
+struct EnergyResult {
+  EquilibriumSummary assembly;
+  CycleSummary cycle;
+  double seconds = 0.0;
+};
+
+void print_json(const EnergyRequest& request, const LoopModel& model, const EnergyResult& result) {
+  const CycleSummary& c = result.cycle;
+  std::string json = "{";
+  json += "\"E_mean\":" + json_number(c.E_mean);
+  json += ",\"E_max\":" + json_number(c.E_max);
+  json += ",\"samples\":" + std::to_string(c.samples.size());
+  json += ",\"failed_samples\":" + std::to_string(c.failed_samples);
+  json += ",\"branch_jumps\":" + std::to_string(c.branch_jumps);
+  json += ",\"refinements\":" + std::to_string(c.refinements);
+  json += ",\"iterations\":" + std::to_string(c.total_iterations);
+  json += ",\"max_closure_residual\":" + json_number(c.max_closure_residual);
+  json += ",\"theta0_deg\":" + json_number(request.theta0_deg);
+  json += ",\"theta_deg\":[";
+  for (int i = 0; i < model.joints(); ++i) {
+    if (i > 0) json += ',';
+    json += json_number(wrapped_degrees(result.assembly.state.theta[i]));
+  }
+  json += "]";
+  json += ",\"length_scale\":" + json_number(model.length_scale());
+  json += ",\"compliance\":" + json_string(to_string(request.compliance));
+  json += ",\"seconds\":" + json_number(result.seconds);
+  json += "}\n";
+  std::fputs(json.c_str(), stdout);
+}
+
+std::string readable(double value) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.6g", value);
+  return buffer;
+}
+
+std::string joint_angles_deg(const LoopModel& model, const JointVector& theta) {
+  std::vector<double> degrees;
+  for (int i = 0; i < model.joints(); ++i) degrees.push_back(wrapped_degrees(theta[i]));
+  return format_list(degrees);
+}
+
+void print_summary(const EnergyRequest& request, const LoopModel& model, const EnergyResult& result) {
+  const CycleSummary& c = result.cycle;
+  const EquilibriumSummary& a = result.assembly;
+  const std::vector<double> d = request.input.d ? request.input.d->values
+                                                : std::vector<double>(request.input.a.values.size(), 0.0);
+  std::printf("loop (%dR)\n", model.joints());
+  std::printf("  a                     %s\n", format_list(request.input.a.values).c_str());
+  std::printf("  alpha_deg             %s\n", format_list(request.input.alpha_deg.values).c_str());
+  std::printf("  d                     %s\n", format_list(d).c_str());
+  std::printf("  length scale L        %s\n", readable(model.length_scale()).c_str());
+  std::printf("  compliance            %s, torsion ratio k_t/(k_a L^2) = %s\n", to_string(request.compliance),
+              readable(request.torsion_ratio).c_str());
+  std::printf("assembly at theta0 = %s deg (%s)\n", readable(request.theta0_deg).c_str(),
+              request.theta ? "from --theta-deg" : "least-energy of the deterministic guesses");
+  std::printf("  status                %s after %d Newton iterations\n", to_string(a.status), a.iterations);
+  std::printf("  theta_deg             %s\n", joint_angles_deg(model, a.state.theta).c_str());
+  std::printf("cycle (%d samples over %s deg)\n", static_cast<int>(c.samples.size()),
+              readable(request.range_deg).c_str());
+  std::printf("  E_mean                %s   [E / (k_a L^2)]\n", readable(c.E_mean).c_str());
+  std::printf("  E_max                 %s\n", readable(c.E_max).c_str());
+  std::printf("  failed samples        %d\n", c.failed_samples);
+  std::printf("  branch jumps          %d\n", c.branch_jumps);
+  std::printf("  refinements           %d\n", c.refinements);
+  std::printf("  Newton iterations     %d\n", c.total_iterations);
+  std::printf("  max closure residual  %s\n", readable(c.max_closure_residual).c_str());
+  std::printf("  wall time             %s s\n", readable(result.seconds).c_str());
+}
+
+std::string plot_title(const EnergyRequest& request) {
+  std::string title = "a = " + format_list(request.input.a.values) +
+                      "   alpha = " + format_list(request.input.alpha_deg.values) + " deg";
+  if (request.input.d) title += "   d = " + format_list(request.input.d->values);
+  title += "   (" + std::string(to_string(request.compliance)) + " compliance)";
+  return title;
+}
+
+int run_energy(const EnergyArguments& args) {
+  // 1. Check everything the user gave before doing any work, so that bad
+  //    input costs nothing and leaves no file behind.
+  const EnergyRequest request = read_request(args);
+
+  if (given(args.csv_option) && given(args.plot_option)) {
+    std::error_code ec1, ec2;
+    const auto csv_path = std::filesystem::weakly_canonical(args.csv, ec1);
+    const auto plot_path = std::filesystem::weakly_canonical(args.plot, ec2);
+    if (!ec1 && !ec2 && csv_path == plot_path) {
+      throw UsageError("--plot", quote_text(args.plot) + " is also the --csv file; give two different files");
+    }
+  }
+  std::filesystem::path gnuplot;
+  if (given(args.plot_option)) gnuplot = require_gnuplot("--plot");
+  std::optional<PendingOutput> csv;
+  std::optional<PendingOutput> png;
+  if (given(args.csv_option)) csv.emplace(args.csv, "--csv");
+  if (given(args.plot_option)) png.emplace(args.plot, "--plot");
+
+  EquilibriumOptions equilibrium_options;
+  equilibrium_options.compliance = request.compliance;
+  equilibrium_options.torsion_stiffness_ratio = request.torsion_ratio;
+  const LoopModel model(request.geometry, equilibrium_options);
+  if (!std::isfinite(model.length_scale())) {
+    throw UsageError(request.input.a.source, "the lengths are too large to compute with (length scale " +
+                                                 format_double(model.length_scale()) + ")");
+  }
+  CycleOptions cycle_options;
+  cycle_options.samples = request.samples;
+  // 360 must give exactly 2 pi so that the library treats it as a full turn.
+  cycle_options.range = request.range_deg / 360.0 * (2.0 * kPi);
+  cycle_options.validate();
+
+  // 2. The computation.
+  EquilibriumWorkspace workspace(model);
+  EnergyResult result;
+  const double theta0 = request.theta ? (*request.theta)[0] : request.theta0_deg / kDegreesPerRadian;
+  const auto start = std::chrono::steady_clock::now();
+  result.assembly = request.theta ? assemble_from_angles(model, workspace, *request.theta)
+                                  : assemble(model, workspace, theta0);
+  cycle_energy(model, workspace, theta0, result.assembly.state, cycle_options, result.cycle);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  if (result.assembly.status != SolveStatus::converged) {
+    std::fprintf(stderr, "loopfarm energy: warning: the assembly at theta0 did not converge (%s); "
+                         "the cycle starts from the best attempt\n", to_string(result.assembly.status));
+  }
+
+  // 3. Files first, each written in full before it replaces its target; then
+  //    stdout, so that a failed plot leaves neither files nor a summary.
+  if (csv) {
+    write_csv(csv->stream(), model, result.cycle);
+    csv->close();
+  }
+  if (png) {
+    png->close();  // gnuplot writes the temporary file itself
+    plot_energy_curve(gnuplot, result.cycle, {plot_title(request), request.log}, png->temporary());
+  }
+  if (csv) csv->commit();
+  if (png) png->commit();
+
+  if (request.json) {
+    print_json(request, model, result);
+  } else {
+    print_summary(request, model, result);
+  }
+  return kExitSuccess;
+}
+
+}  // namespace
+
+Subcommand add_energy_command(CLI::App& parent) {
+  auto args = std::make_shared<EnergyArguments>();
+  CLI::App* app = parent.add_subcommand(
+      "energy", "Cycle energy of one loop: drive joint 1 through a turn and report the elastic energy "
+                "E/(k_a L^2) that closing the loop costs (zero for a movable linkage).");
+  app->footer(
+      "Lists are comma-separated, without spaces; use --flag=LIST when a list starts with '-'.\n"
+      "Examples:\n"
+      "  loopfarm energy --a 2,4,2,4 --alpha-deg 30,90,30,90 --theta-deg 120,90,-120,-90\n"
+      "  loopfarm energy --geometry loop.toml --samples 64 --csv curve.csv --plot curve.png --log\n"
+      "Exit codes: 0 done, 1 failure (e.g. gnuplot missing), 2 bad input.\n");
+
+  args->a_option = app->add_option("--a", args->a, "link lengths a1,...,an (4 <= n <= 8), each >= 0")
+                       ->type_name("LIST");
+  args->alpha_option =
+      app->add_option("--alpha-deg", args->alpha_deg, "link twists alpha1,...,alphan [deg]")->type_name("LIST");
+  args->d_option = app->add_option("--d", args->d, "joint offsets d1,...,dn (default: all 0)")->type_name("LIST");
+  args->geometry_option =
+      app->add_option("--geometry", args->geometry,
+                      "TOML file with arrays a, alpha_deg and optionally d, instead of --a/--alpha-deg/--d")
+          ->type_name("FILE");
+  args->geometry_option->excludes(args->a_option)->excludes(args->alpha_option)->excludes(args->d_option);
+
+  args->theta_option =
+      app->add_option("--theta-deg", args->theta_deg,
+                      "initial joint angles theta1,...,thetan [deg]: theta1 is theta0, the others the passive "
+                      "angles' starting guess (default: the loop is assembled automatically)")
+          ->type_name("LIST");
+  CLI::Option* theta0 =
+      app->add_option("--theta0-deg", args->theta0_deg, "input angle theta0 the cycle starts at [deg]")
+          ->type_name("DEG")
+          ->capture_default_str();
+  args->theta_option->excludes(theta0);
+
+  app->add_option("--samples", args->samples, "samples N over the cycle (>= 2)")
+      ->type_name("N")
+      ->capture_default_str();
+  app->add_option("--compliance", args->compliance,
+                  "springy parameters: paper (a and alpha, the paper's model) or full (a, alpha and d)")
+      ->type_name("paper|full")
+      ->capture_default_str();
+  app->add_option("--torsion-ratio", args->torsion_ratio, "torsion stiffness k_t / (k_a L^2), > 0")
+      ->type_name("X")
+      ->capture_default_str();
+  app->add_option("--range-deg", args->range_deg,
+                  "input range [deg]: 360 is a full turn from theta0, less is [theta0 - R/2, theta0 + R/2]")
+      ->type_name("R")
+      ->capture_default_str();
+
+  app->add_flag("--json", args->json, "print one JSON object instead of the summary");
+  args->csv_option = app->add_option("--csv", args->csv, "write the energy curve, one row per sample")
+                         ->type_name("FILE");
+  args->plot_option =
+      app->add_option("--plot", args->plot, "draw energy against input angle into a PNG (needs gnuplot)")
+          ->type_name("FILE.png");
+  app->add_flag("--log", args->log, "logarithmic energy axis in --plot")->needs(args->plot_option);
+
+  return {app, [args] { return run_energy(*args); }};
+}
+
+}  // namespace loopfarm::cli

@@ -1,0 +1,11 @@
+// `loopfarm energy`: the cycle energy of one loop, with its curve as CSV and
+// plot. See README.md for the options.
+#pragma once
+
+#include "subcommand.hpp"
+
+namespace loopfarm::cli {
+
+Subcommand add_energy_command(CLI::App& parent);
+
+}  // namespace loopfarm::cli

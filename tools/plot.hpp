@@ -1,0 +1,34 @@
+// Plots through gnuplot, run as a separate program: the energy curve of a
+// cycle as a PNG.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "loopfarm/cycle.hpp"
+
+namespace loopfarm::cli {
+
+// The first executable called `name` on PATH, or an empty path.
+std::filesystem::path find_program(std::string_view name);
+
+// gnuplot's path; throws EnvironmentError naming `flag` when it is not
+// installed, so a command can refuse before it starts any work.
+std::filesystem::path require_gnuplot(const std::string& flag);
+
+struct EnergyPlotStyle {
+  std::string title;       // plain text, one line
+  bool log_scale = false;  // logarithmic energy axis
+};
+
+// Draws energy against input angle [deg] into `png` (overwritten). Failed and
+// branch-jumping samples are marked. On a logarithmic axis, energies below
+// kLogFloor (including exact zeros, which a log axis cannot show) are drawn
+// at kLogFloor. Throws EnvironmentError if gnuplot fails or writes nothing,
+// with gnuplot's first error line.
+inline constexpr double kLogFloor = 1e-32;
+void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary& summary,
+                       const EnergyPlotStyle& style, const std::filesystem::path& png);
+
+}  // namespace loopfarm::cli
