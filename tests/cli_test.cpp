@@ -1,0 +1,461 @@
+// The loopfarm command line, run as a user runs it: exit codes, the one-line
+// messages for bad input, stdout formats and the files it writes (or must not
+// write). LOOPFARM_EXECUTABLE is the path of the built binary.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kExecutable = LOOPFARM_EXECUTABLE;
+const std::vector<std::string> kBennett = {"energy", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90"};
+
+// Single quotes for /bin/sh: only the quote itself needs care.
+std::string shell_quote(const std::string& text) {
+  std::string out = "'";
+  for (const char c : text) {
+    if (c == '\'') {
+      out += "'\\''";
+    } else {
+      out += c;
+    }
+  }
+  return out + "'";
+}
+
+std::string read_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void write_file(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> split(const std::string& text, char separator) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (true) {
+    const size_t end = text.find(separator, start);
+    parts.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (end == std::string::npos) return parts;
+    start = end + 1;
+  }
+}
+
+// The whole text as a double, or NaN if it is not exactly one number.
+double to_number(const std::string& text) {
+  if (text.empty()) return std::nan("");
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() ? value : std::nan("");
+}
+
+// The raw text of a top-level value in a one-line JSON object: the key's
+// value up to the next ',' or '}' outside brackets. Empty if the key is absent.
+std::string json_raw(const std::string& json, const std::string& key) {
+  const std::string needle = "\"" + key + "\":";
+  const size_t at = json.find(needle);
+  if (at == std::string::npos) return "";
+  size_t i = at + needle.size();
+  const size_t start = i;
+  int depth = 0;
+  bool in_string = false;
+  for (; i < json.size(); ++i) {
+    const char c = json[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      ++depth;
+    } else if (c == ']' || c == '}') {
+      if (depth == 0) break;
+      --depth;
+    } else if (c == ',' && depth == 0) {
+      break;
+    }
+  }
+  return json.substr(start, i - start);
+}
+
+double json_number(const std::string& json, const std::string& key) { return to_number(json_raw(json, key)); }
+
+// `base` followed by `more`.
+std::vector<std::string> with(std::vector<std::string> base, const std::vector<std::string>& more) {
+  base.insert(base.end(), more.begin(), more.end());
+  return base;
+}
+
+bool have_gnuplot() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
+
+struct Result {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string(info->test_suite_name()) + "-" + info->name();
+    for (char& c : name) {
+      if (c == '/') c = '-';
+    }
+    dir_ = fs::temp_directory_path() / ("loopfarm-cli-test-" + std::to_string(::getpid()) + "-" + name);
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+
+  // Runs the binary with `args` ("{dir}" replaced by the test's directory),
+  // optionally prefixed by environment assignments for /bin/sh.
+  Result run(const std::vector<std::string>& args, const std::string& environment = "") {
+    std::string command = environment + (environment.empty() ? "" : " ") + shell_quote(kExecutable);
+    for (std::string arg : args) {
+      for (size_t at; (at = arg.find("{dir}")) != std::string::npos;) arg.replace(at, 5, dir_.string());
+      command += ' ';
+      command += shell_quote(arg);
+    }
+    const fs::path out = dir_ / ".stdout";
+    const fs::path err = dir_ / ".stderr";
+    command += " >";
+    command += shell_quote(out.string());
+    command += " 2>";
+    command += shell_quote(err.string());
+    const int status = std::system(command.c_str());
+    Result result;
+    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    result.out = read_file(out);
+    result.err = read_file(err);
+    fs::remove(out);
+    fs::remove(err);
+    return result;
+  }
+
+  // Names of the files in the test directory.
+  std::vector<std::string> files() const {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(dir_)) names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+  fs::path dir_;
+};
+
+// ---------------------------------------------------------------------------
+// Bad input: exit code 2, one line on stderr naming the flag or file position,
+// nothing on stdout, and no file written or changed.
+
+struct BadInput {
+  std::string name;
+  std::vector<std::string> args;
+  std::vector<std::string> message_parts;  // each must appear in the message
+  std::string toml = "";                   // written to {dir}/geom.toml when not empty
+};
+
+std::ostream& operator<<(std::ostream& out, const BadInput& input) { return out << input.name; }
+
+class BadInputTest : public CliTest, public ::testing::WithParamInterface<BadInput> {};
+
+TEST_P(BadInputTest, ExitsWithCode2AndOneLineNamingTheFlag) {
+  const BadInput& input = GetParam();
+  if (!input.toml.empty()) write_file(dir_ / "geom.toml", input.toml);
+  // A previous result at the --csv target must survive the failed run.
+  std::vector<std::string> args = input.args;
+  const std::string sentinel = "theta_in_deg,energy\n0,1\n";
+  bool guarded = false;
+  if (std::find(args.begin(), args.end(), "--csv") == args.end()) {
+    write_file(dir_ / "keep.csv", sentinel);
+    args.insert(args.end(), {"--csv", "{dir}/keep.csv"});
+    guarded = true;
+  }
+  const auto before = files();
+
+  const Result result = run(args);
+
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_EQ(result.out, "");
+  const auto lines = lines_of(result.err);
+  ASSERT_EQ(lines.size(), 1u) << result.err;
+  EXPECT_EQ(result.err.back(), '\n');
+  EXPECT_EQ(lines[0].rfind("loopfarm", 0), 0u) << lines[0];
+  for (const std::string& part : input.message_parts) {
+    EXPECT_NE(lines[0].find(part), std::string::npos) << "expected " << part << " in: " << lines[0];
+  }
+  if (guarded) {
+    EXPECT_EQ(read_file(dir_ / "keep.csv"), sentinel);
+  }
+  EXPECT_EQ(files(), before) << "a failed run left files behind";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Energy, BadInputTest,
+    ::testing::Values(
+        BadInput{"three_joints", {"energy", "--a", "1,2,3", "--alpha-deg", "10,20,30"}, {"loopfarm energy: --a:", "3 values"}},
+        BadInput{"nine_joints",
+                 {"energy", "--a", "1,1,1,1,1,1,1,1,1", "--alpha-deg", "10,10,10,10,10,10,10,10,10"},
+                 {"loopfarm energy: --a:", "9 values"}},
+        BadInput{"alpha_count_differs", {"energy", "--a", "2,4,2,4", "--alpha-deg", "30,90,30"}, {"--alpha-deg:", "3 values"}},
+        BadInput{"d_count_differs", with(kBennett, {"--d", "0,0,0"}), {"--d:", "3 values"}},
+        BadInput{"theta_count_differs", with(kBennett, {"--theta-deg", "120,90,-120"}), {"--theta-deg:", "3 values"}},
+        BadInput{"nan_length", {"energy", "--a", "2,nan,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "\"nan\""}},
+        BadInput{"inf_twist", {"energy", "--a", "2,4,2,4", "--alpha-deg", "30,inf,30,90"}, {"--alpha-deg:", "\"inf\""}},
+        BadInput{"infinity_offset", with(kBennett, {"--d", "0,Infinity,0,0"}), {"--d:", "\"Infinity\""}},
+        BadInput{"negative_length", {"energy", "--a=-2,4,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "-2", ">= 0"}},
+        BadInput{"empty_list", {"energy", "--a", "", "--alpha-deg", "30,90,30,90"}, {"--a:", "empty"}},
+        BadInput{"empty_element", {"energy", "--a", "2,,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "element 2", "empty"}},
+        BadInput{"trailing_comma", {"energy", "--a", "2,4,2,4,", "--alpha-deg", "30,90,30,90"}, {"--a:", "element 5"}},
+        BadInput{"junk_in_number", {"energy", "--a", "2,4x,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "\"4x\""}},
+        BadInput{"letters", {"energy", "--a", "2,x,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "\"x\""}},
+        BadInput{"samples_too_few", with(kBennett, {"--samples", "1"}), {"--samples:", "1"}},
+        BadInput{"samples_not_a_number", with(kBennett, {"--samples", "abc"}), {"--samples:", "\"abc\""}},
+        BadInput{"samples_fraction", with(kBennett, {"--samples", "2.5"}), {"--samples:", "\"2.5\""}},
+        BadInput{"unknown_compliance", with(kBennett, {"--compliance", "rigid"}), {"--compliance:", "\"rigid\""}},
+        BadInput{"zero_torsion_ratio", with(kBennett, {"--torsion-ratio", "0"}), {"--torsion-ratio:", "0"}},
+        BadInput{"negative_torsion_ratio", with(kBennett, {"--torsion-ratio=-1"}), {"--torsion-ratio:", "-1"}},
+        BadInput{"range_too_large", with(kBennett, {"--range-deg", "400"}), {"--range-deg:", "400"}},
+        BadInput{"range_zero", with(kBennett, {"--range-deg", "0"}), {"--range-deg:", "0"}},
+        BadInput{"nan_theta0", with(kBennett, {"--theta0-deg", "nan"}), {"--theta0-deg:", "\"nan\""}},
+        BadInput{"missing_twists", {"energy", "--a", "2,4,2,4"}, {"--alpha-deg:", "missing"}},
+        BadInput{"missing_geometry", {"energy"}, {"--a:", "missing"}},
+        BadInput{"toml_unknown_key",
+                 {"energy", "--geometry", "{dir}/geom.toml"},
+                 {"geom.toml:3 key \"b\"", "unknown key"},
+                 "a = [2, 4, 2, 4]\nalpha_deg = [30, 90, 30, 90]\nb = 1\n"},
+        BadInput{"toml_wrong_type",
+                 {"energy", "--geometry", "{dir}/geom.toml"},
+                 {"geom.toml:1 key \"a\"", "string \"2,4,2,4\""},
+                 "a = \"2,4,2,4\"\nalpha_deg = [30, 90, 30, 90]\n"},
+        BadInput{"toml_wrong_element_type",
+                 {"energy", "--geometry", "{dir}/geom.toml"},
+                 {"geom.toml:2 key \"alpha_deg\"", "element 2", "boolean true"},
+                 "a = [2, 4, 2, 4]\nalpha_deg = [30, true, 30, 90]\n"},
+        BadInput{"toml_nan",
+                 {"energy", "--geometry", "{dir}/geom.toml"},
+                 {"geom.toml:2 key \"d\"", "nan"},
+                 "a = [2, 4, 2, 4]\nd = [0, nan, 0, 0]\nalpha_deg = [30, 90, 30, 90]\n"},
+        BadInput{"toml_count_differs",
+                 {"energy", "--geometry", "{dir}/geom.toml"},
+                 {"geom.toml:2 key \"alpha_deg\"", "3 values"},
+                 "a = [2, 4, 2, 4]\nalpha_deg = [30, 90, 30]\n"},
+        BadInput{"toml_missing_key", {"energy", "--geometry", "{dir}/geom.toml"}, {"geom.toml", "alpha_deg"}, "a = [2, 4, 2, 4]\n"},
+        BadInput{"toml_syntax_error",
+                 {"energy", "--geometry", "{dir}/geom.toml"},
+                 {"geom.toml:", "invalid TOML"},
+                 "a = [2, 4, 2, 4\nalpha_deg = [30, 90, 30, 90]\n"},
+        BadInput{"toml_missing_file", {"energy", "--geometry", "{dir}/absent.toml"}, {"--geometry:", "absent.toml"}},
+        BadInput{"geometry_and_flags", with(kBennett, {"--geometry", "{dir}/absent.toml"}), {"--geometry"}},
+        BadInput{"csv_directory_missing", with(kBennett, {"--csv", "{dir}/no/such/dir/out.csv"}), {"--csv:", "out.csv"}},
+        BadInput{"csv_is_a_directory", with(kBennett, {"--csv", "{dir}"}), {"--csv:", "directory"}},
+        BadInput{"log_without_plot", with(kBennett, {"--log"}), {"--log"}},
+        BadInput{"unknown_option", with(kBennett, {"--frobnicate"}), {"--frobnicate"}}),
+    [](const ::testing::TestParamInfo<BadInput>& info) { return info.param.name; });
+
+// ---------------------------------------------------------------------------
+// Results.
+
+TEST_F(CliTest, JsonForThePaperBennettLoopHasZeroEnergy) {
+  const Result result = run(with(kBennett, {"--theta-deg", "120,90,-120,-90", "--samples", "24", "--json"}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(result.err, "");
+  const auto lines = lines_of(result.out);
+  ASSERT_EQ(lines.size(), 1u) << result.out;
+  const std::string& json = lines[0];
+  EXPECT_EQ(json.front(), '{');
+  EXPECT_EQ(json.back(), '}');
+
+  // Keys present, in the documented order.
+  const std::vector<std::string> keys = {"E_mean",     "E_max",      "samples",    "failed_samples",
+                                         "branch_jumps", "refinements", "iterations", "max_closure_residual",
+                                         "theta0_deg", "theta_deg",  "length_scale", "compliance", "seconds"};
+  size_t previous = 0;
+  for (const std::string& key : keys) {
+    const size_t at = json.find("\"" + key + "\":");
+    ASSERT_NE(at, std::string::npos) << key;
+    EXPECT_GE(at, previous) << key << " out of order";
+    previous = at;
+  }
+  EXPECT_EQ(json.find("nan"), std::string::npos);
+  EXPECT_EQ(json.find("inf"), std::string::npos);
+
+  const double e_max = json_number(json, "E_max");
+  ASSERT_FALSE(std::isnan(e_max)) << json_raw(json, "E_max");
+  EXPECT_LE(e_max, 1e-20);
+  EXPECT_LE(json_number(json, "E_mean"), e_max);
+  EXPECT_EQ(json_raw(json, "samples"), "24");
+  EXPECT_EQ(json_raw(json, "failed_samples"), "0");
+  EXPECT_EQ(json_raw(json, "compliance"), "\"paper\"");
+  EXPECT_DOUBLE_EQ(json_number(json, "theta0_deg"), 120.0);
+  EXPECT_NEAR(json_number(json, "length_scale"), std::sqrt(10.0), 1e-12);
+
+  std::string theta = json_raw(json, "theta_deg");
+  ASSERT_GE(theta.size(), 2u);
+  ASSERT_EQ(theta.front(), '[');
+  ASSERT_EQ(theta.back(), ']');
+  const auto angles = split(theta.substr(1, theta.size() - 2), ',');
+  ASSERT_EQ(angles.size(), 4u) << theta;
+  const double expected[] = {120.0, 90.0, -120.0, -90.0};
+  for (size_t i = 0; i < 4; ++i) EXPECT_NEAR(to_number(angles[i]), expected[i], 1e-6) << theta;
+  EXPECT_GE(json_number(json, "seconds"), 0.0);
+}
+
+TEST_F(CliTest, NegativeListsWorkAsSeparateArguments) {
+  // The other assembly of the same Bennett loop; CLI11 must take "-120,..."
+  // as the value, not as an option.
+  const Result result = run(with(kBennett, {"--theta-deg", "-120,-90,120,90", "--samples", "8", "--json"}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_LE(json_number(result.out, "E_max"), 1e-20) << result.out;
+  EXPECT_DOUBLE_EQ(json_number(result.out, "theta0_deg"), -120.0);
+}
+
+TEST_F(CliTest, GenericLoopHasPositiveEnergy) {
+  const Result result = run({"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0",
+                             "--samples", "16", "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const double e_mean = json_number(result.out, "E_mean");
+  EXPECT_GT(e_mean, 1e-6) << result.out;
+  EXPECT_GE(json_number(result.out, "E_max"), e_mean);
+  EXPECT_EQ(json_raw(result.out, "samples"), "16");
+}
+
+TEST_F(CliTest, TomlGeometryGivesTheSameResultAsFlags) {
+  write_file(dir_ / "loop.toml",
+             "# a generic loop\na = [1, 2, 3, 2.5]\nalpha_deg = [20, 70, 40, 110]\nd = [0.1, -0.3, 0.2, 0]\n");
+  const Result from_flags = run({"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0",
+                                 "--samples", "8", "--json"});
+  const Result from_file = run({"energy", "--geometry", "{dir}/loop.toml", "--samples", "8", "--json"});
+  ASSERT_EQ(from_flags.exit_code, 0) << from_flags.err;
+  ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
+  EXPECT_EQ(json_raw(from_flags.out, "E_mean"), json_raw(from_file.out, "E_mean"));
+  EXPECT_EQ(json_raw(from_flags.out, "theta_deg"), json_raw(from_file.out, "theta_deg"));
+}
+
+TEST_F(CliTest, SummaryNamesEveryQuantity) {
+  const Result result = run(with(kBennett, {"--theta-deg", "120,90,-120,-90", "--samples", "8"}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  for (const char* part : {"E_mean", "E_max", "failed samples", "branch jumps", "refinements", "Newton iterations",
+                           "max closure residual", "theta_deg", "wall time", "length scale"}) {
+    EXPECT_NE(result.out.find(part), std::string::npos) << part << " missing from\n" << result.out;
+  }
+}
+
+TEST_F(CliTest, CsvHasAHeaderAndOneRowPerSample) {
+  write_file(dir_ / "curve.csv", "old contents\n");
+  const Result result = run(with(kBennett, {"--theta-deg", "120,90,-120,-90", "--samples", "12", "--csv",
+                                            "{dir}/curve.csv"}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find("E_mean"), std::string::npos);
+  const auto lines = lines_of(read_file(dir_ / "curve.csv"));
+  ASSERT_EQ(lines.size(), 13u);
+  EXPECT_EQ(lines[0],
+            "theta_in_deg,energy,status,iterations,closure_residual,theta1_deg,theta2_deg,theta3_deg,theta4_deg,"
+            "da1,da2,da3,da4,dalpha1_deg,dalpha2_deg,dalpha3_deg,dalpha4_deg");
+  for (size_t row = 1; row < lines.size(); ++row) {
+    const auto fields = split(lines[row], ',');
+    ASSERT_EQ(fields.size(), 17u) << lines[row];
+    EXPECT_NEAR(to_number(fields[0]), 120.0 + 30.0 * static_cast<double>(row - 1), 1e-9) << lines[row];
+    EXPECT_LE(to_number(fields[1]), 1e-20) << lines[row];
+    EXPECT_TRUE(fields[2] == "converged" || fields[2] == "refined") << lines[row];
+    for (size_t f = 3; f < fields.size(); ++f) {
+      EXPECT_FALSE(std::isnan(to_number(fields[f]))) << "field " << f << " of " << lines[row];
+    }
+  }
+  EXPECT_EQ(files(), std::vector<std::string>{"curve.csv"}) << "temporary files left behind";
+}
+
+TEST_F(CliTest, CsvWithFullComplianceHasOffsetColumns) {
+  const Result result = run({"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--samples", "4",
+                             "--compliance", "full", "--range-deg", "90", "--theta0-deg", "10", "--csv",
+                             "{dir}/curve.csv", "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(json_raw(result.out, "compliance"), "\"full\"");
+  const auto lines = lines_of(read_file(dir_ / "curve.csv"));
+  ASSERT_EQ(lines.size(), 5u);
+  EXPECT_NE(lines[0].find(",dd1,dd2,dd3,dd4"), std::string::npos) << lines[0];
+  EXPECT_EQ(split(lines[0], ',').size(), 21u);
+  // A partial range is [theta0 - R/2, theta0 + R/2].
+  EXPECT_NEAR(to_number(split(lines[1], ',')[0]), -35.0, 1e-9);
+  EXPECT_NEAR(to_number(split(lines[4], ',')[0]), 55.0, 1e-9);
+}
+
+TEST_F(CliTest, PlotWritesAPng) {
+  if (!have_gnuplot()) GTEST_SKIP() << "gnuplot is not installed";
+  for (const bool log : {false, true}) {
+    const fs::path png = dir_ / (log ? "log.png" : "linear.png");
+    std::vector<std::string> args = {"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110",
+                                     "--samples", "16", "--plot", png.string()};
+    if (log) args.push_back("--log");
+    const Result result = run(args);
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const std::string image = read_file(png);
+    ASSERT_GT(image.size(), 100u);
+    EXPECT_EQ(image.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  }
+  // A zero-energy loop on a log axis (zeros cannot be drawn there) still plots.
+  const Result bennett =
+      run(with(kBennett, {"--theta-deg", "120,90,-120,-90", "--samples", "8", "--plot", "{dir}/zero.png", "--log"}));
+  ASSERT_EQ(bennett.exit_code, 0) << bennett.err;
+  EXPECT_GT(fs::file_size(dir_ / "zero.png"), 100u);
+  EXPECT_EQ(files(), (std::vector<std::string>{"linear.png", "log.png", "zero.png"}));
+}
+
+TEST_F(CliTest, PlotWithoutGnuplotFailsBeforeWritingAnything) {
+  write_file(dir_ / "keep.csv", "sentinel\n");
+  const Result result = run(with(kBennett, {"--csv", "{dir}/keep.csv", "--plot", "{dir}/out.png"}),
+                            "PATH=" + (dir_ / "empty-path").string());
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(result.out, "");
+  ASSERT_EQ(lines_of(result.err).size(), 1u) << result.err;
+  EXPECT_NE(result.err.find("--plot: gnuplot not found"), std::string::npos) << result.err;
+  EXPECT_EQ(read_file(dir_ / "keep.csv"), "sentinel\n");
+  EXPECT_EQ(files(), std::vector<std::string>{"keep.csv"});
+}
+
+TEST_F(CliTest, VersionHelpAndMissingSubcommand) {
+  const Result version = run({"--version"});
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_NE(version.out.find(LOOPFARM_VERSION), std::string::npos) << version.out;
+
+  const Result help = run({"energy", "--help"});
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("--alpha-deg"), std::string::npos) << help.out;
+
+  const Result none = run({});
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_EQ(lines_of(none.err).size(), 1u) << none.err;
+}
+
+}  // namespace
