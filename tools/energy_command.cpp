@@ -124,14 +124,34 @@ EnergyRequest read_request(const EnergyArguments& args) {
   return request;
 }
 
-// Angle [rad] as people read it: degrees in (-180, 180].
-double wrapped_degrees(double radians) { return wrap_angle(radians) * kDegreesPerRadian; }
+// An angle in degrees wrapped to (-180, 180], as people read joint angles.
+double wrap_degrees(double degrees) {
+  double wrapped = std::fmod(degrees, 360.0);
+  if (wrapped <= -180.0) wrapped += 360.0;
+  if (wrapped > 180.0) wrapped -= 360.0;
+  return wrapped;
+}
+
+// Degrees for display. Input angles are measured from theta0 in the user's own
+// degrees, so that theta0 = 120 prints as 120 and not as the 119.99999999999999
+// a round trip through radians gives; other angles are converted directly.
+struct DegreeDisplay {
+  double theta0_deg = 0.0;
+  double theta0 = 0.0;  // [rad]
+  int input_joint = 0;
+
+  double input_deg(double theta_in) const { return theta0_deg + (theta_in - theta0) * kDegreesPerRadian; }
+  // Joint i's angle in (-180, 180]; `theta_in` is the sample's input angle.
+  double joint_deg(const JointVector& theta, int i) const {
+    return i == input_joint ? wrap_degrees(input_deg(theta[i])) : wrap_degrees(theta[i] * kDegreesPerRadian);
+  }
+};
 
 bool is_twist(const LoopModel& model, int k) {
   return model.deformation_element(k) % kElementsPerJoint == static_cast<int>(ChainParameter::alpha);
 }
 
-void write_csv(std::FILE* out, const LoopModel& model, const CycleSummary& cycle) {
+void write_csv(std::FILE* out, const LoopModel& model, const DegreeDisplay& degrees, const CycleSummary& cycle) {
   const int n = model.joints();
   std::fputs("theta_in_deg,energy,status,iterations,closure_residual", out);
   for (int i = 0; i < n; ++i) std::fprintf(out, ",theta%d_deg", i + 1);
@@ -141,10 +161,10 @@ void write_csv(std::FILE* out, const LoopModel& model, const CycleSummary& cycle
   }
   std::fputc('\n', out);
   for (const CycleSample& sample : cycle.samples) {
-    std::fprintf(out, "%s,%s,%s,%d,%s", format_double(sample.theta_in * kDegreesPerRadian).c_str(),
+    std::fprintf(out, "%s,%s,%s,%d,%s", format_double(degrees.input_deg(sample.theta_in)).c_str(),
                  format_double(sample.energy).c_str(), to_string(sample.status), sample.iterations,
                  format_double(sample.closure_residual).c_str());
-    for (int i = 0; i < n; ++i) std::fprintf(out, ",%s", format_double(wrapped_degrees(sample.state.theta[i])).c_str());
+    for (int i = 0; i < n; ++i) std::fprintf(out, ",%s", format_double(degrees.joint_deg(sample.state.theta, i)).c_str());
     for (int k = 0; k < model.deformation_count(); ++k) {
       const double value = physical_deformation(model, sample.state.deformations, k);
       std::fprintf(out, ",%s", format_double(is_twist(model, k) ? value * kDegreesPerRadian : value).c_str());
@@ -157,6 +177,7 @@ struct EnergyResult {
   EquilibriumSummary assembly;
   CycleSummary cycle;
   double seconds = 0.0;
+  DegreeDisplay degrees;
 };
 
 void print_json(const EnergyRequest& request, const LoopModel& model, const EnergyResult& result) {
@@ -174,7 +195,7 @@ void print_json(const EnergyRequest& request, const LoopModel& model, const Ener
   json += ",\"theta_deg\":[";
   for (int i = 0; i < model.joints(); ++i) {
     if (i > 0) json += ',';
-    json += json_number(wrapped_degrees(result.assembly.state.theta[i]));
+    json += json_number(result.degrees.joint_deg(result.assembly.state.theta, i));
   }
   json += "]";
   json += ",\"length_scale\":" + json_number(model.length_scale());
@@ -190,9 +211,9 @@ std::string readable(double value) {
   return buffer;
 }
 
-std::string joint_angles_deg(const LoopModel& model, const JointVector& theta) {
+std::string joint_angles_deg(const LoopModel& model, const DegreeDisplay& display, const JointVector& theta) {
   std::vector<double> degrees;
-  for (int i = 0; i < model.joints(); ++i) degrees.push_back(wrapped_degrees(theta[i]));
+  for (int i = 0; i < model.joints(); ++i) degrees.push_back(display.joint_deg(theta, i));
   return format_list(degrees);
 }
 
@@ -211,7 +232,7 @@ void print_summary(const EnergyRequest& request, const LoopModel& model, const E
   std::printf("assembly at theta0 = %s deg (%s)\n", readable(request.theta0_deg).c_str(),
               request.theta ? "from --theta-deg" : "least-energy of the deterministic guesses");
   std::printf("  status                %s after %d Newton iterations\n", to_string(a.status), a.iterations);
-  std::printf("  theta_deg             %s\n", joint_angles_deg(model, a.state.theta).c_str());
+  std::printf("  theta_deg             %s\n", joint_angles_deg(model, result.degrees, a.state.theta).c_str());
   std::printf("cycle (%d samples over %s deg)\n", static_cast<int>(c.samples.size()),
               readable(request.range_deg).c_str());
   std::printf("  E_mean                %s   [E / (k_a L^2)]\n", readable(c.E_mean).c_str());
@@ -270,6 +291,7 @@ int run_energy(const EnergyArguments& args) {
   EquilibriumWorkspace workspace(model);
   EnergyResult result;
   const double theta0 = request.theta ? (*request.theta)[0] : request.theta0_deg / kDegreesPerRadian;
+  result.degrees = {request.theta0_deg, theta0, model.options().input_joint};
   const auto start = std::chrono::steady_clock::now();
   result.assembly = request.theta ? assemble_from_angles(model, workspace, *request.theta)
                                   : assemble(model, workspace, theta0);
@@ -284,12 +306,13 @@ int run_energy(const EnergyArguments& args) {
   // 3. Files first, each written in full before it replaces its target; then
   //    stdout, so that a failed plot leaves neither files nor a summary.
   if (csv) {
-    write_csv(csv->stream(), model, result.cycle);
+    write_csv(csv->stream(), model, result.degrees, result.cycle);
     csv->close();
   }
   if (png) {
     png->close();  // gnuplot writes the temporary file itself
-    plot_energy_curve(gnuplot, result.cycle, {plot_title(request), request.log}, png->temporary());
+    plot_energy_curve(gnuplot, result.cycle, {plot_title(request), request.log, request.theta0_deg, theta0},
+                      png->temporary());
   }
   if (csv) csv->commit();
   if (png) png->commit();

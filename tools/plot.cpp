@@ -128,7 +128,8 @@ void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary&
     failed += marker == 1;
     jumped += marker == 2;
     ++drawable;
-    std::fprintf(data.stream(), "%.17g %.17g %d\n", sample.theta_in * kDegreesPerRadian, energy, marker);
+    const double theta_deg = style.theta0_deg + (sample.theta_in - style.theta0) * kDegreesPerRadian;
+    std::fprintf(data.stream(), "%.17g %.17g %d\n", theta_deg, energy, marker);
   }
   data.close();
   if (drawable == 0) throw EnvironmentError("--plot: no sample has a finite energy; nothing to plot");

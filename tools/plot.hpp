@@ -20,6 +20,10 @@ std::filesystem::path require_gnuplot(const std::string& flag);
 struct EnergyPlotStyle {
   std::string title;       // plain text, one line
   bool log_scale = false;  // logarithmic energy axis
+  // The x axis shows theta0_deg + (theta_in - theta0) in degrees, so that
+  // the start angle appears exactly as the user gave it.
+  double theta0_deg = 0.0;
+  double theta0 = 0.0;  // [rad]
 };
 
 // Draws energy against input angle [deg] into `png` (overwritten). Failed and
