@@ -59,11 +59,14 @@ class Stepper {
     const double h_prev = from_theta - before_theta;
     const bool predict = options_.secant_predictor && before != nullptr && h_prev != 0.0 && h * h_prev > 0.0;
     if (predict) extrapolate(from, *before, h / h_prev, guess);
-    r.solve = solve_equilibrium(model_, ws_, target, guess);
+    // A warm-started solve that needs many iterations has lost the branch:
+    // bisecting is cheaper than letting it wander.
+    const int budget = options_.max_iterations_per_step;
+    r.solve = solve_equilibrium(model_, ws_, target, guess, budget);
     r.iterations += r.solve.iterations;
     if (predict && !acceptable(r.solve, from)) {
       // The prediction can overshoot near a turning point: retry from `from`.
-      r.solve = solve_equilibrium(model_, ws_, target, from);
+      r.solve = solve_equilibrium(model_, ws_, target, from, budget);
       r.iterations += r.solve.iterations;
     }
     if (acceptable(r.solve, from)) {
@@ -71,6 +74,13 @@ class Stepper {
       return r;
     }
     if (depth >= options_.max_refinements) {
+      // The equilibrium branch ends here (a fold of the elastic path) or the
+      // solve is hard: one solve with the full iteration budget, and whatever
+      // it lands on is a jump to another branch.
+      if (r.solve.status != SolveStatus::converged) {
+        r.solve = solve_equilibrium(model_, ws_, target, from);
+        r.iterations += r.solve.iterations;
+      }
       r.status = r.solve.status == SolveStatus::converged ? SampleStatus::branch_jump : SampleStatus::failed;
       return r;
     }
@@ -148,6 +158,9 @@ void CycleOptions::validate() const {
   }
   if (max_refinements < 0 || max_refinements > 30) {
     fail("max_refinements: must be in [0, 30], got " + std::to_string(max_refinements));
+  }
+  if (max_iterations_per_step < 1) {
+    fail("max_iterations_per_step: must be >= 1, got " + std::to_string(max_iterations_per_step));
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
@@ -15,10 +16,11 @@ namespace {
 // fixed point is an exact KKT point); they only decide how fast and how
 // robustly it is reached.
 constexpr double kInitialAugmentation = 1.0;   // sigma: weight of A^T A added to the Hessian
-constexpr double kMaxAugmentation = 1e6;
+constexpr double kMaxAugmentation = 1e4;
+constexpr double kMinRegularization = 1e-10;
 constexpr double kMaxRegularization = 1e10;    // rho: primal (Levenberg) regularisation cap
 constexpr double kMinDualRegularization = 1e-14;  // mu: stabilisation of the dual block
-constexpr double kMaxDualRegularization = 1e-2;
+constexpr double kMaxDualRegularization = 1e-6;
 constexpr double kMaxStep = 1.0;               // cap on |dx|_inf [rad, or units of L]
 constexpr double kArmijo = 1e-4;
 constexpr int kMaxBacktracks = 40;
@@ -215,7 +217,7 @@ std::string deformation_name(const LoopModel& model, int k) {
 }
 
 EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& ws, double theta_in,
-                                     const EquilibriumState& guess) {
+                                     const EquilibriumState& guess, int iteration_limit) {
   const int m = model.unknown_count();
   const EquilibriumOptions& opt = model.options();
   EquilibriumSummary summary;
@@ -248,7 +250,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       summary.status = SolveStatus::converged;
       break;
     }
-    if (summary.iterations >= opt.max_iterations) {
+    if (summary.iterations >= (iteration_limit > 0 ? iteration_limit : opt.max_iterations)) {
       summary.status = SolveStatus::max_iterations;
       break;
     }
@@ -261,7 +263,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // Stabilised SQP: a dual regularisation proportional to the KKT residual
     // keeps the step defined where the closure Jacobian loses rank, and
     // vanishes at the solution so that convergence stays quadratic.
-    const double mu = std::clamp(kkt_residual, kMinDualRegularization, kMaxDualRegularization);
+    const double mu = std::clamp(kkt_residual * kkt_residual, kMinDualRegularization, kMaxDualRegularization);
 
     // Solve [H Aᵀ; A -mu I] [dx; dl] = -[g; c] through H = W + sigma AᵀA + rho I.
     // Adding sigma AᵀA does not move the solution of the system's fixed point;
@@ -269,10 +271,18 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // (the second-order condition), and Cholesky then certifies the inertia.
     // Where even that fails (far from a minimum), rho turns the step into a
     // regularised descent step.
-    double rho = 0.0;
-    bool factored = false;
-    for (int attempt = 0; attempt < 60 && !factored; ++attempt) {
-      ws.hessian = ws.chain_hessian;
+    // First choice: the exact Newton step, certified by Cholesky of
+    // W + sigma AᵀA (sigma grows a little where needed). Far from a minimum W
+    // is indefinite on the null space of A and no sigma helps; then the
+    // Gauss-Newton model, which keeps only the springs' stiffness K, gives a
+    // least-norm projection step towards closure that is always defined once a
+    // small rho covers the passive angles (K has no block for them).
+    auto factor = [&](bool exact, double rho) {
+      if (exact) {
+        ws.hessian = ws.chain_hessian;
+      } else {
+        ws.hessian.setZero();
+      }
       for (int u = 0; u < m; ++u) {
         const int k = model.unknown_deformation(u);
         if (k >= 0) ws.hessian(u, u) += model.deformation_stiffness(k);
@@ -280,15 +290,20 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       ws.hessian.noalias() += sigma * ws.jacobian.transpose() * ws.jacobian;
       ws.hessian.diagonal().array() += rho;
       llt.compute(ws.hessian);
-      if (llt.info() == Eigen::Success) {
-        factored = true;
-        break;
-      }
-      if (sigma < kMaxAugmentation) {
-        sigma *= 10.0;
-      } else {
-        rho = rho == 0.0 ? (rho_last > 0.0 ? std::max(1e-10, rho_last / 4.0) : 1e-8) : rho * 10.0;
-        if (rho > kMaxRegularization) break;
+      return llt.info() == Eigen::Success;
+    };
+    bool factored = false;
+    double rho = 0.0;
+    for (double trial_sigma = sigma; trial_sigma <= kMaxAugmentation && !factored; trial_sigma *= 10.0) {
+      sigma = trial_sigma;
+      factored = factor(true, 0.0);
+    }
+    if (!factored) {
+      sigma = kInitialAugmentation;
+      ++summary.gauss_newton_steps;
+      for (rho = std::max(kMinRegularization, rho_last / 4.0); rho <= kMaxRegularization && !factored; rho *= 10.0) {
+        factored = factor(false, rho);
+        if (factored) break;
       }
     }
     if (!factored) {
@@ -326,7 +341,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     const double slope0 = energy_slope + lambda_plus.dot(jacobian_step);
     const double slope1 = c.dot(jacobian_step);
     const double curvature = ws.step.dot(ws.hessian * ws.step);
-    merit_weight = std::max(merit_weight, sigma);
+    merit_weight = std::max(merit_weight, 1.0);
     if (slope0 + merit_weight * slope1 > -0.1 * curvature && slope1 < 0.0) {
       merit_weight = std::max(merit_weight, (slope0 + 0.1 * curvature) / -slope1 * 2.0);
     }
@@ -344,8 +359,12 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       ++summary.residual_evaluations;
       const Vector6& tc = ws.chain.residual;
       const double merit = trial_energy + lambda_plus.dot(tc) + 0.5 * merit_weight * tc.squaredNorm();
-      if (std::isfinite(merit) && (merit <= merit0 + kArmijo * alpha * std::min(slope, 0.0) ||
-                                   (slope >= 0.0 && merit <= merit0))) {
+      // The slack admits steps whose change of merit is lost in round-off, as
+      // the last steps of a solve with nonzero energy are: the energy and
+      // lambᵀc (c is O(1) in normalised units) are only known to that level.
+      const double slack =
+          10.0 * std::numeric_limits<double>::epsilon() * (std::abs(merit0) + lambda_plus.lpNorm<1>());
+      if (std::isfinite(merit) && merit <= merit0 + kArmijo * alpha * std::min(slope, 0.0) + slack) {
         accepted = true;
         energy = trial_energy;
         break;

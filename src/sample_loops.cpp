@@ -25,8 +25,8 @@ struct SplitMix64 {
 LoopGeometry four(double a1, double a2, double a3, double a4, double t1, double t2, double t3,
                   double t4) {
   LoopGeometry g;
-  g.a = JointVector(4);
-  g.alpha = JointVector(4);
+  g.a.resize(4);
+  g.alpha.resize(4);
   g.d.setZero(4);
   g.a << a1, a2, a3, a4;
   g.alpha << t1, t2, t3, t4;

@@ -3,8 +3,12 @@
 
 #include <cmath>
 #include <functional>
+#include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/QR>
+
+#include "loopfarm/equilibrium.hpp"
 
 namespace loopfarm::testing {
 
@@ -20,5 +24,110 @@ inline double relative_error(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b)
 
 inline double deg(double radians) { return radians * 180.0 / 3.14159265358979323846; }
 inline double rad(double degrees) { return degrees * 3.14159265358979323846 / 180.0; }
+
+// A second, independent equilibrium solver to check solve_equilibrium against.
+// It shares nothing with it but closure_residual and the problem statement:
+// the method of multipliers (augmented Lagrangian), each subproblem
+//     min 1/2 |sqrt(K) delta|^2 + kappa/2 |c + lambda/kappa|^2
+// solved as nonlinear least squares by Levenberg-Marquardt with central-
+// difference Jacobians and a QR solve, then lambda += kappa c. First-order in
+// the multipliers, no Hessian, no analytic derivative: slow, but converges to
+// the same exact constrained minimum.
+struct ReferenceEquilibrium {
+  bool converged = false;
+  double energy = 0.0;
+  double closure = 0.0;       // max-norm of the final closure residual
+  JointVector theta;          // all joint angles
+  Eigen::VectorXd deformations;  // in the model's slot order
+};
+
+inline ReferenceEquilibrium reference_equilibrium(const LoopModel& model, double theta_in,
+                                                  const JointVector& theta_guess) {
+  const LoopGeometry& g0 = model.normalized_geometry();
+  const int n = g0.joints();
+  const int input = model.options().input_joint;
+  const int ndef = model.deformation_count();
+  const int nx = (n - 1) + ndef;
+  std::vector<int> passive;
+  for (int i = 0; i < n; ++i) {
+    if (i != input) passive.push_back(i);
+  }
+  // x = (passive angles, deformations); deformation slot k deforms a (k < n),
+  // alpha (n <= k < 2n) or d (2n <= k), as documented in equilibrium.hpp.
+  auto closure_at = [&](const Eigen::VectorXd& x) {
+    LoopGeometry g = g0;
+    JointVector theta(n);
+    theta[input] = theta_in;
+    for (int j = 0; j < n - 1; ++j) theta[passive[j]] = x[j];
+    for (int k = 0; k < ndef; ++k) {
+      const double v = x[n - 1 + k];
+      if (k < n) g.a[k] += v;
+      else if (k < 2 * n) g.alpha[k - n] += v;
+      else g.d[k - 2 * n] += v;
+    }
+    return Eigen::VectorXd(closure_residual(g, theta));
+  };
+  Eigen::VectorXd weight(ndef);
+  for (int k = 0; k < ndef; ++k) weight[k] = std::sqrt(model.deformation_stiffness(k));
+
+  const double kappa = 1e3;
+  Eigen::VectorXd lambda = Eigen::VectorXd::Zero(6);
+  auto residual = [&](const Eigen::VectorXd& x) {
+    Eigen::VectorXd r(ndef + 6);
+    r.head(ndef) = weight.cwiseProduct(x.tail(ndef));
+    r.tail(6) = std::sqrt(kappa) * (closure_at(x) + lambda / kappa);
+    return r;
+  };
+
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(nx);
+  for (int j = 0; j < n - 1; ++j) x[j] = theta_guess[passive[j]];
+  ReferenceEquilibrium out;
+  for (int outer = 0; outer < 200; ++outer) {
+    double damping = 1e-3;
+    for (int inner = 0; inner < 200; ++inner) {
+      const Eigen::VectorXd r = residual(x);
+      Eigen::MatrixXd jac(r.size(), nx);
+      const double h = 1e-6;
+      for (int u = 0; u < nx; ++u) {
+        Eigen::VectorXd xp = x, xm = x;
+        xp[u] += h;
+        xm[u] -= h;
+        jac.col(u) = (residual(xp) - residual(xm)) / (2.0 * h);
+      }
+      // Levenberg-Marquardt step from the stacked system [J; sqrt(mu) I] dx = [-r; 0].
+      bool improved = false;
+      Eigen::VectorXd dx;
+      for (int tries = 0; tries < 30 && !improved; ++tries) {
+        Eigen::MatrixXd stacked(r.size() + nx, nx);
+        stacked << jac, std::sqrt(damping) * Eigen::MatrixXd::Identity(nx, nx);
+        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(r.size() + nx);
+        rhs.head(r.size()) = -r;
+        dx = stacked.colPivHouseholderQr().solve(rhs);
+        if (residual(x + dx).squaredNorm() <= r.squaredNorm()) {
+          improved = true;
+          damping = std::max(damping / 10.0, 1e-15);
+        } else {
+          damping *= 10.0;
+        }
+      }
+      if (!improved) break;
+      x += dx;
+      if (dx.cwiseAbs().maxCoeff() < 1e-14) break;
+    }
+    const Eigen::VectorXd c = closure_at(x);
+    lambda += kappa * c;
+    out.closure = c.cwiseAbs().maxCoeff();
+    if (out.closure < 1e-12) {
+      out.converged = true;
+      break;
+    }
+  }
+  out.theta = JointVector(n);
+  out.theta[input] = theta_in;
+  for (int j = 0; j < n - 1; ++j) out.theta[passive[j]] = x[j];
+  out.deformations = x.tail(ndef);
+  out.energy = 0.5 * weight.cwiseProduct(out.deformations).squaredNorm();
+  return out;
+}
 
 }  // namespace loopfarm::testing

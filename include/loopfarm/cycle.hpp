@@ -25,7 +25,9 @@ struct CycleOptions {
   // A step whose passive angles move by more than this [rad] is refined by
   // bisection, as is a step whose solve fails.
   double max_passive_step = 0.5;
-  int max_refinements = 8;       // bisection depth per step
+  int max_refinements = 5;       // bisection depth per step (finest step h / 32)
+  // Iteration cap of a continuation solve; a step that needs more is bisected.
+  int max_iterations_per_step = 20;
   bool secant_predictor = true;  // extrapolate the previous two samples
 
   bool full_turn() const;
@@ -63,6 +65,14 @@ struct CycleSummary {
   std::vector<CycleSample> samples;  // in input-angle order
 };
 
+// Where the stiff-limit equilibrium path folds (a sample with status
+// branch_jump) or does not return to its start after a full turn, the cycle
+// depends on the direction the input is driven in (reversing the loop's
+// labels reverses it), and which branch a jump lands on can change with
+// round-off. Such cycles are flagged (branch_jumps, refinements); read their
+// energy as one of several possible. Smooth cycles are exact and independent
+// of labelling, direction and scale (tests/cycle_test.cpp).
+//
 // Drives the loop from `start` (an assembled state at theta0, e.g. from
 // assemble()) through the cycle. `summary` is reused: with the same N it does
 // not allocate. The workspace must belong to `model`.

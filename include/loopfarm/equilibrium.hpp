@@ -130,6 +130,7 @@ struct EquilibriumSummary {
   double energy = 0.0;           // E / (k_a L^2)
   double closure_residual = 0.0;  // max-norm of (rotation, translation / L)
   double stationarity = 0.0;      // max-norm of the Lagrangian gradient
+  int gauss_newton_steps = 0;       // iterations that fell back to the Gauss-Newton model
   double max_regularization = 0.0;  // largest primal regularisation used
   EquilibriumState state;            // the solution (deformations, angles, multipliers)
 };
@@ -155,9 +156,11 @@ struct EquilibriumWorkspace {
 
 // Solves the stiff-limit equilibrium at input angle theta_in from `guess`
 // (whose input-joint angle is ignored). Never throws for a failed solve: the
-// status says what happened. No heap allocation.
+// status says what happened. No heap allocation. `max_iterations` > 0
+// overrides the model's iteration limit for this solve.
 EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& workspace,
-                                     double theta_in, const EquilibriumState& guess);
+                                     double theta_in, const EquilibriumState& guess,
+                                     int max_iterations = 0);
 
 // The normalised geometry deformed by `deformations`, in `out` (same size).
 void deformed_geometry(const LoopModel& model, const DeformationVector& deformations,

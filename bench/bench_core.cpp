@@ -1,0 +1,116 @@
+// Cost of the elastic-energy core: one warm equilibrium solve and one cycle,
+// for the paper's Bennett loop (movable: every sample converges to zero) and
+// for generic 4R loops (rigid: every sample carries energy).
+//
+//   build/release/bench/loopfarm_bench
+//
+// Counters: Newton iterations per solve or per cycle sample, bisections per
+// cycle, samples that jumped branch or failed. Figures are in README.md.
+#include <benchmark/benchmark.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "loopfarm/assembly.hpp"
+#include "loopfarm/cycle.hpp"
+#include "loopfarm/sample_loops.hpp"
+
+namespace loopfarm {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+struct Fixture {
+  LoopGeometry geometry;
+  double theta0 = 0.0;
+  JointVector start;  // empty: assemble from the deterministic guesses
+};
+
+// Generic loops: the same fixed seeds everywhere, so runs compare.
+constexpr std::uint64_t kGenericSeeds[] = {1, 2, 3, 4, 5, 6, 7, 8};
+
+Fixture bennett() {
+  const LoopGeometry g = paper_bennett_loop();
+  return {g, 120 * kDeg, bennett_angles(g, 120 * kDeg)};
+}
+
+Fixture generic(std::uint64_t seed) { return {random_loop(4, seed), 0.0, JointVector()}; }
+
+EquilibriumState assembled(const LoopModel& model, EquilibriumWorkspace& ws, const Fixture& f) {
+  return f.start.size() > 0 ? assemble_from_angles(model, ws, f.start).state : assemble(model, ws, f.theta0).state;
+}
+
+// One solve at theta0 + 1 degree from the solution at theta0: the warm start a
+// cycle step makes (N = 360 spacing).
+void solve_warm(benchmark::State& state, const Fixture& f) {
+  const LoopModel model(f.geometry);
+  EquilibriumWorkspace ws(model);
+  const EquilibriumState from = assembled(model, ws, f);
+  long iterations = 0;
+  long solves = 0;
+  for (auto _ : state) {
+    const EquilibriumSummary s = solve_equilibrium(model, ws, f.theta0 + kDeg, from);
+    benchmark::DoNotOptimize(s.energy);
+    iterations += s.iterations;
+    ++solves;
+  }
+  state.counters["iterations"] = static_cast<double>(iterations) / static_cast<double>(solves);
+}
+
+void cycle(benchmark::State& state, const std::vector<Fixture>& fixtures) {
+  CycleOptions options;
+  options.samples = static_cast<int>(state.range(0));
+  struct Prepared {
+    LoopModel model;
+    EquilibriumWorkspace ws;
+    EquilibriumState start;
+    double theta0;
+  };
+  std::vector<Prepared> prepared;
+  prepared.reserve(fixtures.size());
+  for (const Fixture& f : fixtures) {
+    LoopModel model(f.geometry);
+    EquilibriumWorkspace ws(model);
+    EquilibriumState start = assembled(model, ws, f);
+    prepared.push_back({model, ws, start, f.theta0});
+  }
+  CycleSummary summary;
+  long cycles = 0, iterations = 0, refinements = 0, jumps = 0, failed = 0;
+  size_t next = 0;
+  for (auto _ : state) {
+    Prepared& p = prepared[next];
+    next = (next + 1) % prepared.size();
+    cycle_energy(p.model, p.ws, p.theta0, p.start, options, summary);
+    benchmark::DoNotOptimize(summary.E_mean);
+    ++cycles;
+    iterations += summary.total_iterations;
+    refinements += summary.refinements;
+    jumps += summary.branch_jumps;
+    failed += summary.failed_samples;
+  }
+  const double samples = static_cast<double>(cycles) * options.samples;
+  state.counters["it/sample"] = static_cast<double>(iterations) / samples;
+  state.counters["bisect/cycle"] = static_cast<double>(refinements) / static_cast<double>(cycles);
+  state.counters["jump_frac"] = static_cast<double>(jumps) / samples;
+  state.counters["fail_frac"] = static_cast<double>(failed) / samples;
+}
+
+void BM_SolveWarm_Bennett(benchmark::State& state) { solve_warm(state, bennett()); }
+void BM_SolveWarm_Generic(benchmark::State& state) { solve_warm(state, generic(3)); }
+
+void BM_Cycle_Bennett(benchmark::State& state) { cycle(state, {bennett()}); }
+void BM_Cycle_Generic(benchmark::State& state) {
+  std::vector<Fixture> fixtures;
+  for (std::uint64_t seed : kGenericSeeds) fixtures.push_back(generic(seed));
+  cycle(state, fixtures);
+}
+
+BENCHMARK(BM_SolveWarm_Bennett);
+BENCHMARK(BM_SolveWarm_Generic);
+BENCHMARK(BM_Cycle_Bennett)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Cycle_Generic)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace loopfarm
+
+BENCHMARK_MAIN();

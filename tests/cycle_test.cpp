@@ -1,0 +1,308 @@
+#include "loopfarm/cycle.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "allocation_counter.hpp"
+#include "loopfarm/assembly.hpp"
+#include "loopfarm/sample_loops.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm {
+namespace {
+
+using testing::rad;
+using testing::relative_error;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The paper's loop with link 1 lengthened to 2.03: not movable, smooth cycle.
+LoopGeometry long_link_loop() {
+  LoopGeometry g = paper_bennett_loop();
+  g.a[0] = 2.03;
+  return g;
+}
+
+JointVector paper_start() { return bennett_angles(paper_bennett_loop(), rad(120)); }
+
+CycleSummary run_cycle(const LoopGeometry& g, const JointVector& start, const EquilibriumOptions& eo = {},
+                       const CycleOptions& co = {}) {
+  const LoopModel model(g, eo);
+  EquilibriumWorkspace ws(model);
+  const EquilibriumSummary assembled = assemble_from_angles(model, ws, start);
+  CycleSummary summary;
+  cycle_energy(model, ws, start[eo.input_joint], assembled.state, co, summary);
+  return summary;
+}
+
+// A parameter of the geometry in GeometryVector order (a, alpha, d).
+double& parameter(LoopGeometry& g, int j) {
+  const int n = g.joints();
+  if (j < n) return g.a[j];
+  if (j < 2 * n) return g.alpha[j - n];
+  return g.d[j - 2 * n];
+}
+
+struct GradientCase {
+  const char* name;
+  LoopGeometry g;
+  JointVector start;
+  Compliance compliance;
+};
+
+std::vector<GradientCase> gradient_cases() {
+  std::vector<GradientCase> cases;
+  cases.push_back({"paper loop a1=2.03", long_link_loop(), paper_start(), Compliance::paper});
+  LoopGeometry offset = long_link_loop();
+  offset.d << 0.1, -0.05, 0.2, 0.0;
+  cases.push_back({"with offsets, full compliance", offset, paper_start(), Compliance::full});
+  LoopGeometry five = random_loop(5, 21);
+  cases.push_back({"random 5R", five, random_angles(5, 21), Compliance::paper});
+  return cases;
+}
+
+// A gradient case's cycle, solved with N samples.
+struct SolvedCycle {
+  SolvedCycle(const GradientCase& c, int samples)
+      : eo(options_for(c)), co(cycle_options(samples)), model(c.g, eo), ws(model) {
+    cycle_energy(model, ws, c.start[0], assemble_from_angles(model, ws, c.start).state, co, summary);
+  }
+  static EquilibriumOptions options_for(const GradientCase& c) {
+    EquilibriumOptions o;
+    o.compliance = c.compliance;
+    return o;
+  }
+  static CycleOptions cycle_options(int samples) {
+    CycleOptions o;
+    o.samples = samples;
+    return o;
+  }
+  EquilibriumOptions eo;
+  CycleOptions co;
+  LoopModel model;
+  EquilibriumWorkspace ws;
+  CycleSummary summary;
+};
+
+// dE_mean/dp from the multipliers against central differences of whole cycles.
+TEST(Cycle, EnergyGradientAgreesWithCentralDifferences) {
+  for (const GradientCase& c : gradient_cases()) {
+    SolvedCycle s(c, 16);
+    ASSERT_EQ(s.summary.failed_samples + s.summary.branch_jumps, 0) << c.name;
+    ASSERT_GT(s.summary.E_mean, 1e-8) << c.name;
+    const GeometryVector gradient = cycle_energy_gradient(s.model, s.ws, s.summary);
+
+    const int np = 3 * c.g.joints();
+    Eigen::VectorXd fd(np);
+    for (int j = 0; j < np; ++j) {
+      const double h = 1e-5;
+      auto e_mean = [&](double step) {
+        LoopGeometry g = c.g;
+        parameter(g, j) += step;
+        // Started from the base cycle's solved pose: the same branch.
+        return run_cycle(g, s.summary.samples[0].state.theta, s.eo, s.co).E_mean;
+      };
+      fd[j] = (e_mean(h) - e_mean(-h)) / (2 * h);
+    }
+    EXPECT_LT((gradient - fd).cwiseAbs().maxCoeff(), 1e-6 * fd.cwiseAbs().maxCoeff())
+        << c.name << "\nanalytic " << gradient.transpose() << "\nfd       " << fd.transpose();
+  }
+}
+
+// d r/dp by implicit differentiation against central differences of the
+// stacked weighted deformations; and E_mean = |r|^2 / 2 ties it to the gradient.
+TEST(Cycle, DeformationJacobianAgreesWithCentralDifferences) {
+  for (const GradientCase& c : gradient_cases()) {
+    SolvedCycle s(c, 8);
+    ASSERT_EQ(s.summary.failed_samples + s.summary.branch_jumps, 0) << c.name;
+    const Eigen::VectorXd r = cycle_weighted_deformations(s.model, s.summary);
+    EXPECT_NEAR(0.5 * r.squaredNorm(), s.summary.E_mean, 1e-14 + 1e-12 * s.summary.E_mean);
+    const Eigen::MatrixXd jacobian = cycle_deformation_jacobian(s.model, s.ws, s.summary);
+    ASSERT_EQ(jacobian.rows(), r.size());
+    ASSERT_EQ(jacobian.cols(), 3 * c.g.joints());
+
+    Eigen::MatrixXd fd(jacobian.rows(), jacobian.cols());
+    for (int j = 0; j < jacobian.cols(); ++j) {
+      const double h = 1e-5;
+      auto weighted = [&](double step) {
+        LoopGeometry g = c.g;
+        parameter(g, j) += step;
+        const LoopModel moved(g, s.eo);
+        return cycle_weighted_deformations(moved, run_cycle(g, s.summary.samples[0].state.theta, s.eo, s.co));
+      };
+      fd.col(j) = (weighted(h) - weighted(-h)) / (2 * h);
+    }
+    EXPECT_LT(relative_error(jacobian, fd), 1e-6) << c.name;
+    // Gauss-Newton identity: grad E_mean = J^T r.
+    const GeometryVector gradient = cycle_energy_gradient(s.model, s.ws, s.summary);
+    EXPECT_LT(relative_error(jacobian.transpose() * r, gradient), 1e-9) << c.name;
+  }
+}
+
+TEST(Cycle, BennettLoopHasZeroCycleEnergy) {
+  const CycleSummary s = run_cycle(paper_bennett_loop(), paper_start());
+  ASSERT_EQ(s.samples.size(), 32u);
+  EXPECT_EQ(s.failed_samples, 0);
+  EXPECT_EQ(s.branch_jumps, 0);
+  EXPECT_LE(s.E_max, 1e-20);
+  EXPECT_LE(s.max_closure_residual, 1e-13);
+  // Full turn: theta0 + 2 pi j / N.
+  for (size_t j = 0; j < s.samples.size(); ++j) {
+    EXPECT_NEAR(s.samples[j].theta_in, rad(120) + 2 * kPi * static_cast<double>(j) / 32, 1e-14);
+  }
+}
+
+TEST(Cycle, GenericLoopsHaveEnergyWellAboveZero) {
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    const LoopGeometry g = random_loop(4, seed);
+    const LoopModel model(g);
+    EquilibriumWorkspace ws(model);
+    const EquilibriumSummary start = assemble(model, ws, 0.0);
+    ASSERT_EQ(start.status, SolveStatus::converged) << seed;
+    CycleSummary s;
+    cycle_energy(model, ws, 0.0, start.state, {}, s);
+    EXPECT_GT(s.E_mean, 1e-3) << seed;
+    EXPECT_GE(s.E_max, s.E_mean) << seed;
+  }
+}
+
+// The energy belongs to the physical loop, not to how it is written down.
+TEST(Cycle, EnergyIsInvariantUnderRelabellingReversalAndScaling) {
+  struct Case {
+    LoopGeometry g;
+    JointVector start;
+  };
+  std::vector<Case> cases;
+  cases.push_back({long_link_loop(), paper_start()});
+  LoopGeometry offset = long_link_loop();
+  offset.d << 0.3, -0.2, 0.1, 0.4;
+  cases.push_back({offset, paper_start()});
+  cases.push_back({random_loop(5, 2), random_angles(5, 2)});
+  cases.push_back({random_loop(5, 10), random_angles(5, 10)});
+  for (const Case& c : cases) {
+    const int n = c.g.joints();
+    EquilibriumOptions eo;
+    eo.compliance = Compliance::full;
+    const CycleSummary base = run_cycle(c.g, c.start, eo);
+    // The premise: a smooth elastic path that closes after one turn. Where the
+    // path jumps branch, the cycle depends on the driving direction (which
+    // reversal flips) and on round-off (see cycle.hpp).
+    ASSERT_EQ(base.failed_samples + base.branch_jumps + base.refinements, 0);
+    const JointVector solved = base.samples[0].state.theta;
+    ASSERT_GT(base.E_mean, 1e-6);
+    const double tol = 1e-10 * base.E_mean;
+
+    for (int shift = 1; shift < n; ++shift) {
+      EquilibriumOptions shifted = eo;
+      shifted.input_joint = (n - shift) % n;  // old joint 0 is new joint n - shift
+      const CycleSummary s = run_cycle(relabelled(c.g, shift), relabelled_angles(solved, shift), shifted);
+      EXPECT_NEAR(s.E_mean, base.E_mean, tol) << "shift " << shift;
+      EXPECT_NEAR(s.E_max, base.E_max, tol) << "shift " << shift;
+    }
+    {
+      EquilibriumOptions rev = eo;
+      rev.input_joint = n - 1;  // old joint 0 is new joint n - 1, theta' = -theta
+      const CycleSummary s = run_cycle(reversed(c.g), reversed_angles(solved), rev);
+      EXPECT_NEAR(s.E_mean, base.E_mean, tol) << "reversed";
+      EXPECT_NEAR(s.E_max, base.E_max, tol) << "reversed";
+    }
+    for (double factor : {0.01, 3.0, 1000.0}) {
+      LoopGeometry g = c.g;
+      g.a *= factor;
+      g.d *= factor;
+      const CycleSummary s = run_cycle(g, solved, eo);
+      EXPECT_NEAR(s.E_mean, base.E_mean, tol) << "scale " << factor;
+      EXPECT_NEAR(s.E_max, base.E_max, tol) << "scale " << factor;
+    }
+  }
+}
+
+// A partial range is sampled evenly around theta0, and every sample's energy
+// is the exact equilibrium (checked with the independent reference solver).
+TEST(Cycle, PartialRangeSamplesAroundTheta0AndAgreesWithReferenceSolver) {
+  const LoopGeometry g = long_link_loop();
+  CycleOptions co;
+  co.samples = 7;
+  co.range = rad(60);
+  const CycleSummary s = run_cycle(g, paper_start(), {}, co);
+  ASSERT_EQ(s.samples.size(), 7u);
+  EXPECT_EQ(s.failed_samples, 0);
+  const LoopModel model(g);
+  for (int j = 0; j < 7; ++j) {
+    const CycleSample& sample = s.samples[static_cast<size_t>(j)];
+    EXPECT_NEAR(sample.theta_in, rad(90 + 10 * j), 1e-14);
+    const auto ref = testing::reference_equilibrium(model, sample.theta_in, sample.state.theta);
+    ASSERT_TRUE(ref.converged);
+    EXPECT_NEAR(sample.energy, ref.energy, 1e-7 * ref.energy) << j;
+  }
+  double mean = 0.0, max = 0.0;
+  for (const CycleSample& sample : s.samples) {
+    mean += sample.energy / 7;
+    max = std::max(max, sample.energy);
+  }
+  EXPECT_DOUBLE_EQ(s.E_mean, mean);
+  EXPECT_DOUBLE_EQ(s.E_max, max);
+}
+
+// The input angles a coarse and a fine cycle share get the same energies:
+// the continuation stays on one branch and does not drift with the step.
+TEST(Cycle, ResultDoesNotDependOnTheSampleCountAtSharedAngles) {
+  CycleOptions coarse, fine;
+  coarse.samples = 16;
+  fine.samples = 64;
+  const CycleSummary a = run_cycle(long_link_loop(), paper_start(), {}, coarse);
+  const CycleSummary b = run_cycle(long_link_loop(), paper_start(), {}, fine);
+  for (int j = 0; j < 16; ++j) {
+    EXPECT_NEAR(a.samples[static_cast<size_t>(j)].energy, b.samples[static_cast<size_t>(4 * j)].energy,
+                1e-12 * b.E_max)
+        << j;
+  }
+}
+
+TEST(Cycle, RepeatedCycleWithTheSameSampleCountDoesNotAllocate) {
+  const LoopGeometry g = long_link_loop();
+  const LoopModel model(g);
+  EquilibriumWorkspace ws(model);
+  const EquilibriumState start = assemble_from_angles(model, ws, paper_start()).state;
+  CycleSummary s;
+  cycle_energy(model, ws, rad(120), start, {}, s);
+  const long before = testing::allocations();
+  cycle_energy(model, ws, rad(120), start, {}, s);
+  EXPECT_EQ(testing::allocations() - before, 0);
+  EXPECT_EQ(s.failed_samples, 0);
+}
+
+TEST(Cycle, InvalidOptionsAreRejectedByName) {
+  auto message = [](const CycleOptions& o) -> std::string {
+    try {
+      o.validate();
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  CycleOptions o;
+  EXPECT_EQ(message(o), "");
+  o.samples = 1;
+  EXPECT_NE(message(o).find("samples"), std::string::npos);
+  o = {};
+  o.range = 0.0;
+  EXPECT_NE(message(o).find("range"), std::string::npos);
+  o.range = 7.0;
+  EXPECT_NE(message(o).find("range"), std::string::npos);
+  o = {};
+  o.max_passive_step = std::nan("");
+  EXPECT_NE(message(o).find("max_passive_step"), std::string::npos);
+  o = {};
+  o.max_refinements = -1;
+  EXPECT_NE(message(o).find("max_refinements"), std::string::npos);
+  o = {};
+  o.max_iterations_per_step = 0;
+  EXPECT_NE(message(o).find("max_iterations_per_step"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace loopfarm

@@ -1,0 +1,283 @@
+#include "loopfarm/equilibrium.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "allocation_counter.hpp"
+#include "loopfarm/sample_loops.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm {
+namespace {
+
+using testing::rad;
+using testing::reference_equilibrium;
+
+EquilibriumSummary solve_from(const LoopModel& model, double theta_in, const JointVector& theta) {
+  EquilibriumWorkspace ws(model);
+  return solve_equilibrium(model, ws, theta_in, EquilibriumState::at_angles(model, theta));
+}
+
+// The asymmetric Bennett closure equations (2a): theta3 = -theta1,
+// theta4 = -theta2, tan(theta1/2) tan(theta2/2) = sin((a2+a1)/2) / sin((a2-a1)/2).
+void expect_bennett_closure(const LoopGeometry& g, const JointVector& t, double tol) {
+  EXPECT_NEAR(wrap_angle(t[2] + t[0]), 0.0, tol);
+  EXPECT_NEAR(wrap_angle(t[3] + t[1]), 0.0, tol);
+  const double lhs = std::tan(t[0] / 2) * std::tan(t[1] / 2);
+  const double rhs = std::sin((g.alpha[1] + g.alpha[0]) / 2) / std::sin((g.alpha[1] - g.alpha[0]) / 2);
+  EXPECT_NEAR(lhs, rhs, tol * std::max(1.0, std::abs(rhs)));
+}
+
+// The line-symmetric closure equations (4a): theta3 = theta1, theta4 = theta2,
+// tan(theta1/2) tan(theta2/2) = cos((a2+a1)/2) / cos((a2-a1)/2).
+void expect_line_symmetric_closure(const LoopGeometry& g, const JointVector& t, double tol) {
+  EXPECT_NEAR(wrap_angle(t[2] - t[0]), 0.0, tol);
+  EXPECT_NEAR(wrap_angle(t[3] - t[1]), 0.0, tol);
+  const double lhs = std::tan(t[0] / 2) * std::tan(t[1] / 2);
+  const double rhs = std::cos((g.alpha[1] + g.alpha[0]) / 2) / std::cos((g.alpha[1] - g.alpha[0]) / 2);
+  EXPECT_NEAR(lhs, rhs, tol * std::max(1.0, std::abs(rhs)));
+}
+
+TEST(Equilibrium, BennettLoopSolvesToZeroEnergyOnItsClosureCurve) {
+  const LoopGeometry g = paper_bennett_loop();
+  for (Compliance compliance : {Compliance::paper, Compliance::full}) {
+    EquilibriumOptions options;
+    options.compliance = compliance;
+    const LoopModel model(g, options);
+    for (double deg : {-150.0, -60.0, 20.0, 75.0, 120.0, 160.0}) {
+      // Start away from the answer so that the solver has work to do.
+      JointVector guess = bennett_angles(g, rad(deg));
+      guess.tail(3).array() += 0.2;
+      const EquilibriumSummary s = solve_from(model, rad(deg), guess);
+      ASSERT_EQ(s.status, SolveStatus::converged) << deg;
+      EXPECT_LE(s.energy, 1e-20) << deg;
+      EXPECT_LE(s.closure_residual, 1e-13) << deg;
+      EXPECT_EQ(s.state.theta[0], rad(deg));
+      expect_bennett_closure(g, s.state.theta, 1e-10);
+    }
+  }
+}
+
+TEST(Equilibrium, LineSymmetricBennettLoopSolvesToZeroEnergyOnItsClosureCurve) {
+  const LoopGeometry g = bennett_loop_line_symmetric(2.0, rad(30), rad(90));
+  const LoopModel model(g);
+  for (double deg : {-120.0, -30.0, 45.0, 120.0}) {
+    JointVector guess = bennett_angles_line_symmetric(g, rad(deg));
+    guess.tail(3).array() -= 0.15;
+    const EquilibriumSummary s = solve_from(model, rad(deg), guess);
+    ASSERT_EQ(s.status, SolveStatus::converged) << deg;
+    EXPECT_LE(s.energy, 1e-20) << deg;
+    expect_line_symmetric_closure(g, s.state.theta, 1e-10);
+  }
+}
+
+TEST(Equilibrium, PlanarAndSphericalFourBarsHaveZeroEnergy) {
+  // Grashof crank-rocker: shortest link 1 is the crank, so every input angle closes.
+  const LoopGeometry planar = planar_four_bar(1.0, 3.0, 2.5, 3.5);
+  const LoopGeometry spherical = spherical_four_bar(rad(20), rad(70), rad(60), rad(80));
+  for (const LoopGeometry* g : {&planar, &spherical}) {
+    const LoopModel model(*g);
+    EquilibriumWorkspace ws(model);
+    EquilibriumState state = EquilibriumState::at_angles(model, random_angles(4, 3));
+    // Walk the input around, warm-starting each solve from the last.
+    for (int j = 0; j < 24; ++j) {
+      const double theta_in = rad(15.0 * j);
+      const EquilibriumSummary s = solve_equilibrium(model, ws, theta_in, state);
+      ASSERT_EQ(s.status, SolveStatus::converged) << j;
+      EXPECT_LE(s.energy, 1e-20) << j;
+      state = s.state;
+    }
+  }
+}
+
+// The returned state satisfies the KKT conditions, checked with a central-
+// difference Jacobian of closure_residual instead of the solver's own.
+TEST(Equilibrium, SolutionSatisfiesKktConditionsCheckedByFiniteDifferences) {
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    const LoopGeometry g = random_loop(4 + static_cast<int>(seed % 3), seed);
+    for (Compliance compliance : {Compliance::paper, Compliance::full}) {
+      EquilibriumOptions options;
+      options.compliance = compliance;
+      options.torsion_stiffness_ratio = 0.5 + 0.3 * static_cast<double>(seed);
+      const LoopModel model(g, options);
+      EquilibriumWorkspace ws(model);
+      const EquilibriumSummary s =
+          solve_equilibrium(model, ws, 0.3, EquilibriumState::at_angles(model, random_angles(g.joints(), seed)));
+      if (s.status != SolveStatus::converged) {
+        ADD_FAILURE() << "seed " << seed << ": " << to_string(s.status);
+        continue;
+      }
+      LoopGeometry deformed;
+      deformed_geometry(model, s.state.deformations, deformed);
+      EXPECT_LE(closure_residual(deformed, s.state.theta).cwiseAbs().maxCoeff(), 1e-12);
+      // grad_u (1/2 d^T K d) + A^T lambda = 0 for every unknown u.
+      for (int u = 0; u < model.unknown_count(); ++u) {
+        const double h = 1e-6;
+        auto residual_moved = [&](double step) {
+          EquilibriumState moved = s.state;
+          const int k = model.unknown_deformation(u);
+          if (k >= 0) moved.deformations[k] += step;
+          else moved.theta[model.unknown_joint(u)] += step;
+          LoopGeometry gm;
+          deformed_geometry(model, moved.deformations, gm);
+          return closure_residual(gm, moved.theta);
+        };
+        const Vector6 column = (residual_moved(h) - residual_moved(-h)) / (2 * h);
+        const int k = model.unknown_deformation(u);
+        const double energy_gradient =
+            k >= 0 ? model.deformation_stiffness(k) * s.state.deformations[k] : 0.0;
+        EXPECT_NEAR(energy_gradient + column.dot(s.state.multipliers), 0.0, 1e-8)
+            << "seed " << seed << " unknown " << u;
+      }
+    }
+  }
+}
+
+// solve_equilibrium against the method of multipliers with finite differences
+// (tests/test_support.hpp): same energy, same deformations, same pose.
+TEST(Equilibrium, AgreesWithAnIndependentAugmentedLagrangianSolver) {
+  struct Case {
+    LoopGeometry g;
+    double theta_in;
+    JointVector guess;
+  };
+  std::vector<Case> cases;
+  LoopGeometry long_link = paper_bennett_loop();
+  long_link.a[0] = 2.03;
+  for (double deg : {120.0, 45.0, -100.0}) {
+    cases.push_back({long_link, rad(deg), bennett_angles(paper_bennett_loop(), rad(deg))});
+  }
+  for (std::uint64_t seed = 11; seed <= 14; ++seed) {
+    const LoopGeometry g = random_loop(seed == 14 ? 5 : 4, seed);
+    cases.push_back({g, 1.0, random_angles(g.joints(), seed)});
+  }
+  for (Compliance compliance : {Compliance::paper, Compliance::full}) {
+    for (const Case& c : cases) {
+      EquilibriumOptions options;
+      options.compliance = compliance;
+      const LoopModel model(c.g, options);
+      const EquilibriumSummary s = solve_from(model, c.theta_in, c.guess);
+      ASSERT_EQ(s.status, SolveStatus::converged);
+      // Start the reference at the solution's pose: the question is whether
+      // both methods call the same point the minimum, not which basin a
+      // distant guess falls into.
+      JointVector start = s.state.theta;
+      start.array() += 0.05;
+      const auto ref = reference_equilibrium(model, c.theta_in, start);
+      ASSERT_TRUE(ref.converged) << ref.closure;
+      EXPECT_NEAR(s.energy, ref.energy, 1e-7 * ref.energy + 1e-14);
+      EXPECT_LT((s.state.deformations - ref.deformations).cwiseAbs().maxCoeff(), 1e-6);
+      for (int i = 0; i < c.g.joints(); ++i) {
+        EXPECT_NEAR(wrap_angle(s.state.theta[i] - ref.theta[i]), 0.0, 1e-6);
+      }
+    }
+  }
+}
+
+TEST(Equilibrium, WarmStartFromTheAnswerConvergesAtOnce) {
+  LoopGeometry g = paper_bennett_loop();
+  g.a[0] = 2.03;
+  const LoopModel model(g);
+  EquilibriumWorkspace ws(model);
+  const EquilibriumSummary cold =
+      solve_equilibrium(model, ws, rad(120), EquilibriumState::at_angles(model, bennett_angles(paper_bennett_loop(), rad(120))));
+  ASSERT_EQ(cold.status, SolveStatus::converged);
+  const EquilibriumSummary again = solve_equilibrium(model, ws, rad(120), cold.state);
+  EXPECT_EQ(again.status, SolveStatus::converged);
+  EXPECT_LE(again.iterations, 1);
+  EXPECT_NEAR(again.energy, cold.energy, 1e-15);
+  // A neighbouring input angle from the previous answer: a few Newton steps.
+  const EquilibriumSummary next = solve_equilibrium(model, ws, rad(122), cold.state);
+  EXPECT_EQ(next.status, SolveStatus::converged);
+  EXPECT_LE(next.iterations, 6);
+}
+
+TEST(Equilibrium, SolveDoesNotAllocate) {
+  for (int n : {4, 6, 8}) {
+    const LoopGeometry g = random_loop(n, 40 + n);
+    EquilibriumOptions options;
+    options.compliance = Compliance::full;
+    const LoopModel model(g, options);
+    EquilibriumWorkspace ws(model);
+    const EquilibriumState guess = EquilibriumState::at_angles(model, random_angles(n, 3));
+    EquilibriumSummary s = solve_equilibrium(model, ws, 0.7, guess);  // warm-up
+    const long before = testing::allocations();
+    s = solve_equilibrium(model, ws, 0.7, guess);
+    s = solve_equilibrium(model, ws, 0.8, s.state);
+    EXPECT_EQ(testing::allocations() - before, 0) << "n = " << n;
+    EXPECT_GT(s.iterations, 0);
+  }
+  // The counter works: an allocation is seen.
+  const long before = testing::allocations();
+  auto* probe = new std::string(100, 'x');
+  EXPECT_GT(testing::allocations() - before, 0);
+  delete probe;
+}
+
+TEST(Equilibrium, NonFiniteGuessIsReportedNotThrown) {
+  const LoopModel model(paper_bennett_loop());
+  EquilibriumWorkspace ws(model);
+  JointVector theta = bennett_angles(paper_bennett_loop(), 1.0);
+  theta[2] = std::nan("");
+  const EquilibriumSummary s = solve_equilibrium(model, ws, 1.0, EquilibriumState::at_angles(model, theta));
+  EXPECT_EQ(s.status, SolveStatus::non_finite);
+}
+
+TEST(Equilibrium, InvalidOptionsAreRejectedByName) {
+  const LoopGeometry g = paper_bennett_loop();
+  auto message = [&](EquilibriumOptions o) -> std::string {
+    try {
+      LoopModel model(g, o);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EquilibriumOptions o;
+  o.torsion_stiffness_ratio = 0.0;
+  EXPECT_NE(message(o).find("torsion_stiffness_ratio"), std::string::npos);
+  o = {};
+  o.torsion_stiffness_ratio = std::nan("");
+  EXPECT_NE(message(o).find("torsion_stiffness_ratio"), std::string::npos);
+  o = {};
+  o.input_joint = 4;
+  EXPECT_NE(message(o).find("input_joint"), std::string::npos);
+  o = {};
+  o.closure_tolerance = -1;
+  EXPECT_NE(message(o).find("closure_tolerance"), std::string::npos);
+  o = {};
+  o.max_iterations = 0;
+  EXPECT_NE(message(o).find("max_iterations"), std::string::npos);
+  EXPECT_EQ(message({}), "");
+  EXPECT_THROW(compliance_from_string("stiff"), std::invalid_argument);
+  EXPECT_EQ(compliance_from_string("full"), Compliance::full);
+}
+
+// The torsion ratio r weights the twist springs: E(r) = min (|da|^2 + r |dalpha|^2) / 2
+// rises with r, and the twist deformation |dalpha| falls (the exchange
+// argument for a parametric minimum: f + r g has g(x*(r)) non-increasing).
+TEST(Equilibrium, TorsionStiffnessRatioWeightsTheTwistDeformations) {
+  LoopGeometry g = paper_bennett_loop();
+  g.a[0] = 2.03;
+  const JointVector guess = bennett_angles(paper_bennett_loop(), rad(120));
+  double previous_energy = 0.0;
+  double previous_twist = 1e300;
+  for (double ratio : {0.1, 1.0, 10.0, 100.0}) {
+    EquilibriumOptions o;
+    o.torsion_stiffness_ratio = ratio;
+    const LoopModel model(g, o);
+    const EquilibriumSummary s = solve_from(model, rad(120), guess);
+    ASSERT_EQ(s.status, SolveStatus::converged);
+    EXPECT_GT(s.energy, previous_energy) << ratio;
+    const double twist = s.state.deformations.segment(4, 4).norm();
+    EXPECT_LT(twist, previous_twist) << ratio;
+    previous_energy = s.energy;
+    previous_twist = twist;
+  }
+}
+
+}  // namespace
+}  // namespace loopfarm
