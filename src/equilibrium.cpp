@@ -171,9 +171,9 @@ EquilibriumWorkspace::EquilibriumWorkspace(const LoopModel& model) {
   const int m = model.unknown_count();
   chain_hessian.resize(m, m);
   hessian.resize(m, m);
-  factor.resize(m, m);
+  normal.resize(m, m);
   jacobian.resize(6, m);
-  solved.resize(6, m);
+  half.resize(m, 6);
   gradient.resize(m);
   step.resize(m);
   scratch.resize(m);
@@ -287,11 +287,12 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
         const int k = model.unknown_deformation(u);
         if (k >= 0) ws.hessian(u, u) += model.deformation_stiffness(k);
       }
-      ws.hessian.noalias() += sigma * ws.jacobian.transpose() * ws.jacobian;
+      ws.hessian += sigma * ws.normal;
       ws.hessian.diagonal().array() += rho;
       llt.compute(ws.hessian);
       return llt.info() == Eigen::Success;
     };
+    ws.normal.noalias() = ws.jacobian.transpose().lazyProduct(ws.jacobian);
     bool factored = false;
     double rho = 0.0;
     for (double trial_sigma = sigma; trial_sigma <= kMaxAugmentation && !factored; trial_sigma *= 10.0) {
@@ -313,17 +314,29 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     rho_last = rho;
     summary.max_regularization = std::max(summary.max_regularization, rho);
 
-    ws.solved = llt.solve(ws.jacobian.transpose()).transpose();  // (H^-1 Aᵀ)ᵀ
-    ws.schur.noalias() = ws.jacobian * ws.solved.transpose();
+    // With H = L Lᵀ, Y = L^-1 Aᵀ and z = L^-1 g: the Schur complement
+    // A H^-1 Aᵀ is YᵀY, and the step -H^-1 (g + Aᵀ dl) is -L^-ᵀ (z + Y dl).
+    const auto lower = llt.matrixL();
+    ws.half = ws.jacobian.transpose();
+    lower.solveInPlace(ws.half);
+    ws.scratch = ws.gradient;
+    lower.solveInPlace(ws.scratch);
+    ws.schur.noalias() = ws.half.transpose().lazyProduct(ws.half);
     ws.schur.diagonal().array() += mu;
     schur_llt.compute(ws.schur);
     if (schur_llt.info() != Eigen::Success) {
       summary.status = SolveStatus::singular;
       break;
     }
-    ws.scratch = llt.solve(ws.gradient);  // H^-1 g
-    const Vector6 dual = schur_llt.solve(c - ws.jacobian * ws.scratch);
-    ws.step.noalias() = -ws.scratch - ws.solved.transpose() * dual;
+    Vector6 dual = schur_llt.solve(c - ws.half.transpose().lazyProduct(ws.scratch));
+    ws.scratch.noalias() += ws.half.lazyProduct(dual);
+    const double curvature = ws.scratch.squaredNorm();  // stepᵀ H step
+    ws.step = -ws.scratch;
+    llt.matrixU().solveInPlace(ws.step);
+    // The sigma AᵀA term leaves dx the Newton step but shifts the multiplier
+    // step: W dx + Aᵀ(dl - sigma c) = -g when A dx = -c. Undo the shift, or the
+    // multipliers (and with them x) converge only linearly.
+    dual -= sigma * c;
     if (!ws.step.allFinite() || !dual.allFinite()) {
       summary.status = SolveStatus::non_finite;
       break;
@@ -340,7 +353,6 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     }
     const double slope0 = energy_slope + lambda_plus.dot(jacobian_step);
     const double slope1 = c.dot(jacobian_step);
-    const double curvature = ws.step.dot(ws.hessian * ws.step);
     merit_weight = std::max(merit_weight, 1.0);
     if (slope0 + merit_weight * slope1 > -0.1 * curvature && slope1 < 0.0) {
       merit_weight = std::max(merit_weight, (slope0 + 0.1 * curvature) / -slope1 * 2.0);

@@ -142,9 +142,9 @@ struct EquilibriumWorkspace {
   ChainKinematics chain;
   ChainMatrix chain_hessian;
   UnknownMatrix hessian;      // Hessian of the Lagrangian (+ augmentation)
-  UnknownMatrix factor;       // its Cholesky factor storage
-  Matrix6U jacobian;          // closure Jacobian with respect to the unknowns
-  Matrix6U solved;            // H^-1 A^T, transposed
+  UnknownMatrix normal;       // A^T A
+  Matrix6U jacobian;          // closure Jacobian A with respect to the unknowns
+  Eigen::Matrix<double, Eigen::Dynamic, 6, 0, kMaxUnknowns, 6> half;  // L^-1 A^T, H = L L^T
   UnknownVector gradient;     // gradient of the Lagrangian
   UnknownVector step;
   UnknownVector scratch;
