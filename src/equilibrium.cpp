@@ -7,6 +7,8 @@
 
 #include <Eigen/Cholesky>
 
+#include "small_dense.hpp"
+
 namespace loopfarm {
 namespace {
 
@@ -233,7 +235,6 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
 
   double energy = evaluate(model, ws, x, true);
   ++summary.residual_evaluations;
-  Eigen::LLT<UnknownMatrix> llt(m);
   Eigen::LLT<Matrix6> schur_llt;
 
   for (;;) {
@@ -278,21 +279,19 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // least-norm projection step towards closure that is always defined once a
     // small rho covers the passive angles (K has no block for them).
     auto factor = [&](bool exact, double rho) {
-      if (exact) {
-        ws.hessian = ws.chain_hessian;
-      } else {
-        ws.hessian.setZero();
+      // Lower triangle only: that is all the factorisation reads.
+      for (int j = 0; j < m; ++j) {
+        for (int i = j; i < m; ++i) {
+          ws.hessian(i, j) = (exact ? ws.chain_hessian(i, j) : 0.0) + sigma * ws.normal(i, j);
+        }
+        const int k = model.unknown_deformation(j);
+        ws.hessian(j, j) += rho + (k >= 0 ? model.deformation_stiffness(k) : 0.0);
       }
-      for (int u = 0; u < m; ++u) {
-        const int k = model.unknown_deformation(u);
-        if (k >= 0) ws.hessian(u, u) += model.deformation_stiffness(k);
-      }
-      ws.hessian += sigma * ws.normal;
-      ws.hessian.diagonal().array() += rho;
-      llt.compute(ws.hessian);
-      return llt.info() == Eigen::Success;
+      return dense::cholesky_in_place(ws.hessian, m);
     };
-    ws.normal.noalias() = ws.jacobian.transpose().lazyProduct(ws.jacobian);
+    for (int j = 0; j < m; ++j) {
+      for (int i = j; i < m; ++i) ws.normal(i, j) = ws.jacobian.col(i).dot(ws.jacobian.col(j));
+    }
     bool factored = false;
     double rho = 0.0;
     for (double trial_sigma = sigma; trial_sigma <= kMaxAugmentation && !factored; trial_sigma *= 10.0) {
@@ -316,23 +315,24 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
 
     // With H = L Lᵀ, Y = L^-1 Aᵀ and z = L^-1 g: the Schur complement
     // A H^-1 Aᵀ is YᵀY, and the step -H^-1 (g + Aᵀ dl) is -L^-ᵀ (z + Y dl).
-    const auto lower = llt.matrixL();
     ws.half = ws.jacobian.transpose();
-    lower.solveInPlace(ws.half);
+    dense::solve_lower(ws.hessian, m, ws.half);
     ws.scratch = ws.gradient;
-    lower.solveInPlace(ws.scratch);
-    ws.schur.noalias() = ws.half.transpose().lazyProduct(ws.half);
-    ws.schur.diagonal().array() += mu;
-    schur_llt.compute(ws.schur);
+    dense::solve_lower(ws.hessian, m, ws.scratch);
+    for (int j = 0; j < 6; ++j) {
+      for (int i = j; i < 6; ++i) ws.schur(i, j) = ws.half.col(i).dot(ws.half.col(j));
+      ws.schur(j, j) += mu;
+    }
+    schur_llt.compute(ws.schur);  // fixed 6 x 6: Eigen unrolls it
     if (schur_llt.info() != Eigen::Success) {
       summary.status = SolveStatus::singular;
       break;
     }
-    Vector6 dual = schur_llt.solve(c - ws.half.transpose().lazyProduct(ws.scratch));
-    ws.scratch.noalias() += ws.half.lazyProduct(dual);
+    Vector6 dual = schur_llt.solve(c - ws.half.transpose() * ws.scratch);
+    for (int u = 0; u < m; ++u) ws.scratch[u] += ws.half.row(u).dot(dual);
     const double curvature = ws.scratch.squaredNorm();  // stepᵀ H step
     ws.step = -ws.scratch;
-    llt.matrixU().solveInPlace(ws.step);
+    dense::solve_lower_transposed(ws.hessian, m, ws.step);
     // The sigma AᵀA term leaves dx the Newton step but shifts the multiplier
     // step: W dx + Aᵀ(dl - sigma c) = -g when A dx = -c. Undo the shift, or the
     // multipliers (and with them x) converge only linearly.

@@ -141,8 +141,8 @@ struct EquilibriumWorkspace {
 
   ChainKinematics chain;
   ChainMatrix chain_hessian;
-  UnknownMatrix hessian;      // Hessian of the Lagrangian (+ augmentation)
-  UnknownMatrix normal;       // A^T A
+  UnknownMatrix hessian;      // H = W + sigma AᵀA + rho I, then its Cholesky factor L
+  UnknownMatrix normal;       // AᵀA (lower triangle)
   Matrix6U jacobian;          // closure Jacobian A with respect to the unknowns
   Eigen::Matrix<double, Eigen::Dynamic, 6, 0, kMaxUnknowns, 6> half;  // L^-1 A^T, H = L L^T
   UnknownVector gradient;     // gradient of the Lagrangian
