@@ -1,5 +1,5 @@
-// The paper's figures (Hu & Kecskemethy, ../shared/seeds/000_*.txt) as
-// asserted tests. The charts of the same runs are in docs/ (docs/make_figures.sh).
+// The paper's figures (Xu & Li 2017, README.md "Citing") as asserted tests.
+// The charts of the same runs are in docs/figures/ (docs/make_figures.sh).
 #include <cmath>
 #include <vector>
 
