@@ -175,7 +175,7 @@ EquilibriumWorkspace::EquilibriumWorkspace(const LoopModel& model) {
   hessian.resize(m, m);
   normal.resize(m, m);
   jacobian.resize(6, m);
-  half.resize(m, 6);
+  solved.resize(m, 8);
   gradient.resize(m);
   step.resize(m);
   scratch.resize(m);
@@ -315,21 +315,26 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
 
     // With H = L Lᵀ, Y = L^-1 Aᵀ and z = L^-1 g: the Schur complement
     // A H^-1 Aᵀ is YᵀY, and the step -H^-1 (g + Aᵀ dl) is -L^-ᵀ (z + Y dl).
-    ws.half = ws.jacobian.transpose();
-    dense::solve_lower(ws.hessian, m, ws.half);
-    ws.scratch = ws.gradient;
-    dense::solve_lower(ws.hessian, m, ws.scratch);
-    for (int j = 0; j < 6; ++j) {
-      for (int i = j; i < 6; ++i) ws.schur(i, j) = ws.half.col(i).dot(ws.half.col(j));
-      ws.schur(j, j) += mu;
+    ws.solved.leftCols<6>() = ws.jacobian.transpose();
+    ws.solved.col(6) = ws.gradient;
+    ws.solved.col(7).setZero();
+    dense::solve_lower_rows(ws.hessian, m, ws.solved);
+    // Gram matrix of the solved columns: its 6 x 6 block is the Schur
+    // complement YᵀY, column 6 holds Yᵀz.
+    Eigen::Matrix<double, 8, 8> gram = Eigen::Matrix<double, 8, 8>::Zero();
+    for (int u = 0; u < m; ++u) {
+      const Eigen::Matrix<double, 1, 8> row = ws.solved.row(u);
+      gram.noalias() += row.transpose() * row;
     }
+    ws.schur = gram.topLeftCorner<6, 6>();
+    ws.schur.diagonal().array() += mu;
     schur_llt.compute(ws.schur);  // fixed 6 x 6: Eigen unrolls it
     if (schur_llt.info() != Eigen::Success) {
       summary.status = SolveStatus::singular;
       break;
     }
-    Vector6 dual = schur_llt.solve(c - ws.half.transpose() * ws.scratch);
-    for (int u = 0; u < m; ++u) ws.scratch[u] += ws.half.row(u).dot(dual);
+    Vector6 dual = schur_llt.solve(c - gram.col(6).head<6>());
+    for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 6) + ws.solved.row(u).head<6>().dot(dual);
     const double curvature = ws.scratch.squaredNorm();  // stepᵀ H step
     ws.step = -ws.scratch;
     dense::solve_lower_transposed(ws.hessian, m, ws.step);

@@ -253,31 +253,43 @@ void residual_hessian(const ChainKinematics& c, const Vector6& lambda, std::span
   const Vector3 mu = c.log_jacobian.transpose() * lw;
   const double lw_phi = lw.dot(phi);
 
-  // Per-element precomputation.
-  std::array<Vector3, kMaxChain> u, lw_cross_w, w_cross_mu, trans_cross_lv;
-  std::array<double, kMaxChain> phi_u, lw_u, phi_w, lw_w, lw_g;
+  // Per-element precomputation. Grouping the terms by what they share with
+  // element k, the entry for k <= l is
+  //   h = u_k . q_l + (phi . u_k) s_l + (l_w . u_k) r_l + w_k . t_l,
+  //   q_l = 1/2 l_w x w_l + beta (l_w . phi) w_l,
+  //   s_l = (beta'/t) (l_w . g_l) - 2 beta (l_w . w_l),   r_l = beta (phi . w_l),
+  //   t_l = w_l x mu + (w_l x p + v_l) x l_v.
+  // A translation (w = 0) has u = 0, so its row of the upper triangle is zero
+  // and as column l it keeps only w_k . t_l.
+  std::array<Vector3, kMaxChain> u, q, tl;
+  std::array<double, kMaxChain> phi_u, lw_u, s_l, r_l;
+  std::array<bool, kMaxChain> rotation;
   for (int i = 0; i < m; ++i) {
     const int e = elements[static_cast<size_t>(i)];
+    const auto kind = static_cast<ChainParameter>(e % kElementsPerJoint);
+    rotation[i] = kind == ChainParameter::theta || kind == ChainParameter::alpha;
     const Vector3& w = c.omega[e];
+    tl[i] = (w.cross(c.position) + c.v[e]).cross(lv);
+    if (!rotation[i]) continue;
     u[i] = c.log_jacobian * w;
     phi_u[i] = phi.dot(u[i]);
     lw_u[i] = lw.dot(u[i]);
-    phi_w[i] = phi.dot(w);
-    lw_w[i] = lw.dot(w);
-    lw_g[i] = lw_phi * phi_w[i] - t * t * lw_w[i];
-    lw_cross_w[i] = lw.cross(w);
-    w_cross_mu[i] = w.cross(mu);
-    trans_cross_lv[i] = (w.cross(c.position) + c.v[e]).cross(lv);
+    const double phi_w = phi.dot(w);
+    const double lw_w = lw.dot(w);
+    const double lw_g = lw_phi * phi_w - t * t * lw_w;
+    q[i] = 0.5 * lw.cross(w) + beta * lw_phi * w;
+    s_l[i] = dbeta_over_t * lw_g - 2.0 * beta * lw_w;
+    r_l[i] = beta * phi_w;
+    tl[i] += w.cross(mu);
   }
   for (int j = 0; j < m; ++j) {
-    const Vector3& wl = c.omega[elements[static_cast<size_t>(j)]];
     for (int i = 0; i <= j; ++i) {
-      const Vector3& wk = c.omega[elements[static_cast<size_t>(i)]];
-      // l_w . M_{w_l} u_k
-      double h = 0.5 * u[i].dot(lw_cross_w[j]) + dbeta_over_t * phi_u[i] * lw_g[j] +
-                 beta * (lw_phi * wl.dot(u[i]) + phi_w[j] * lw_u[i] - 2.0 * lw_w[j] * phi_u[i]);
-      // l_w . J^-1 (w_k x w_l) = w_k . (w_l x mu), and l_v . (w_k x t_l) = w_k . (t_l x l_v).
-      h += wk.dot(w_cross_mu[j]) + wk.dot(trans_cross_lv[j]);
+      double h = 0.0;
+      if (rotation[i]) {
+        const Vector3& wk = c.omega[elements[static_cast<size_t>(i)]];
+        h = wk.dot(tl[j]);
+        if (rotation[j]) h += u[i].dot(q[j]) + phi_u[i] * s_l[j] + lw_u[i] * r_l[j];
+      }
       out(i, j) = h;
       out(j, i) = h;
     }

@@ -2,56 +2,77 @@
 // rows, 11 for a 4R loop). Eigen's general routines for dynamic sizes block,
 // pack and dispatch for large matrices; at these sizes that overhead costs
 // more than the arithmetic (a profile of the warm solve put half its
-// instructions there), so the few operations the solver needs are written out.
-// Private to src/.
+// instructions there), so the few operations the solver needs are written out,
+// column-oriented so that every inner loop runs down one contiguous column.
+// Matrices are column-major (Eigen's default). Private to src/.
 #pragma once
 
 #include <cmath>
 
 namespace loopfarm::dense {
 
-// Cholesky factorisation in place: on success the lower triangle of `a`
-// (n x n, only its lower triangle read) holds L with a = L Lᵀ. Returns false
-// as soon as a pivot is not positive (or not a number): the matrix is then not
-// positive definite, which is what the solver uses this test for.
+// Cholesky factorisation in place (right-looking): on success the lower
+// triangle of `a` (n x n, only its lower triangle read) holds L with
+// a = L Lᵀ. Returns false as soon as a pivot is not positive (or not a
+// number): the matrix is then not positive definite, which is what the solver
+// uses this test for.
 template <class Matrix>
-bool cholesky_in_place(Matrix& a, int n) {
+bool cholesky_in_place(Matrix& matrix, int n) {
+  double* __restrict a = matrix.data();
+  const long lda = matrix.outerStride();
   for (int j = 0; j < n; ++j) {
-    double pivot = a(j, j);
-    for (int k = 0; k < j; ++k) pivot -= a(j, k) * a(j, k);
+    double* __restrict column = a + j * lda;
+    const double pivot = column[j];
     if (!(pivot > 0.0)) return false;
-    pivot = std::sqrt(pivot);
-    a(j, j) = pivot;
-    const double inverse = 1.0 / pivot;
-    for (int i = j + 1; i < n; ++i) {
-      double s = a(i, j);
-      for (int k = 0; k < j; ++k) s -= a(i, k) * a(j, k);
-      a(i, j) = s * inverse;
+    const double root = std::sqrt(pivot);
+    const double inverse = 1.0 / root;
+    column[j] = root;
+    for (int i = j + 1; i < n; ++i) column[i] *= inverse;
+    // Rank-one update of the trailing lower triangle.
+    for (int k = j + 1; k < n; ++k) {
+      double* __restrict target = a + k * lda;
+      const double factor = column[k];
+      for (int i = k; i < n; ++i) target[i] -= column[i] * factor;
     }
   }
   return true;
 }
 
-// b <- L^-1 b for every column of b (n rows), L from cholesky_in_place.
-template <class Matrix, class Rhs>
-void solve_lower(const Matrix& l, int n, Rhs& b) {
-  for (int c = 0; c < b.cols(); ++c) {
-    for (int i = 0; i < n; ++i) {
-      double s = b(i, c);
-      for (int k = 0; k < i; ++k) s -= l(i, k) * b(k, c);
-      b(i, c) = s / l(i, i);
+// B <- L^-1 B for a row-major B of n rows and a fixed number of columns,
+// L from cholesky_in_place: row i of B is updated by whole rows, which the
+// compiler unrolls and vectorises.
+template <class Matrix, class Rows>
+void solve_lower_rows(const Matrix& lower, int n, Rows& b) {
+  static_assert(Rows::IsRowMajor && Rows::ColsAtCompileTime > 0, "row-major, fixed width");
+  constexpr int width = Rows::ColsAtCompileTime;
+  const double* __restrict l = lower.data();
+  const long ldl = lower.outerStride();
+  double* __restrict rows = b.data();
+  for (int j = 0; j < n; ++j) {
+    const double* __restrict column = l + j * ldl;
+    double* __restrict pivot_row = rows + j * width;
+    const double inverse = 1.0 / column[j];
+    for (int c = 0; c < width; ++c) pivot_row[c] *= inverse;
+    for (int i = j + 1; i < n; ++i) {
+      double* __restrict row = rows + i * width;
+      const double factor = column[i];
+      for (int c = 0; c < width; ++c) row[c] -= factor * pivot_row[c];
     }
   }
 }
 
 // b <- L^-ᵀ b for every column of b.
 template <class Matrix, class Rhs>
-void solve_lower_transposed(const Matrix& l, int n, Rhs& b) {
-  for (int c = 0; c < b.cols(); ++c) {
+void solve_lower_transposed(const Matrix& lower, int n, Rhs& rhs) {
+  const double* __restrict l = lower.data();
+  const long ldl = lower.outerStride();
+  for (long c = 0; c < rhs.cols(); ++c) {
+    double* __restrict b = rhs.data() + c * rhs.outerStride();
     for (int i = n - 1; i >= 0; --i) {
-      double s = b(i, c);
-      for (int k = i + 1; k < n; ++k) s -= l(k, i) * b(k, c);
-      b(i, c) = s / l(i, i);
+      const double* __restrict column = l + i * ldl;
+      double s = b[i];
+      for (int k = i + 1; k < n; ++k) s -= column[k] * b[k];
+      b[i] = s / column[i];
     }
   }
 }

@@ -144,7 +144,9 @@ struct EquilibriumWorkspace {
   UnknownMatrix hessian;      // H = W + sigma AᵀA + rho I, then its Cholesky factor L
   UnknownMatrix normal;       // AᵀA (lower triangle)
   Matrix6U jacobian;          // closure Jacobian A with respect to the unknowns
-  Eigen::Matrix<double, Eigen::Dynamic, 6, 0, kMaxUnknowns, 6> half;  // L^-1 A^T, H = L L^T
+  // [L^-1 Aᵀ | L^-1 g | 0] with H = L Lᵀ: row-major, 8 wide, so that the
+  // triangular solve updates whole rows (SIMD-friendly, no short loops).
+  Eigen::Matrix<double, Eigen::Dynamic, 8, Eigen::RowMajor, kMaxUnknowns, 8> solved;
   UnknownVector gradient;     // gradient of the Lagrangian
   UnknownVector step;
   UnknownVector scratch;
