@@ -176,5 +176,25 @@ TEST(PaperFoldedPoses, SolveConvergesAtTheCuspAndAgreesWithASecondMethod) {
   }
 }
 
+// The other movable 4R families over a whole cycle, assembled automatically:
+// a planar four-bar whose input link is a crank (Grashof, shortest link
+// driven) and a spherical 4R whose input turns fully.
+TEST(MovableFamilies, PlanarCrankAndSphericalLoopHaveZeroCycleEnergy) {
+  const LoopGeometry planar = planar_four_bar(1.0, 3.0, 2.5, 3.5);
+  const LoopGeometry spherical = spherical_four_bar(rad(20), rad(70), rad(60), rad(80));
+  for (const LoopGeometry* g : {&planar, &spherical}) {
+    const LoopModel model(*g);
+    EquilibriumWorkspace ws(model);
+    const EquilibriumSummary start = assemble(model, ws, 0.0);
+    ASSERT_EQ(start.status, SolveStatus::converged);
+    CycleOptions options;
+    options.samples = 64;
+    CycleSummary s;
+    cycle_energy(model, ws, 0.0, start.state, options, s);
+    EXPECT_EQ(s.failed_samples + s.branch_jumps, 0);
+    EXPECT_LE(s.E_max, 1e-20);
+  }
+}
+
 }  // namespace
 }  // namespace loopfarm
