@@ -304,5 +304,26 @@ TEST(Cycle, InvalidOptionsAreRejectedByName) {
   EXPECT_NE(message(o).find("max_iterations_per_step"), std::string::npos);
 }
 
+// A known limit, pinned so that the README's statement stays true until it is
+// fixed (then this test fails and README "Known limits" must change with it):
+// near a fold of the elastic path the continuation can pass to another branch
+// without flagging a jump, so the cycle energy of this generic loop depends on
+// the per-step iteration budget.
+TEST(CycleKnownLimit, GenericLoopPathDependsOnTheStepBudgetNearAFold) {
+  const LoopModel model(random_loop(4, 3));
+  EquilibriumWorkspace ws(model);
+  const EquilibriumState start = assemble(model, ws, 0.0).state;
+  CycleOptions generous, tight;
+  generous.max_iterations_per_step = 20;
+  tight.max_iterations_per_step = 10;
+  CycleSummary a, b;
+  cycle_energy(model, ws, 0.0, start, generous, a);
+  cycle_energy(model, ws, 0.0, start, tight, b);
+  EXPECT_EQ(a.branch_jumps + a.failed_samples, 0);
+  EXPECT_EQ(b.branch_jumps + b.failed_samples, 0);
+  EXPECT_NEAR(a.E_mean, 1.011, 0.001);
+  EXPECT_NEAR(b.E_mean, 2.331, 0.001);
+}
+
 }  // namespace
 }  // namespace loopfarm
