@@ -266,18 +266,15 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // vanishes at the solution so that convergence stays quadratic.
     const double mu = std::clamp(kkt_residual * kkt_residual, kMinDualRegularization, kMaxDualRegularization);
 
-    // Solve [H Aᵀ; A -mu I] [dx; dl] = -[g; c] through H = W + sigma AᵀA + rho I.
-    // Adding sigma AᵀA does not move the solution of the system's fixed point;
-    // it makes H positive definite wherever W is so on the null space of A
-    // (the second-order condition), and Cholesky then certifies the inertia.
-    // Where even that fails (far from a minimum), rho turns the step into a
-    // regularised descent step.
-    // First choice: the exact Newton step, certified by Cholesky of
-    // W + sigma AᵀA (sigma grows a little where needed). Far from a minimum W
-    // is indefinite on the null space of A and no sigma helps; then the
+    // Solve [H Aᵀ; A -mu I] [dx; dl] = -[g; c] with H = W + sigma AᵀA + rho I.
+    // First choice, rho = 0: the exact Newton step. Adding sigma AᵀA leaves dx
+    // unchanged (A dx = -c) and makes H positive definite wherever W is so on
+    // the null space of A (the second-order condition); Cholesky then
+    // certifies it, sigma growing a little where needed. Far from a minimum W
+    // is indefinite on that null space and no sigma helps; then the
     // Gauss-Newton model, which keeps only the springs' stiffness K, gives a
-    // least-norm projection step towards closure that is always defined once a
-    // small rho covers the passive angles (K has no block for them).
+    // least-norm projection step towards closure, defined once a small rho
+    // covers the passive angles (K has no block for them).
     auto factor = [&](bool exact, double rho) {
       // Lower triangle only: that is all the factorisation reads.
       for (int j = 0; j < m; ++j) {
@@ -339,8 +336,9 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     ws.step = -ws.scratch;
     dense::solve_lower_transposed(ws.hessian, m, ws.step);
     // The sigma AᵀA term leaves dx the Newton step but shifts the multiplier
-    // step: W dx + Aᵀ(dl - sigma c) = -g when A dx = -c. Undo the shift, or the
-    // multipliers (and with them x) converge only linearly.
+    // step: W dx + Aᵀ(dl - sigma c) = -g when A dx = -c (exactly so for mu = 0).
+    // Undo the shift, or the multipliers (and with them x) converge only
+    // linearly.
     dual -= sigma * c;
     if (!ws.step.allFinite() || !dual.allFinite()) {
       summary.status = SolveStatus::non_finite;
