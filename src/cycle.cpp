@@ -24,15 +24,60 @@ double passive_change(const LoopModel& model, const EquilibriumState& a, const E
   return change;
 }
 
-// Secant prediction: prev + ratio * (prev - before), angles differenced modulo 2 pi.
-void extrapolate(const EquilibriumState& prev, const EquilibriumState& before, double ratio,
-                 EquilibriumState& out) {
-  out.theta = prev.theta;
-  for (int i = 0; i < prev.theta.size(); ++i) {
-    out.theta[i] += ratio * wrap_angle(prev.theta[i] - before.theta[i]);
+// A solved point of the equilibrium path, with its tangent when the solve
+// provided one.
+struct PathPoint {
+  const EquilibriumState* state = nullptr;
+  const EquilibriumState* tangent = nullptr;  // d state / d theta_in, or null
+  double theta = 0.0;
+};
+
+// The guess for the solve at from.theta + h. With tangents at `from` and
+// `before`: the cubic Hermite polynomial through both points and tangents,
+// error O(h^4); with a tangent at `from` only, a Taylor step along it
+// (O(h^2)); without a tangent, the secant through `before` and `from`
+// (O(h^2)). Angles are differenced modulo 2 pi.
+void predict(const PathPoint& from, const PathPoint* before, double h, EquilibriumState& out) {
+  const EquilibriumState& x = *from.state;
+  out.theta = x.theta;
+  out.deformations = x.deformations;
+  out.multipliers = x.multipliers;
+  if (from.tangent != nullptr) {
+    const EquilibriumState& t = *from.tangent;
+    if (before == nullptr || before->tangent == nullptr) {
+      out.theta += h * t.theta;
+      out.deformations += h * t.deformations;
+      out.multipliers += h * t.multipliers;
+      return;
+    }
+    // P(s) = x + t s + a s^2 + b s^3 with P(-p) = x_b, P'(-p) = t_b:
+    // b = (2 (x_b - x) + (t + t_b) p) / p^3, a = (t - t_b) / (2 p) + 3/2 b p.
+    const EquilibriumState& xb = *before->state;
+    const EquilibriumState& tb = *before->tangent;
+    const double p = from.theta - before->theta;
+    auto extrapolate = [&](double x1, double x0, double t1, double t0) {
+      const double cubic = (2.0 * (x0 - x1) + (t1 + t0) * p) / (p * p * p);
+      const double quadratic = (t1 - t0) / (2.0 * p) + 1.5 * cubic * p;
+      return h * (t1 + h * (quadratic + h * cubic));
+    };
+    for (int i = 0; i < x.theta.size(); ++i) {
+      // x_b - x modulo 2 pi: differences only, so the branch of each angle does not matter.
+      out.theta[i] += extrapolate(0.0, wrap_angle(xb.theta[i] - x.theta[i]), t.theta[i], tb.theta[i]);
+    }
+    for (int k = 0; k < x.deformations.size(); ++k) {
+      out.deformations[k] += extrapolate(x.deformations[k], xb.deformations[k], t.deformations[k], tb.deformations[k]);
+    }
+    for (int k = 0; k < 6; ++k) {
+      out.multipliers[k] += extrapolate(x.multipliers[k], xb.multipliers[k], t.multipliers[k], tb.multipliers[k]);
+    }
+    return;
   }
-  out.deformations = prev.deformations + ratio * (prev.deformations - before.deformations);
-  out.multipliers = prev.multipliers + ratio * (prev.multipliers - before.multipliers);
+  if (before == nullptr) return;
+  const EquilibriumState& b = *before->state;
+  const double ratio = h / (from.theta - before->theta);
+  for (int i = 0; i < x.theta.size(); ++i) out.theta[i] += ratio * wrap_angle(x.theta[i] - b.theta[i]);
+  out.deformations += ratio * (x.deformations - b.deformations);
+  out.multipliers += ratio * (x.multipliers - b.multipliers);
 }
 
 // Continuation from one solved input angle to the next, with bisection where a
@@ -49,27 +94,29 @@ class Stepper {
     int refinements = 0;
   };
 
-  // Steps from `from` (solved at from_theta; `before`, if given, solved at
-  // before_theta, for the secant predictor) to target.
-  Result step(const EquilibriumState& from, double from_theta, const EquilibriumState* before,
-              double before_theta, double target, int depth) const {
+  // Steps from `from` to the input angle `target` (`before`, if given, is
+  // the point before `from`, for the predictor).
+  Result step(const PathPoint& from, const PathPoint* before, double target, int depth) const {
     Result r;
-    EquilibriumState guess = from;
-    const double h = target - from_theta;
-    const double h_prev = from_theta - before_theta;
-    const bool predict = options_.secant_predictor && before != nullptr && h_prev != 0.0 && h * h_prev > 0.0;
-    if (predict) extrapolate(from, *before, h / h_prev, guess);
+    EquilibriumState guess;
+    if (before != nullptr && before->theta == from.theta) before = nullptr;
+    const bool predicted = options_.predictor && (from.tangent != nullptr || before != nullptr);
+    if (predicted) {
+      predict(from, before, target - from.theta, guess);
+    } else {
+      guess = *from.state;
+    }
     // A warm-started solve that needs many iterations has lost the branch:
     // bisecting is cheaper than letting it wander.
     const int budget = options_.max_iterations_per_step;
     r.solve = solve_equilibrium(model_, ws_, target, guess, budget);
     r.iterations += r.solve.iterations;
-    if (predict && !acceptable(r.solve, from)) {
+    if (predicted && !acceptable(r.solve, *from.state)) {
       // The prediction can overshoot near a turning point: retry from `from`.
-      r.solve = solve_equilibrium(model_, ws_, target, from, budget);
+      r.solve = solve_equilibrium(model_, ws_, target, *from.state, budget);
       r.iterations += r.solve.iterations;
     }
-    if (acceptable(r.solve, from)) {
+    if (acceptable(r.solve, *from.state)) {
       r.status = SampleStatus::converged;
       return r;
     }
@@ -78,15 +125,15 @@ class Stepper {
       // solve is hard: one solve with the full iteration budget, and whatever
       // it lands on is a jump to another branch.
       if (r.solve.status != SolveStatus::converged) {
-        r.solve = solve_equilibrium(model_, ws_, target, from);
+        r.solve = solve_equilibrium(model_, ws_, target, *from.state);
         r.iterations += r.solve.iterations;
       }
       r.status = r.solve.status == SolveStatus::converged ? SampleStatus::branch_jump : SampleStatus::failed;
       return r;
     }
     // Bisect: reach the midpoint, then the target from there.
-    const double mid = 0.5 * (from_theta + target);
-    Result half = step(from, from_theta, before, before_theta, mid, depth + 1);
+    const double mid = 0.5 * (from.theta + target);
+    Result half = step(from, before, mid, depth + 1);
     r.iterations += half.iterations;
     r.refinements += 1 + half.refinements;
     if (half.status == SampleStatus::failed) {
@@ -94,7 +141,8 @@ class Stepper {
       half.refinements = r.refinements;
       return half;
     }
-    Result rest = step(half.solve.state, mid, &from, from_theta, target, depth + 1);
+    const PathPoint midpoint{&half.solve.state, half.solve.has_tangent ? &half.solve.tangent : nullptr, mid};
+    Result rest = step(midpoint, &from, target, depth + 1);
     rest.iterations += r.iterations;
     rest.refinements += r.refinements;
     if (rest.status == SampleStatus::converged) rest.status = SampleStatus::refined;
@@ -111,8 +159,7 @@ class Stepper {
 
   const LoopModel& model_;
   EquilibriumWorkspace& ws_;
-  const CycleOptions& options_;
-};
+  const CycleOptions& options_;};
 
 // d normalised parameter / d parameter: p~ = p / L(p) for lengths, alpha unchanged.
 Eigen::MatrixXd normalization_jacobian(const LoopModel& model) {
@@ -187,7 +234,12 @@ void cycle_energy(const LoopModel& model, EquilibriumWorkspace& ws, double theta
 
   const Stepper stepper(model, ws, options);
   // The anchor: the equilibrium at theta0 itself, from the given start.
-  const EquilibriumSummary anchor = solve_equilibrium(model, ws, theta0, start);
+  EquilibriumSummary anchor = solve_equilibrium(model, ws, theta0, start);
+  if (options.predictor && anchor.status == SolveStatus::converged && !anchor.has_tangent) {
+    // Started on the solution (no Newton step, so no tangent from one): the
+    // first steps predict much better with it.
+    anchor.has_tangent = equilibrium_tangent(model, ws, anchor.state, anchor.tangent);
+  }
   summary.total_iterations = 0;
   summary.refinements = 0;
 
@@ -209,11 +261,15 @@ void cycle_energy(const LoopModel& model, EquilibriumWorkspace& ws, double theta
   // then backward over those before it (a partial range only). A failed
   // sample is skipped over: the walk goes on from the last solved one.
   for (int direction : {+1, -1}) {
-    EquilibriumState from = anchor.state;
-    EquilibriumState previous;  // the sample before `from`, for the secant predictor
+    // The last solved point and the one before it, with their tangents.
+    EquilibriumSummary from = anchor;
+    EquilibriumSummary previous;
     double from_theta = theta0;
     double previous_theta = theta0;
     bool have_previous = false;
+    auto point = [](const EquilibriumSummary& s, double theta) {
+      return PathPoint{&s.state, s.has_tangent ? &s.tangent : nullptr, theta};
+    };
     const int first = direction > 0 ? 0 : N - 1;
     for (int j = first; j >= 0 && j < N; j += direction) {
       const double target = summary.samples[static_cast<size_t>(j)].theta_in;
@@ -227,13 +283,14 @@ void cycle_energy(const LoopModel& model, EquilibriumWorkspace& ws, double theta
         record(j, r);
         continue;
       }
-      r = stepper.step(from, from_theta, have_previous ? &previous : nullptr, previous_theta, target, 0);
+      const PathPoint before = point(previous, previous_theta);
+      r = stepper.step(point(from, from_theta), have_previous ? &before : nullptr, target, 0);
       record(j, r);
       if (r.status == SampleStatus::failed) continue;
-      previous = from;
+      std::swap(previous, from);
       previous_theta = from_theta;
       have_previous = true;
-      from = r.solve.state;
+      from = r.solve;
       from_theta = target;
     }
   }

@@ -26,6 +26,9 @@ constexpr double kMaxDualRegularization = 1e-6;
 constexpr double kMaxStep = 1.0;               // cap on |dx|_inf [rad, or units of L]
 constexpr double kArmijo = 1e-4;
 constexpr int kMaxBacktracks = 40;
+// Multipliers (max-norm) below which the constraint curvature they weight is
+// left out of the Newton Hessian.
+constexpr double kNegligibleMultiplier = 1e-9;
 
 double max_abs(const Vector6& v) { return v.cwiseAbs().maxCoeff(); }
 
@@ -156,6 +159,22 @@ LoopModel::LoopModel(const LoopGeometry& geometry, const EquilibriumOptions& opt
     unknown_joint_[unknown_count_] = passive_angle ? joint : -1;
     ++unknown_count_;
   }
+  // The Hessian's elements: the unknowns with the input joint's angle slotted
+  // in at its place in the chain.
+  const int input_element = chain_index(options.input_joint, ChainParameter::theta);
+  int row = 0;
+  for (int u = 0; u < unknown_count_; ++u) {
+    if (row == u && unknown_element_[u] > input_element) {
+      input_hessian_index_ = row;
+      hessian_element_[row++] = input_element;
+    }
+    unknown_hessian_index_[u] = row;
+    hessian_element_[row++] = unknown_element_[u];
+  }
+  if (row == unknown_count_) {
+    input_hessian_index_ = row;
+    hessian_element_[row] = input_element;
+  }
 }
 
 EquilibriumState EquilibriumState::at_angles(const LoopModel& model, const JointVector& theta) {
@@ -218,6 +237,89 @@ std::string deformation_name(const LoopModel& model, int k) {
   return "theta" + joint;
 }
 
+namespace {
+
+// AᵀA, lower triangle, into ws.normal.
+void normal_matrix(const LoopModel& model, EquilibriumWorkspace& ws) {
+  const int m = model.unknown_count();
+  for (int j = 0; j < m; ++j) {
+    for (int i = j; i < m; ++i) ws.normal(i, j) = ws.jacobian.col(i).dot(ws.jacobian.col(j));
+  }
+}
+
+// Factorises H = W + sigma AᵀA + rho I in place in ws.hessian (W with the
+// constraint curvature from ws.chain_hessian if `curvature`, else the springs'
+// stiffness alone). False if H is not positive definite.
+bool factor_hessian(const LoopModel& model, EquilibriumWorkspace& ws, double sigma, bool curvature, double rho) {
+  const int m = model.unknown_count();
+  // Lower triangle only: that is all the factorisation reads.
+  for (int j = 0; j < m; ++j) {
+    for (int i = j; i < m; ++i) {
+      const double w =
+          curvature ? ws.chain_hessian(model.unknown_hessian_index(i), model.unknown_hessian_index(j)) : 0.0;
+      ws.hessian(i, j) = w + sigma * ws.normal(i, j);
+    }
+    const int k = model.unknown_deformation(j);
+    ws.hessian(j, j) += rho + (k >= 0 ? model.deformation_stiffness(k) : 0.0);
+  }
+  return dense::cholesky_in_place(ws.hessian, m);
+}
+
+// With H = L Lᵀ from factor_hessian: ws.solved = L^-1 [Aᵀ | g | b], b = d g /
+// d theta_in (the Hessian's input-joint column, zero unless `curvature`; it
+// rides along in the SIMD-wide solve for the path tangent), and `gram` their
+// Gram matrix: its 6 x 6 block is the Schur complement A H^-1 Aᵀ = YᵀY
+// (Y = L^-1 Aᵀ), columns 6 and 7 hold Yᵀ L^-1 g and Yᵀ L^-1 b.
+void solve_columns(const LoopModel& model, EquilibriumWorkspace& ws, const UnknownVector& g, bool curvature,
+                   Eigen::Matrix<double, 8, 8>& gram) {
+  const int m = model.unknown_count();
+  ws.solved.leftCols<6>() = ws.jacobian.transpose();
+  ws.solved.col(6) = g;
+  for (int u = 0; u < m; ++u) {
+    ws.solved(u, 7) = curvature ? ws.chain_hessian(model.unknown_hessian_index(u), model.input_hessian_index()) : 0.0;
+  }
+  dense::solve_lower_rows(ws.hessian, m, ws.solved);
+  gram.setZero();
+  for (int u = 0; u < m; ++u) {
+    const Eigen::Matrix<double, 1, 8> row = ws.solved.row(u);
+    gram.noalias() += row.transpose() * row;
+  }
+}
+
+// The tangent of the equilibrium path, d(x, lambda)/d theta_in, from
+// differentiating the KKT conditions: [W Aᵀ; A 0] [dx; dl] = -[b; c_t] with
+// b = d g / d theta_in and c_t = d c / d theta_in. Solved with the last Newton
+// step's factorisation (H = W + sigma AᵀA = L Lᵀ, `gram` holding its solved
+// columns), the same elimination as the step: W is that of the previous
+// iterate, which is all a predictor needs.
+bool path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& x,
+                  const Eigen::Matrix<double, 8, 8>& gram, const Eigen::LLT<Matrix6>& schur_llt, double sigma,
+                  EquilibriumState& t) {
+  const int m = model.unknown_count();
+  const int input = model.options().input_joint;
+  const Vector6 c_t = residual_derivative(ws.chain, chain_index(input, ChainParameter::theta));
+  Vector6 dual = schur_llt.solve(c_t - gram.col(7).head<6>());
+  for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 7) + ws.solved.row(u).head<6>().dot(dual);
+  ws.scratch = -ws.scratch;
+  dense::solve_lower_transposed(ws.hessian, m, ws.scratch);
+  dual -= sigma * c_t;  // the shift the sigma AᵀA term makes, as in the step
+  t.theta.setZero(x.theta.size());
+  t.theta[input] = 1.0;
+  t.deformations.setZero(x.deformations.size());
+  for (int u = 0; u < m; ++u) {
+    const int k = model.unknown_deformation(u);
+    if (k >= 0) {
+      t.deformations[k] = ws.scratch[u];
+    } else {
+      t.theta[model.unknown_joint(u)] = ws.scratch[u];
+    }
+  }
+  t.multipliers = dual;
+  return t.theta.allFinite() && t.deformations.allFinite() && t.multipliers.allFinite();
+}
+
+}  // namespace
+
 EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& ws, double theta_in,
                                      const EquilibriumState& guess, int iteration_limit) {
   const int m = model.unknown_count();
@@ -232,10 +334,15 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
   double sigma = kInitialAugmentation;  // augmentation weight, grows only when needed
   double rho_last = 0.0;                // last primal regularisation that worked
   double merit_weight = 0.0;            // nu of the merit function, nondecreasing
+  double sigma_last = sigma;            // sigma of the last factorisation
 
   double energy = evaluate(model, ws, x, true);
   ++summary.residual_evaluations;
   Eigen::LLT<Matrix6> schur_llt;
+  // Gram matrix of the solved columns [L^-1 Aᵀ | L^-1 g | L^-1 b] (below);
+  // kept with the factorisation for the path tangent.
+  Eigen::Matrix<double, 8, 8> gram;
+  bool last_step_exact = false;  // the last factorisation holds the exact Hessian
 
   for (;;) {
     const Vector6 c = ws.chain.residual;
@@ -249,6 +356,9 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     }
     if (summary.closure_residual <= opt.closure_tolerance && summary.stationarity <= opt.stationarity_tolerance) {
       summary.status = SolveStatus::converged;
+      if (summary.iterations > 0 && last_step_exact) {
+        summary.has_tangent = path_tangent(model, ws, x, gram, schur_llt, sigma_last, summary.tangent);
+      }
       break;
     }
     if (summary.iterations >= (iteration_limit > 0 ? iteration_limit : opt.max_iterations)) {
@@ -259,7 +369,13 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
 
     // Hessian of the Lagrangian: constraint curvature weighted by the
     // multipliers, plus the springs' stiffness on the deformations.
-    residual_hessian(ws.chain, x.multipliers, model.unknown_elements(), ws.chain_hessian);
+    // Where the multipliers are negligible (a loop that closes without
+    // deforming, as every movable one does) so is the curvature term: the
+    // Hessian is K alone, to a relative 1e-9 that leaves the convergence
+    // quadratic at these tolerances, and the chain's second derivatives
+    // are skipped.
+    const bool curvature = max_abs(x.multipliers) > kNegligibleMultiplier;
+    if (curvature) residual_hessian(ws.chain, x.multipliers, model.hessian_elements(), ws.chain_hessian);
     const double kkt_residual = std::max(summary.closure_residual, summary.stationarity);
     // Stabilised SQP: a dual regularisation proportional to the KKT residual
     // keeps the step defined where the closure Jacobian loses rank, and
@@ -275,31 +391,20 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // Gauss-Newton model, which keeps only the springs' stiffness K, gives a
     // least-norm projection step towards closure, defined once a small rho
     // covers the passive angles (K has no block for them).
-    auto factor = [&](bool exact, double rho) {
-      // Lower triangle only: that is all the factorisation reads.
-      for (int j = 0; j < m; ++j) {
-        for (int i = j; i < m; ++i) {
-          ws.hessian(i, j) = (exact ? ws.chain_hessian(i, j) : 0.0) + sigma * ws.normal(i, j);
-        }
-        const int k = model.unknown_deformation(j);
-        ws.hessian(j, j) += rho + (k >= 0 ? model.deformation_stiffness(k) : 0.0);
-      }
-      return dense::cholesky_in_place(ws.hessian, m);
-    };
-    for (int j = 0; j < m; ++j) {
-      for (int i = j; i < m; ++i) ws.normal(i, j) = ws.jacobian.col(i).dot(ws.jacobian.col(j));
-    }
+    normal_matrix(model, ws);
     bool factored = false;
+    bool exact = true;
     double rho = 0.0;
     for (double trial_sigma = sigma; trial_sigma <= kMaxAugmentation && !factored; trial_sigma *= 10.0) {
       sigma = trial_sigma;
-      factored = factor(true, 0.0);
+      factored = factor_hessian(model, ws, sigma, curvature, 0.0);
     }
     if (!factored) {
       sigma = kInitialAugmentation;
+      exact = false;
       ++summary.gauss_newton_steps;
       for (rho = std::max(kMinRegularization, rho_last / 4.0); rho <= kMaxRegularization && !factored; rho *= 10.0) {
-        factored = factor(false, rho);
+        factored = factor_hessian(model, ws, sigma, false, rho);
         if (factored) break;
       }
     }
@@ -308,21 +413,13 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       break;
     }
     rho_last = rho;
+    last_step_exact = exact;
+    sigma_last = sigma;
     summary.max_regularization = std::max(summary.max_regularization, rho);
 
     // With H = L Lᵀ, Y = L^-1 Aᵀ and z = L^-1 g: the Schur complement
     // A H^-1 Aᵀ is YᵀY, and the step -H^-1 (g + Aᵀ dl) is -L^-ᵀ (z + Y dl).
-    ws.solved.leftCols<6>() = ws.jacobian.transpose();
-    ws.solved.col(6) = ws.gradient;
-    ws.solved.col(7).setZero();
-    dense::solve_lower_rows(ws.hessian, m, ws.solved);
-    // Gram matrix of the solved columns: its 6 x 6 block is the Schur
-    // complement YᵀY, column 6 holds Yᵀz.
-    Eigen::Matrix<double, 8, 8> gram = Eigen::Matrix<double, 8, 8>::Zero();
-    for (int u = 0; u < m; ++u) {
-      const Eigen::Matrix<double, 1, 8> row = ws.solved.row(u);
-      gram.noalias() += row.transpose() * row;
-    }
+    solve_columns(model, ws, ws.gradient, exact && curvature, gram);
     ws.schur = gram.topLeftCorner<6, 6>();
     ws.schur.diagonal().array() += mu;
     schur_llt.compute(ws.schur);  // fixed 6 x 6: Eigen unrolls it
@@ -332,7 +429,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     }
     Vector6 dual = schur_llt.solve(c - gram.col(6).head<6>());
     for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 6) + ws.solved.row(u).head<6>().dot(dual);
-    const double curvature = ws.scratch.squaredNorm();  // stepᵀ H step
+    const double step_curvature = ws.scratch.squaredNorm();  // stepᵀ H step
     ws.step = -ws.scratch;
     dense::solve_lower_transposed(ws.hessian, m, ws.step);
     // The sigma AᵀA term leaves dx the Newton step but shifts the multiplier
@@ -357,8 +454,8 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     const double slope0 = energy_slope + lambda_plus.dot(jacobian_step);
     const double slope1 = c.dot(jacobian_step);
     merit_weight = std::max(merit_weight, 1.0);
-    if (slope0 + merit_weight * slope1 > -0.1 * curvature && slope1 < 0.0) {
-      merit_weight = std::max(merit_weight, (slope0 + 0.1 * curvature) / -slope1 * 2.0);
+    if (slope0 + merit_weight * slope1 > -0.1 * step_curvature && slope1 < 0.0) {
+      merit_weight = std::max(merit_weight, (slope0 + 0.1 * step_curvature) / -slope1 * 2.0);
     }
     const double slope = slope0 + merit_weight * slope1;
     const double merit0 = energy + lambda_plus.dot(c) + 0.5 * merit_weight * c.squaredNorm();
@@ -404,6 +501,28 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
   for (int i = 0; i < model.joints(); ++i) x.theta[i] = wrap_angle(x.theta[i]);
   x.theta[opt.input_joint] = theta_in;
   return summary;
+}
+
+bool equilibrium_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& solution,
+                         EquilibriumState& tangent) {
+  evaluate(model, ws, solution, true);
+  lagrangian_gradient(model, ws, solution);
+  residual_hessian(ws.chain, solution.multipliers, model.hessian_elements(), ws.chain_hessian);
+  normal_matrix(model, ws);
+  double sigma = kInitialAugmentation;
+  bool factored = false;
+  for (; sigma <= kMaxAugmentation && !factored; sigma *= 10.0) {
+    factored = factor_hessian(model, ws, sigma, true, 0.0);
+    if (factored) break;
+  }
+  if (!factored) return false;  // not a strict local minimum: no tangent to follow
+  Eigen::Matrix<double, 8, 8> gram;
+  solve_columns(model, ws, ws.gradient, true, gram);
+  ws.schur = gram.topLeftCorner<6, 6>();
+  ws.schur.diagonal().array() += kMinDualRegularization;
+  const Eigen::LLT<Matrix6> schur_llt(ws.schur);
+  if (schur_llt.info() != Eigen::Success) return false;
+  return path_tangent(model, ws, solution, gram, schur_llt, sigma, tangent);
 }
 
 }  // namespace loopfarm

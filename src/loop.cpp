@@ -176,6 +176,8 @@ Vector3 so3_log(const Matrix3& R) {
 }
 
 double wrap_angle(double angle) {
+  // Most angles the solvers wrap are already in range: skip the division.
+  if (angle > -kPi && angle <= kPi) return angle;
   double w = std::remainder(angle, 2.0 * kPi);  // in [-pi, pi]
   if (w <= -kPi) w += 2.0 * kPi;
   return w;

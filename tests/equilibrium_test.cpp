@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "allocation_counter.hpp"
+#include "loopfarm/assembly.hpp"
 #include "loopfarm/sample_loops.hpp"
 #include "test_support.hpp"
 
@@ -195,6 +196,64 @@ TEST(Equilibrium, WarmStartFromTheAnswerConvergesAtOnce) {
   EXPECT_LE(next.iterations, 6);
 }
 
+// The path tangent d(state)/d theta_in against central differences of two
+// solves at theta_in +- h: from equilibrium_tangent (a factorisation at the
+// solution) to 1e-6, and from the summary (the last Newton step's
+// factorisation, a predictor) to 1e-4. A rigid generic loop exercises the
+// multiplier and curvature terms; the Bennett loop, driven at joint 3, the
+// input-joint bookkeeping; the full compliance set, the offsets.
+TEST(Equilibrium, PathTangentMatchesCentralDifferences) {
+  struct Case {
+    LoopGeometry geometry;
+    Compliance compliance;
+    int input_joint;
+  };
+  const Case cases[] = {{random_loop(4, 6), Compliance::paper, 0},
+                        {random_loop(5, 11), Compliance::full, 1},
+                        {paper_bennett_loop(), Compliance::paper, 2}};
+  for (const Case& c : cases) {
+    EquilibriumOptions options;
+    options.compliance = c.compliance;
+    options.input_joint = c.input_joint;
+    const LoopModel model(c.geometry, options);
+    EquilibriumWorkspace ws(model);
+    const EquilibriumSummary anchor = assemble(model, ws, 0.3);
+    ASSERT_EQ(anchor.status, SolveStatus::converged);
+    const double theta = anchor.state.theta[c.input_joint];
+
+    EquilibriumState exact_tangent;
+    ASSERT_TRUE(equilibrium_tangent(model, ws, anchor.state, exact_tangent));
+    // A solve with a few Newton steps, for the summary's tangent.
+    EquilibriumState guess = anchor.state;
+    guess.theta.array() += 0.02;
+    const EquilibriumSummary solved = solve_equilibrium(model, ws, theta, guess);
+    ASSERT_EQ(solved.status, SolveStatus::converged);
+    ASSERT_TRUE(solved.has_tangent);
+
+    const double h = 1e-5;
+    const EquilibriumSummary plus = solve_equilibrium(model, ws, theta + h, anchor.state);
+    const EquilibriumSummary minus = solve_equilibrium(model, ws, theta - h, anchor.state);
+    ASSERT_EQ(plus.status, SolveStatus::converged);
+    ASSERT_EQ(minus.status, SolveStatus::converged);
+    auto expect_close = [&](const EquilibriumState& t, double tol, const char* what) {
+      for (int i = 0; i < model.joints(); ++i) {
+        const double fd = i == c.input_joint ? 1.0 : wrap_angle(plus.state.theta[i] - minus.state.theta[i]) / (2 * h);
+        EXPECT_NEAR(t.theta[i], fd, tol * std::max(1.0, std::abs(fd))) << what << " theta" << i + 1;
+      }
+      for (int k = 0; k < model.deformation_count(); ++k) {
+        const double fd = (plus.state.deformations[k] - minus.state.deformations[k]) / (2 * h);
+        EXPECT_NEAR(t.deformations[k], fd, tol * std::max(1.0, std::abs(fd))) << what << " " << deformation_name(model, k);
+      }
+      for (int k = 0; k < 6; ++k) {
+        const double fd = (plus.state.multipliers[k] - minus.state.multipliers[k]) / (2 * h);
+        EXPECT_NEAR(t.multipliers[k], fd, tol * std::max(1.0, std::abs(fd))) << what << " lambda" << k;
+      }
+    };
+    expect_close(exact_tangent, 1e-6, "equilibrium_tangent");
+    expect_close(solved.tangent, 1e-4, "summary tangent");
+  }
+}
+
 TEST(Equilibrium, SolveDoesNotAllocate) {
   for (int n : {4, 6, 8}) {
     const LoopGeometry g = random_loop(n, 40 + n);
@@ -207,6 +266,8 @@ TEST(Equilibrium, SolveDoesNotAllocate) {
     const long before = testing::allocations();
     s = solve_equilibrium(model, ws, 0.7, guess);
     s = solve_equilibrium(model, ws, 0.8, s.state);
+    EquilibriumState tangent = s.state;
+    equilibrium_tangent(model, ws, s.state, tangent);
     EXPECT_EQ(testing::allocations() - before, 0) << "n = " << n;
     EXPECT_GT(s.iterations, 0);
   }

@@ -28,7 +28,9 @@ struct CycleOptions {
   int max_refinements = 5;       // bisection depth per step (finest step h / 32)
   // Iteration cap of a continuation solve; a step that needs more is bisected.
   int max_iterations_per_step = 20;
-  bool secant_predictor = true;  // extrapolate the previous two samples
+  // Start each solve from a prediction along the path (the solved tangent,
+  // or the secant through the last two samples) instead of the last sample.
+  bool predictor = true;
 
   bool full_turn() const;
   // Throws std::invalid_argument naming the first invalid option.

@@ -92,10 +92,15 @@ class LoopModel {
   int deformation_element(int k) const { return deformation_element_[k]; }
   // Stiffness of deformation slot k (1 for lengths, the torsion ratio for twists).
   double deformation_stiffness(int k) const { return deformation_stiffness_[k]; }
-  // The unknowns' chain elements as a list (for residual_hessian).
-  std::span<const int> unknown_elements() const {
-    return {unknown_element_.data(), static_cast<size_t>(unknown_count_)};
+  // The chain elements whose constraint curvature a Newton step needs: the
+  // unknowns' and the input joint's (for the path tangent), in chain order,
+  // as a list for residual_hessian.
+  std::span<const int> hessian_elements() const {
+    return {hessian_element_.data(), static_cast<size_t>(unknown_count_ + 1)};
   }
+  // Position of unknown u, and of the input joint, in hessian_elements().
+  int unknown_hessian_index(int u) const { return unknown_hessian_index_[u]; }
+  int input_hessian_index() const { return input_hessian_index_; }
 
  private:
   LoopGeometry geometry_;
@@ -107,6 +112,9 @@ class LoopModel {
   std::array<int, kMaxUnknowns> unknown_element_{};
   std::array<int, kMaxUnknowns> unknown_deformation_{};
   std::array<int, kMaxUnknowns> unknown_joint_{};
+  std::array<int, kMaxUnknowns + 1> hessian_element_{};
+  std::array<int, kMaxUnknowns> unknown_hessian_index_{};
+  int input_hessian_index_ = 0;
   std::array<int, kMaxDeformations> deformation_element_{};
   std::array<double, kMaxDeformations> deformation_stiffness_{};
 };
@@ -133,6 +141,12 @@ struct EquilibriumSummary {
   int gauss_newton_steps = 0;       // iterations that fell back to the Gauss-Newton model
   double max_regularization = 0.0;  // largest primal regularisation used
   EquilibriumState state;            // the solution (deformations, angles, multipliers)
+  // d state / d theta_in along the equilibrium path (theta: 1 for the input
+  // joint), from the KKT factorisation of the last Newton step, so accurate
+  // to about that step's length: a predictor for the continuation, at no
+  // extra factorisation. Set when the solve converged after at least one step.
+  bool has_tangent = false;
+  EquilibriumState tangent;
 };
 
 // Every buffer a solve needs, allocated once for a model's size.
@@ -163,6 +177,13 @@ struct EquilibriumWorkspace {
 EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& workspace,
                                      double theta_in, const EquilibriumState& guess,
                                      int max_iterations = 0);
+
+// d state / d theta_in at a solved equilibrium `solution` (as
+// EquilibriumSummary::tangent, but from a factorisation at `solution` itself).
+// False where the path has no tangent: the reduced Hessian is not positive
+// definite (a fold of the path, or not a minimum). No heap allocation.
+bool equilibrium_tangent(const LoopModel& model, EquilibriumWorkspace& workspace, const EquilibriumState& solution,
+                         EquilibriumState& tangent);
 
 // The normalised geometry deformed by `deformations`, in `out` (same size).
 void deformed_geometry(const LoopModel& model, const DeformationVector& deformations,
