@@ -40,8 +40,8 @@ EquilibriumState assembled(const LoopModel& model, EquilibriumWorkspace& ws, con
   return f.start.size() > 0 ? assemble_from_angles(model, ws, f.start).state : assemble(model, ws, f.theta0).state;
 }
 
-// One solve at theta0 + 1 degree from the solution at theta0: the warm start a
-// cycle step makes (N = 360 spacing).
+// One solve at theta0 + 1 degree from the solution at theta0 (N = 360
+// spacing), without a predictor.
 void solve_warm(benchmark::State& state, const Fixture& f) {
   const LoopModel model(f.geometry);
   EquilibriumWorkspace ws(model);
@@ -50,6 +50,33 @@ void solve_warm(benchmark::State& state, const Fixture& f) {
   long solves = 0;
   for (auto _ : state) {
     const EquilibriumSummary s = solve_equilibrium(model, ws, f.theta0 + kDeg, from);
+    benchmark::DoNotOptimize(s.energy);
+    iterations += s.iterations;
+    ++solves;
+  }
+  state.counters["iterations"] = static_cast<double>(iterations) / static_cast<double>(solves);
+}
+
+// The same solve from the continuation's guess: the state at theta0 moved
+// 1 degree along its path tangent (what a cycle step starts from; later
+// steps use the sharper cubic through two samples).
+void solve_predicted(benchmark::State& state, const Fixture& f) {
+  const LoopModel model(f.geometry);
+  EquilibriumWorkspace ws(model);
+  const EquilibriumState from = assembled(model, ws, f);
+  EquilibriumState tangent;
+  if (!equilibrium_tangent(model, ws, from, tangent)) {
+    state.SkipWithError("no path tangent at the start");
+    return;
+  }
+  EquilibriumState guess = from;
+  guess.theta += kDeg * tangent.theta;
+  guess.deformations += kDeg * tangent.deformations;
+  guess.multipliers += kDeg * tangent.multipliers;
+  long iterations = 0;
+  long solves = 0;
+  for (auto _ : state) {
+    const EquilibriumSummary s = solve_equilibrium(model, ws, f.theta0 + kDeg, guess);
     benchmark::DoNotOptimize(s.energy);
     iterations += s.iterations;
     ++solves;
@@ -97,6 +124,8 @@ void cycle(benchmark::State& state, const std::vector<Fixture>& fixtures) {
 
 void BM_SolveWarm_Bennett(benchmark::State& state) { solve_warm(state, bennett()); }
 void BM_SolveWarm_Generic(benchmark::State& state) { solve_warm(state, generic(3)); }
+void BM_SolvePredicted_Bennett(benchmark::State& state) { solve_predicted(state, bennett()); }
+void BM_SolvePredicted_Generic(benchmark::State& state) { solve_predicted(state, generic(3)); }
 
 void BM_Cycle_Bennett(benchmark::State& state) { cycle(state, {bennett()}); }
 void BM_Cycle_Generic(benchmark::State& state) {
@@ -107,6 +136,8 @@ void BM_Cycle_Generic(benchmark::State& state) {
 
 BENCHMARK(BM_SolveWarm_Bennett);
 BENCHMARK(BM_SolveWarm_Generic);
+BENCHMARK(BM_SolvePredicted_Bennett);
+BENCHMARK(BM_SolvePredicted_Generic);
 BENCHMARK(BM_Cycle_Bennett)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Cycle_Generic)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
 

@@ -1,8 +1,10 @@
 #include "loopfarm/cycle.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
+#include <tuple>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -22,6 +24,15 @@ double passive_change(const LoopModel& model, const EquilibriumState& a, const E
     change = std::max(change, std::abs(wrap_angle(a.theta[i] - b.theta[i])));
   }
   return change;
+}
+
+// Largest rate of change of a passive angle along a path tangent.
+double passive_rate(const LoopModel& model, const EquilibriumState& tangent) {
+  double rate = 0.0;
+  for (int i = 0; i < model.joints(); ++i) {
+    if (i != model.options().input_joint) rate = std::max(rate, std::abs(tangent.theta[i]));
+  }
+  return rate;
 }
 
 // A solved point of the equilibrium path, with its tangent when the solve
@@ -98,38 +109,44 @@ class Stepper {
   // the point before `from`, for the predictor).
   Result step(const PathPoint& from, const PathPoint* before, double target, int depth) const {
     Result r;
-    EquilibriumState guess;
     if (before != nullptr && before->theta == from.theta) before = nullptr;
     const bool predicted = options_.predictor && (from.tangent != nullptr || before != nullptr);
-    if (predicted) {
-      predict(from, before, target - from.theta, guess);
-    } else {
-      guess = *from.state;
-    }
-    // A warm-started solve that needs many iterations has lost the branch:
-    // bisecting is cheaper than letting it wander.
-    const int budget = options_.max_iterations_per_step;
-    r.solve = solve_equilibrium(model_, ws_, target, guess, budget);
-    r.iterations += r.solve.iterations;
-    if (predicted && !acceptable(r.solve, *from.state)) {
-      // The prediction can overshoot near a turning point: retry from `from`.
-      r.solve = solve_equilibrium(model_, ws_, target, *from.state, budget);
+    // The tangent foretells a step whose passive angles would move too far:
+    // bisect at once instead of after a failed solve.
+    const bool too_far = from.tangent != nullptr && depth < options_.max_refinements &&
+                         std::abs(target - from.theta) * passive_rate(model_, *from.tangent) > options_.max_passive_step;
+    if (!too_far) {
+      EquilibriumState guess;
+      if (predicted) {
+        predict(from, before, target - from.theta, guess);
+      } else {
+        guess = *from.state;
+      }
+      // A warm-started solve that needs many iterations has lost the branch:
+      // bisecting is cheaper than letting it wander.
+      const int budget = options_.max_iterations_per_step;
+      r.solve = solve_equilibrium(model_, ws_, target, guess, budget);
       r.iterations += r.solve.iterations;
-    }
-    if (acceptable(r.solve, *from.state)) {
-      r.status = SampleStatus::converged;
-      return r;
-    }
-    if (depth >= options_.max_refinements) {
-      // The equilibrium branch ends here (a fold of the elastic path) or the
-      // solve is hard: one solve with the full iteration budget, and whatever
-      // it lands on is a jump to another branch.
-      if (r.solve.status != SolveStatus::converged) {
-        r.solve = solve_equilibrium(model_, ws_, target, *from.state);
+      if (predicted && !acceptable(r.solve, *from.state)) {
+        // The prediction can overshoot near a turning point: retry from `from`.
+        r.solve = solve_equilibrium(model_, ws_, target, *from.state, budget);
         r.iterations += r.solve.iterations;
       }
-      r.status = r.solve.status == SolveStatus::converged ? SampleStatus::branch_jump : SampleStatus::failed;
-      return r;
+      if (acceptable(r.solve, *from.state)) {
+        r.status = SampleStatus::converged;
+        return r;
+      }
+      if (depth >= options_.max_refinements) {
+        // The equilibrium branch ends here (a fold of the elastic path) or the
+        // solve is hard: one solve with the full iteration budget, and whatever
+        // it lands on is a jump to another branch.
+        if (r.solve.status != SolveStatus::converged) {
+          r.solve = solve_equilibrium(model_, ws_, target, *from.state);
+          r.iterations += r.solve.iterations;
+        }
+        r.status = r.solve.status == SolveStatus::converged ? SampleStatus::branch_jump : SampleStatus::failed;
+        return r;
+      }
     }
     // Bisect: reach the midpoint, then the target from there.
     const double mid = 0.5 * (from.theta + target);
@@ -257,40 +274,44 @@ void cycle_energy(const LoopModel& model, EquilibriumWorkspace& ws, double theta
   };
 
   bool anchor_recorded = false;
+  std::array<Stepper::Result, 3> slots;
   // Walk outward from the anchor: forward over the samples at or after theta0,
   // then backward over those before it (a partial range only). A failed
   // sample is skipped over: the walk goes on from the last solved one.
   for (int direction : {+1, -1}) {
-    // The last solved point and the one before it, with their tangents.
-    EquilibriumSummary from = anchor;
-    EquilibriumSummary previous;
+    // The last solved point and the one before it, with their tangents, and
+    // the slot the next step's result goes to: three slots in rotation, so
+    // that no summary is copied to move along.
+    slots[0].solve = anchor;
+    int from = 0, previous = 1, next = 2;
     double from_theta = theta0;
     double previous_theta = theta0;
     bool have_previous = false;
-    auto point = [](const EquilibriumSummary& s, double theta) {
+    auto point = [&](int slot, double theta) {
+      const EquilibriumSummary& s = slots[static_cast<size_t>(slot)].solve;
       return PathPoint{&s.state, s.has_tangent ? &s.tangent : nullptr, theta};
     };
     const int first = direction > 0 ? 0 : N - 1;
     for (int j = first; j >= 0 && j < N; j += direction) {
       const double target = summary.samples[static_cast<size_t>(j)].theta_in;
       if ((direction > 0) != (target >= theta0)) continue;
-      Stepper::Result r;
       if (target == theta0) {
-        r.solve = anchor;
-        r.status = anchor.status == SolveStatus::converged ? SampleStatus::converged : SampleStatus::failed;
-        r.iterations = anchor.iterations;
+        Stepper::Result at_anchor;
+        at_anchor.solve = anchor;
+        at_anchor.status = anchor.status == SolveStatus::converged ? SampleStatus::converged : SampleStatus::failed;
+        at_anchor.iterations = anchor.iterations;
         anchor_recorded = true;
-        record(j, r);
+        record(j, at_anchor);
         continue;
       }
       const PathPoint before = point(previous, previous_theta);
+      Stepper::Result& r = slots[static_cast<size_t>(next)];
       r = stepper.step(point(from, from_theta), have_previous ? &before : nullptr, target, 0);
       record(j, r);
       if (r.status == SampleStatus::failed) continue;
-      std::swap(previous, from);
+      std::tie(previous, from, next) = std::make_tuple(from, next, previous);
       previous_theta = from_theta;
       have_previous = true;
-      from = r.solve;
       from_theta = target;
     }
   }

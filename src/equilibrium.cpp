@@ -28,7 +28,7 @@ constexpr double kArmijo = 1e-4;
 constexpr int kMaxBacktracks = 40;
 // Multipliers (max-norm) below which the constraint curvature they weight is
 // left out of the Newton Hessian.
-constexpr double kNegligibleMultiplier = 1e-9;
+constexpr double kNegligibleMultiplier = 1e-6;
 
 double max_abs(const Vector6& v) { return v.cwiseAbs().maxCoeff(); }
 
@@ -239,6 +239,11 @@ std::string deformation_name(const LoopModel& model, int k) {
 
 namespace {
 
+// Inner products of the solved columns [Y | z | L^-1 b] with Y's six (the
+// rest of their Gram matrix is never used): rows 0-5 are YᵀY, row 6 is zᵀY,
+// row 7 is (L^-1 b)ᵀY.
+using SolvedGram = Eigen::Matrix<double, 8, 6>;
+
 // AᵀA, lower triangle, into ws.normal.
 void normal_matrix(const LoopModel& model, EquilibriumWorkspace& ws) {
   const int m = model.unknown_count();
@@ -268,10 +273,10 @@ bool factor_hessian(const LoopModel& model, EquilibriumWorkspace& ws, double sig
 // With H = L Lᵀ from factor_hessian: ws.solved = L^-1 [Aᵀ | g | b], b = d g /
 // d theta_in (the Hessian's input-joint column, zero unless `curvature`; it
 // rides along in the SIMD-wide solve for the path tangent), and `gram` their
-// Gram matrix: its 6 x 6 block is the Schur complement A H^-1 Aᵀ = YᵀY
-// (Y = L^-1 Aᵀ), columns 6 and 7 hold Yᵀ L^-1 g and Yᵀ L^-1 b.
+// products with Y = L^-1 Aᵀ: its 6 x 6 block is the Schur complement
+// A H^-1 Aᵀ = YᵀY, rows 6 and 7 hold (Yᵀ L^-1 g)ᵀ and (Yᵀ L^-1 b)ᵀ.
 void solve_columns(const LoopModel& model, EquilibriumWorkspace& ws, const UnknownVector& g, bool curvature,
-                   Eigen::Matrix<double, 8, 8>& gram) {
+                   SolvedGram& gram) {
   const int m = model.unknown_count();
   ws.solved.leftCols<6>() = ws.jacobian.transpose();
   ws.solved.col(6) = g;
@@ -282,7 +287,7 @@ void solve_columns(const LoopModel& model, EquilibriumWorkspace& ws, const Unkno
   gram.setZero();
   for (int u = 0; u < m; ++u) {
     const Eigen::Matrix<double, 1, 8> row = ws.solved.row(u);
-    gram.noalias() += row.transpose() * row;
+    gram.noalias() += row.transpose() * row.head<6>();
   }
 }
 
@@ -293,12 +298,12 @@ void solve_columns(const LoopModel& model, EquilibriumWorkspace& ws, const Unkno
 // columns), the same elimination as the step: W is that of the previous
 // iterate, which is all a predictor needs.
 bool path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& x,
-                  const Eigen::Matrix<double, 8, 8>& gram, const Eigen::LLT<Matrix6>& schur_llt, double sigma,
+                  const SolvedGram& gram, const Eigen::LLT<Matrix6>& schur_llt, double sigma,
                   EquilibriumState& t) {
   const int m = model.unknown_count();
   const int input = model.options().input_joint;
   const Vector6 c_t = residual_derivative(ws.chain, chain_index(input, ChainParameter::theta));
-  Vector6 dual = schur_llt.solve(c_t - gram.col(7).head<6>());
+  Vector6 dual = schur_llt.solve(c_t - gram.row(7).transpose());
   for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 7) + ws.solved.row(u).head<6>().dot(dual);
   ws.scratch = -ws.scratch;
   dense::solve_lower_transposed(ws.hessian, m, ws.scratch);
@@ -341,7 +346,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
   Eigen::LLT<Matrix6> schur_llt;
   // Gram matrix of the solved columns [L^-1 Aᵀ | L^-1 g | L^-1 b] (below);
   // kept with the factorisation for the path tangent.
-  Eigen::Matrix<double, 8, 8> gram;
+  SolvedGram gram;
   bool last_step_exact = false;  // the last factorisation holds the exact Hessian
 
   for (;;) {
@@ -427,7 +432,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       summary.status = SolveStatus::singular;
       break;
     }
-    Vector6 dual = schur_llt.solve(c - gram.col(6).head<6>());
+    Vector6 dual = schur_llt.solve(c - gram.row(6).transpose());
     for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 6) + ws.solved.row(u).head<6>().dot(dual);
     const double step_curvature = ws.scratch.squaredNorm();  // stepᵀ H step
     ws.step = -ws.scratch;
@@ -516,7 +521,7 @@ bool equilibrium_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const
     if (factored) break;
   }
   if (!factored) return false;  // not a strict local minimum: no tangent to follow
-  Eigen::Matrix<double, 8, 8> gram;
+  SolvedGram gram;
   solve_columns(model, ws, ws.gradient, true, gram);
   ws.schur = gram.topLeftCorner<6, 6>();
   ws.schur.diagonal().array() += kMinDualRegularization;

@@ -70,9 +70,15 @@ void solve_lower_transposed(const Matrix& lower, int n, Rhs& rhs) {
     double* __restrict b = rhs.data() + c * rhs.outerStride();
     for (int i = n - 1; i >= 0; --i) {
       const double* __restrict column = l + i * ldl;
-      double s = b[i];
-      for (int k = i + 1; k < n; ++k) s -= column[k] * b[k];
-      b[i] = s / column[i];
+      // Two partial sums halve the dependency chain of the dot product.
+      double s0 = b[i], s1 = 0.0;
+      int k = i + 1;
+      for (; k + 1 < n; k += 2) {
+        s0 -= column[k] * b[k];
+        s1 -= column[k + 1] * b[k + 1];
+      }
+      if (k < n) s0 -= column[k] * b[k];
+      b[i] = (s0 + s1) / column[i];
     }
   }
 }

@@ -262,6 +262,37 @@ TEST(Cycle, ResultDoesNotDependOnTheSampleCountAtSharedAngles) {
   }
 }
 
+// The predictor (tangent, cubic Hermite) only changes where each solve
+// starts: on smooth cycles every sample must land on the same solution as
+// without it, and the tangent's step control must not add bisections.
+TEST(Cycle, PredictorChangesOnlyTheStartingPoints) {
+  struct Case {
+    LoopGeometry geometry;
+    JointVector start;
+  };
+  const LoopGeometry generic = random_loop(4, 6);
+  const LoopModel generic_model(generic);
+  EquilibriumWorkspace generic_ws(generic_model);
+  const Case cases[] = {{paper_bennett_loop(), paper_start()},
+                        {long_link_loop(), paper_start()},
+                        {generic, assemble(generic_model, generic_ws, 0.0).state.theta}};
+  for (const Case& c : cases) {
+    CycleOptions with, without;
+    without.predictor = false;
+    const CycleSummary a = run_cycle(c.geometry, c.start, {}, with);
+    const CycleSummary b = run_cycle(c.geometry, c.start, {}, without);
+    ASSERT_EQ(a.branch_jumps + a.failed_samples, 0);
+    ASSERT_EQ(b.branch_jumps + b.failed_samples, 0);
+    EXPECT_LE(a.refinements, b.refinements);
+    for (size_t j = 0; j < a.samples.size(); ++j) {
+      EXPECT_NEAR(a.samples[j].energy, b.samples[j].energy, 1e-12 * std::max(1.0, b.samples[j].energy)) << j;
+      for (int i = 0; i < 4; ++i) {
+        EXPECT_NEAR(wrap_angle(a.samples[j].state.theta[i] - b.samples[j].state.theta[i]), 0.0, 1e-9) << j;
+      }
+    }
+  }
+}
+
 TEST(Cycle, RepeatedCycleWithTheSameSampleCountDoesNotAllocate) {
   const LoopGeometry g = long_link_loop();
   const LoopModel model(g);
