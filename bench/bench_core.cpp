@@ -40,39 +40,24 @@ EquilibriumState assembled(const LoopModel& model, EquilibriumWorkspace& ws, con
   return f.start.size() > 0 ? assemble_from_angles(model, ws, f.start).state : assemble(model, ws, f.theta0).state;
 }
 
-// One solve at theta0 + 1 degree from the solution at theta0 (N = 360
-// spacing), without a predictor.
-void solve_warm(benchmark::State& state, const Fixture& f) {
+// One solve at theta0 + 1 degree (N = 360 spacing) from the solution at
+// theta0 (`predicted` false), or from the continuation's guess: that solution
+// moved 1 degree along its path tangent (what a cycle's first step starts
+// from; later steps use the sharper cubic through two samples).
+void solve_step(benchmark::State& state, const Fixture& f, bool predicted) {
   const LoopModel model(f.geometry);
   EquilibriumWorkspace ws(model);
-  const EquilibriumState from = assembled(model, ws, f);
-  long iterations = 0;
-  long solves = 0;
-  for (auto _ : state) {
-    const EquilibriumSummary s = solve_equilibrium(model, ws, f.theta0 + kDeg, from);
-    benchmark::DoNotOptimize(s.energy);
-    iterations += s.iterations;
-    ++solves;
+  EquilibriumState guess = assembled(model, ws, f);
+  if (predicted) {
+    EquilibriumState tangent;
+    if (!equilibrium_tangent(model, ws, guess, tangent)) {
+      state.SkipWithError("no path tangent at the start");
+      return;
+    }
+    guess.theta += kDeg * tangent.theta;
+    guess.deformations += kDeg * tangent.deformations;
+    guess.multipliers += kDeg * tangent.multipliers;
   }
-  state.counters["iterations"] = static_cast<double>(iterations) / static_cast<double>(solves);
-}
-
-// The same solve from the continuation's guess: the state at theta0 moved
-// 1 degree along its path tangent (what a cycle step starts from; later
-// steps use the sharper cubic through two samples).
-void solve_predicted(benchmark::State& state, const Fixture& f) {
-  const LoopModel model(f.geometry);
-  EquilibriumWorkspace ws(model);
-  const EquilibriumState from = assembled(model, ws, f);
-  EquilibriumState tangent;
-  if (!equilibrium_tangent(model, ws, from, tangent)) {
-    state.SkipWithError("no path tangent at the start");
-    return;
-  }
-  EquilibriumState guess = from;
-  guess.theta += kDeg * tangent.theta;
-  guess.deformations += kDeg * tangent.deformations;
-  guess.multipliers += kDeg * tangent.multipliers;
   long iterations = 0;
   long solves = 0;
   for (auto _ : state) {
@@ -122,10 +107,10 @@ void cycle(benchmark::State& state, const std::vector<Fixture>& fixtures) {
   state.counters["fail_frac"] = static_cast<double>(failed) / samples;
 }
 
-void BM_SolveWarm_Bennett(benchmark::State& state) { solve_warm(state, bennett()); }
-void BM_SolveWarm_Generic(benchmark::State& state) { solve_warm(state, generic(3)); }
-void BM_SolvePredicted_Bennett(benchmark::State& state) { solve_predicted(state, bennett()); }
-void BM_SolvePredicted_Generic(benchmark::State& state) { solve_predicted(state, generic(3)); }
+void BM_SolveWarm_Bennett(benchmark::State& state) { solve_step(state, bennett(), false); }
+void BM_SolveWarm_Generic(benchmark::State& state) { solve_step(state, generic(3), false); }
+void BM_SolvePredicted_Bennett(benchmark::State& state) { solve_step(state, bennett(), true); }
+void BM_SolvePredicted_Generic(benchmark::State& state) { solve_step(state, generic(3), true); }
 
 void BM_Cycle_Bennett(benchmark::State& state) { cycle(state, {bennett()}); }
 void BM_Cycle_Generic(benchmark::State& state) {
