@@ -187,10 +187,11 @@ TEST(Cycle, EnergyIsInvariantUnderRelabellingReversalAndScaling) {
     EquilibriumOptions eo;
     eo.compliance = Compliance::full;
     const CycleSummary base = run_cycle(c.g, c.start, eo);
-    // The premise: a smooth elastic path that closes after one turn. Where the
-    // path jumps branch, the cycle depends on the driving direction (which
-    // reversal flips) and on round-off (see cycle.hpp).
-    ASSERT_EQ(base.failed_samples + base.branch_jumps + base.refinements, 0);
+    // The premise: a smooth elastic path that closes after one turn (steps may
+    // be refined where it bends). Where the path jumps branch, the cycle
+    // depends on the driving direction (which reversal flips) and on
+    // round-off (see cycle.hpp).
+    ASSERT_EQ(base.failed_samples + base.branch_jumps, 0);
     const JointVector solved = base.samples[0].state.theta;
     ASSERT_GT(base.E_mean, 1e-6);
     const double tol = 1e-10 * base.E_mean;
@@ -262,9 +263,9 @@ TEST(Cycle, ResultDoesNotDependOnTheSampleCountAtSharedAngles) {
   }
 }
 
-// The predictor (tangent, cubic Hermite) only changes where each solve
-// starts: on smooth cycles every sample must land on the same solution as
-// without it, and the tangent's step control must not add bisections.
+// The predictor (tangent, cubic Hermite) and its bend control only
+// change where each solve starts: on smooth cycles every sample must land on
+// the same solution as without them.
 TEST(Cycle, PredictorChangesOnlyTheStartingPoints) {
   struct Case {
     LoopGeometry geometry;
@@ -283,7 +284,6 @@ TEST(Cycle, PredictorChangesOnlyTheStartingPoints) {
     const CycleSummary b = run_cycle(c.geometry, c.start, {}, without);
     ASSERT_EQ(a.branch_jumps + a.failed_samples, 0);
     ASSERT_EQ(b.branch_jumps + b.failed_samples, 0);
-    EXPECT_LE(a.refinements, b.refinements);
     for (size_t j = 0; j < a.samples.size(); ++j) {
       EXPECT_NEAR(a.samples[j].energy, b.samples[j].energy, 1e-12 * std::max(1.0, b.samples[j].energy)) << j;
       for (int i = 0; i < 4; ++i) {
