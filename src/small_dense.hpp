@@ -11,11 +11,13 @@
 
 namespace loopfarm::dense {
 
-// Cholesky factorisation in place (right-looking): on success the lower
-// triangle of `a` (n x n, only its lower triangle read) holds L with
-// a = L Lᵀ. Returns false as soon as a pivot is not positive (or not a
-// number): the matrix is then not positive definite, which is what the solver
-// uses this test for.
+// Cholesky factorisation in place (right-looking): on success the strictly
+// lower triangle of `a` (n x n, only its lower triangle read) holds L with
+// a = L Lᵀ, and the diagonal holds 1 / L(i, i), so that the triangular solves
+// below multiply instead of divide (a division on the back-substitution's
+// critical path costs as much as the rest of the row). Returns false as soon
+// as a pivot is not positive (or not a number): the matrix is then not
+// positive definite, which is what the solver uses this test for.
 template <class Matrix>
 bool cholesky_in_place(Matrix& matrix, int n) {
   double* __restrict a = matrix.data();
@@ -26,7 +28,7 @@ bool cholesky_in_place(Matrix& matrix, int n) {
     if (!(pivot > 0.0)) return false;
     const double root = std::sqrt(pivot);
     const double inverse = 1.0 / root;
-    column[j] = root;
+    column[j] = inverse;
     for (int i = j + 1; i < n; ++i) column[i] *= inverse;
     // Rank-one update of the trailing lower triangle.
     for (int k = j + 1; k < n; ++k) {
@@ -39,8 +41,8 @@ bool cholesky_in_place(Matrix& matrix, int n) {
 }
 
 // B <- L^-1 B for a row-major B of n rows and a fixed number of columns,
-// L from cholesky_in_place: row i of B is updated by whole rows, which the
-// compiler unrolls and vectorises.
+// L from cholesky_in_place (inverted diagonal): row i of B is updated by
+// whole rows, which the compiler unrolls and vectorises.
 template <class Matrix, class Rows>
 void solve_lower_rows(const Matrix& lower, int n, Rows& b) {
   static_assert(Rows::IsRowMajor && Rows::ColsAtCompileTime > 0, "row-major, fixed width");
@@ -51,7 +53,7 @@ void solve_lower_rows(const Matrix& lower, int n, Rows& b) {
   for (int j = 0; j < n; ++j) {
     const double* __restrict column = l + j * ldl;
     double* __restrict pivot_row = rows + j * width;
-    const double inverse = 1.0 / column[j];
+    const double inverse = column[j];
     for (int c = 0; c < width; ++c) pivot_row[c] *= inverse;
     for (int i = j + 1; i < n; ++i) {
       double* __restrict row = rows + i * width;
@@ -61,7 +63,7 @@ void solve_lower_rows(const Matrix& lower, int n, Rows& b) {
   }
 }
 
-// b <- L^-ᵀ b for every column of b.
+// b <- L^-ᵀ b for every column of b, L from cholesky_in_place (inverted diagonal).
 template <class Matrix, class Rhs>
 void solve_lower_transposed(const Matrix& lower, int n, Rhs& rhs) {
   const double* __restrict l = lower.data();
@@ -78,7 +80,7 @@ void solve_lower_transposed(const Matrix& lower, int n, Rhs& rhs) {
         s1 -= column[k + 1] * b[k + 1];
       }
       if (k < n) s0 -= column[k] * b[k];
-      b[i] = (s0 + s1) / column[i];
+      b[i] = (s0 + s1) * column[i];
     }
   }
 }

@@ -20,7 +20,9 @@ TEST(SmallDense, CholeskyAndSolvesAgreeWithEigen) {
     ASSERT_TRUE(dense::cholesky_in_place(a, n)) << n;
     const Eigen::LLT<Eigen::MatrixXd> reference(spd);
     const Eigen::MatrixXd l_ref = reference.matrixL();
-    const Eigen::MatrixXd l = a.triangularView<Eigen::Lower>();
+    // The strictly lower triangle is L, the diagonal 1 / L(i, i).
+    Eigen::MatrixXd l = a.triangularView<Eigen::StrictlyLower>();
+    l.diagonal() = a.diagonal().head(n).cwiseInverse();
     EXPECT_LT((l - l_ref).cwiseAbs().maxCoeff(), 1e-12 * l_ref.cwiseAbs().maxCoeff()) << n;
 
     Rows8 b = Rows8::Random(n, 8);

@@ -23,13 +23,17 @@ struct CycleOptions {
   // theta0 + range/2] at N evenly spaced points, walked outward from theta0.
   double range = 2.0 * 3.14159265358979323846;
   // A step whose passive angles move by more than this [rad] is refined by
-  // bisection, as is a step whose solve fails.
+  // bisection, as is a step whose solve fails; where the path tangent
+  // foretells such a move, or the prediction bends away from the tangent
+  // line, the step is bisected before it is tried.
   double max_passive_step = 0.5;
   int max_refinements = 5;       // bisection depth per step (finest step h / 32)
   // Iteration cap of a continuation solve; a step that needs more is bisected.
   int max_iterations_per_step = 20;
-  // Start each solve from a prediction along the path (the solved tangent,
-  // or the secant through the last two samples) instead of the last sample.
+  // Start each solve from a prediction along the path: the cubic through the
+  // last two samples and their solved tangents (error O(h^4)), the tangent
+  // alone after a jump, the secant where no tangent is known. Off: from the
+  // last sample itself (and no bend control), for comparison.
   bool predictor = true;
 
   bool full_turn() const;

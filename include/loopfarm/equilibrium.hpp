@@ -155,7 +155,7 @@ struct EquilibriumWorkspace {
 
   ChainKinematics chain;
   ChainMatrix chain_hessian;
-  UnknownMatrix hessian;      // H = W + sigma AᵀA + rho I, then its Cholesky factor L
+  UnknownMatrix hessian;      // H = W + sigma AᵀA + rho I, then its Cholesky factor L (diagonal inverted)
   UnknownMatrix normal;       // AᵀA (lower triangle)
   Matrix6U jacobian;          // closure Jacobian A with respect to the unknowns
   // [L^-1 Aᵀ | L^-1 g | 0] with H = L Lᵀ: row-major, 8 wide, so that the
