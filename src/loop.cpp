@@ -139,6 +139,26 @@ JointVector reversed_angles(const JointVector& theta) {
   return out;
 }
 
+LoopGeometry axis_flipped(const LoopGeometry& g, int joint) {
+  // T_{j-1} Rx(pi) = Rz Tz Tx Rx(alpha_{j-1} + pi), and Rx(-pi) T_j =
+  // Rz(-theta_j) Tz(-d_j) Tx(a_j) Rx(alpha_j - pi): Rx(pi) commutes with the
+  // x motions and reverses the z ones.
+  const int n = g.joints();
+  const int before = (joint + n - 1) % n;
+  constexpr double kPi = 3.14159265358979323846;
+  LoopGeometry out = g;
+  out.alpha[before] = wrap_angle(g.alpha[before] + kPi);
+  out.alpha[joint] = wrap_angle(out.alpha[joint] + kPi);  // reads `out`: n >= 4, so before != joint
+  out.d[joint] = -g.d[joint];
+  return out;
+}
+
+JointVector axis_flipped_angles(const JointVector& theta, int joint) {
+  JointVector out = theta;
+  out[joint] = -theta[joint];
+  return out;
+}
+
 Eigen::Isometry3d joint_transform(double theta, double d, double a, double alpha) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.rotate(Eigen::AngleAxisd(theta, Vector3::UnitZ()));

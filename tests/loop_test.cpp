@@ -201,6 +201,33 @@ TEST(Loop, RelabelledAndReversedLoopsCloseAtMappedAngles) {
   EXPECT_NEAR(fwd.head<3>().norm(), back.head<3>().norm(), 1e-12);
 }
 
+TEST(Loop, AxisFlipLeavesTheLoopProductUnchanged) {
+  // At any pose, not only a closed one: flipping axis j > 0 inserts Rx(pi)
+  // Rx(-pi) between T_{j-1} and T_j, so the product is the same matrix;
+  // flipping axis 0 conjugates it by Rx(pi).
+  for (int n : {4, 6, 8}) {
+    const LoopGeometry g = random_loop(n, 7 + n);
+    const JointVector theta = random_angles(n, 7 + n);
+    const Eigen::Matrix4d product = forward_transform(g, theta).matrix();
+    for (int j = 0; j < n; ++j) {
+      const LoopGeometry f = axis_flipped(g, j);
+      const Eigen::Matrix4d flipped = forward_transform(f, axis_flipped_angles(theta, j)).matrix();
+      Eigen::Isometry3d rx = Eigen::Isometry3d::Identity();
+      rx.rotate(Eigen::AngleAxisd(3.14159265358979323846, Vector3::UnitX()));
+      const Eigen::Matrix4d expected = j == 0 ? Eigen::Matrix4d(rx.matrix().transpose() * product * rx.matrix()) : product;
+      EXPECT_LT((flipped - expected).cwiseAbs().maxCoeff(), 1e-12) << n << " " << j;
+      EXPECT_DOUBLE_EQ(f.d[j], -g.d[j]);
+      // Flipping twice is the identity (up to the wrap of the twists).
+      const LoopGeometry back = axis_flipped(f, j);
+      for (int k = 0; k < n; ++k) EXPECT_NEAR(std::remainder(back.alpha[k] - g.alpha[k], 2 * 3.14159265358979323846), 0.0, 1e-14);
+    }
+  }
+  // A closed pose stays closed: the Bennett loop with axis 2 flipped.
+  const LoopGeometry b = paper_bennett_loop();
+  const JointVector theta = bennett_angles(b, rad(50));
+  EXPECT_LT(closure_residual(axis_flipped(b, 2), axis_flipped_angles(theta, 2)).norm(), 1e-13);
+}
+
 TEST(Loop, SoThreeLogInvertsTheExponentialEverywhere) {
   for (double angle : {0.0, 1e-9, 1e-5, 0.3, 1.5, 3.0, 3.14159, 3.141592653589793}) {
     const Vector3 axis = Vector3(0.3, -0.5, 0.8).normalized();

@@ -64,6 +64,15 @@ JointVector relabelled_angles(const JointVector& theta, int shift);
 LoopGeometry reversed(const LoopGeometry& geometry);
 JointVector reversed_angles(const JointVector& theta);
 
+// The same physical loop with the direction of joint axis `joint` reversed:
+// frame `joint` turned by pi about its x axis, which adds pi to the twists on
+// both sides of the axis (alpha_{joint-1}, alpha_joint, wrapped to (-pi, pi])
+// and negates the offset d_joint; the joint angle maps with flipped_angles
+// (theta_joint' = -theta_joint). The loop product is unchanged (conjugated by
+// Rx(pi) when joint is 0). Flipping every axis negates every offset.
+LoopGeometry axis_flipped(const LoopGeometry& geometry, int joint);
+JointVector axis_flipped_angles(const JointVector& theta, int joint);
+
 // T_i = Rz(theta) Tz(d) Tx(a) Rx(alpha).
 Eigen::Isometry3d joint_transform(double theta, double d, double a, double alpha);
 
