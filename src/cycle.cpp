@@ -384,13 +384,14 @@ Eigen::VectorXd cycle_weighted_deformations(const LoopModel& model, const CycleS
 }
 
 Eigen::MatrixXd cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& ws,
-                                           const CycleSummary& summary) {
+                                           const CycleSummary& summary, Eigen::MatrixXd* angle_jacobian) {
   const int n = model.joints();
   const int m = model.deformation_count();
   const int nu = model.unknown_count();
   const int np = 3 * n;
   const int N = static_cast<int>(summary.samples.size());
   Eigen::MatrixXd jacobian(N * m, np);
+  if (angle_jacobian) angle_jacobian->setZero(N * n, np);  // the input angle's rows stay zero
 
   // Every chain element: unknowns and parameters share elements, so one
   // Hessian over the whole chain gives both W and the mixed block.
@@ -440,9 +441,15 @@ Eigen::MatrixXd cycle_deformation_jacobian(const LoopModel& model, EquilibriumWo
     for (int u = 0; u < nu; ++u) {
       const int k = model.unknown_deformation(u);
       if (k >= 0) jacobian.row(j * m + k) = std::sqrt(model.deformation_stiffness(k) / N) * dx.row(u);
+      const int joint = model.unknown_joint(u);
+      if (angle_jacobian && joint >= 0) angle_jacobian->row(j * n + joint) = dx.row(u);
     }
   }
-  return jacobian * normalization_jacobian(model);
+  const Eigen::MatrixXd normalization = normalization_jacobian(model);
+  // Angles are dimensionless: they depend on the geometry only through the
+  // normalised parameters, as the deformations do.
+  if (angle_jacobian) *angle_jacobian = *angle_jacobian * normalization;
+  return jacobian * normalization;
 }
 
 }  // namespace loopfarm

@@ -142,6 +142,35 @@ TEST(Cycle, DeformationJacobianAgreesWithCentralDifferences) {
   }
 }
 
+// The joint angles' sensitivities from the same implicit differentiation.
+TEST(Cycle, AngleJacobianAgreesWithCentralDifferences) {
+  for (const GradientCase& c : gradient_cases()) {
+    SolvedCycle s(c, 8);
+    ASSERT_EQ(s.summary.failed_samples + s.summary.branch_jumps, 0) << c.name;
+    const int n = c.g.joints();
+    Eigen::MatrixXd angles;
+    cycle_deformation_jacobian(s.model, s.ws, s.summary, &angles);
+    ASSERT_EQ(angles.rows(), 8 * n);
+    ASSERT_EQ(angles.cols(), 3 * n);
+    Eigen::MatrixXd fd(angles.rows(), angles.cols());
+    for (int j = 0; j < angles.cols(); ++j) {
+      const double h = 1e-5;
+      auto stacked = [&](double step) {
+        LoopGeometry g = c.g;
+        parameter(g, j) += step;
+        const CycleSummary moved = run_cycle(g, s.summary.samples[0].state.theta, s.eo, s.co);
+        Eigen::VectorXd theta(8 * n);
+        for (int k = 0; k < 8; ++k) theta.segment(k * n, n) = moved.samples[static_cast<size_t>(k)].state.theta;
+        return theta;
+      };
+      const Eigen::VectorXd plus = stacked(h), minus = stacked(-h);
+      for (int row = 0; row < fd.rows(); ++row) fd(row, j) = wrap_angle(plus[row] - minus[row]) / (2 * h);
+    }
+    EXPECT_LT(relative_error(angles, fd), 1e-6) << c.name;
+    EXPECT_GT(fd.cwiseAbs().maxCoeff(), 1e-3) << c.name;  // the angles do move with the geometry
+  }
+}
+
 TEST(Cycle, BennettLoopHasZeroCycleEnergy) {
   const CycleSummary s = run_cycle(paper_bennett_loop(), paper_start());
   ASSERT_EQ(s.samples.size(), 32u);

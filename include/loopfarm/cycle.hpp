@@ -96,8 +96,11 @@ GeometryVector cycle_energy_gradient(const LoopModel& model, EquilibriumWorkspac
 Eigen::VectorXd cycle_weighted_deformations(const LoopModel& model, const CycleSummary& summary);
 
 // d r / d(a, alpha, d): (N * deformation_count) x 3n, by implicit
-// differentiation of every sample's KKT system.
+// differentiation of every sample's KKT system. The same differentiation
+// gives the joint angles' sensitivities: with `angle_jacobian`, row
+// j * n + i holds d theta_i(sample j) / d(a, alpha, d) (zero for the input).
 Eigen::MatrixXd cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& workspace,
-                                           const CycleSummary& summary);
+                                           const CycleSummary& summary,
+                                           Eigen::MatrixXd* angle_jacobian = nullptr);
 
 }  // namespace loopfarm
