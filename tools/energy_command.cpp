@@ -5,11 +5,13 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <string>
 #include <vector>
 
 #include "cli_support.hpp"
 #include "geometry_input.hpp"
+#include "geometry_options.hpp"
 #include "loopfarm/assembly.hpp"
 #include "loopfarm/cycle.hpp"
 #include "loopfarm/equilibrium.hpp"
@@ -28,7 +30,7 @@ constexpr long long kMaxSamples = 100000;
 // The option texts exactly as given; everything is parsed and checked by
 // read_request so that every message has the same form.
 struct EnergyArguments {
-  std::string a, alpha_deg, d, geometry, theta_deg;
+  GeometryOptions geometry;
   std::string theta0_deg = "0";
   std::string samples = "32";
   std::string compliance = "paper";
@@ -38,11 +40,6 @@ struct EnergyArguments {
   bool json = false;
   bool log = false;
 
-  CLI::Option* a_option = nullptr;
-  CLI::Option* alpha_option = nullptr;
-  CLI::Option* d_option = nullptr;
-  CLI::Option* geometry_option = nullptr;
-  CLI::Option* theta_option = nullptr;
   CLI::Option* csv_option = nullptr;
   CLI::Option* plot_option = nullptr;
 };
@@ -61,40 +58,13 @@ struct EnergyRequest {
   bool log = false;
 };
 
-bool given(const CLI::Option* option) { return option != nullptr && option->count() > 0; }
-
 EnergyRequest read_request(const EnergyArguments& args) {
   EnergyRequest request;
-  if (given(args.geometry_option)) {
-    request.input = geometry_from_toml(args.geometry);
-  } else {
-    if (!given(args.a_option)) {
-      throw UsageError("--a", "missing: give the link lengths with --a and the twists with --alpha-deg "
-                              "(e.g. --a 2,4,2,4 --alpha-deg 30,90,30,90), or --geometry FILE.toml");
-    }
-    if (!given(args.alpha_option)) {
-      throw UsageError("--alpha-deg", "missing: give the twists in degrees, e.g. --alpha-deg 30,90,30,90");
-    }
-    request.input = geometry_from_flags(args.a, args.alpha_deg,
-                                        given(args.d_option) ? std::optional<std::string>(args.d) : std::nullopt);
-  }
-  request.geometry = make_geometry(request.input);
-  const int n = request.geometry.joints();
-
-  if (given(args.theta_option)) {
-    const std::vector<double> theta_deg = parse_number_list(args.theta_deg, "--theta-deg");
-    if (theta_deg.size() != static_cast<size_t>(n)) {
-      throw UsageError("--theta-deg", std::to_string(theta_deg.size()) + " values (" + format_list(theta_deg) +
-                                          ") but " + request.input.a.source + " has " + std::to_string(n) +
-                                          "; give one initial angle per joint, the input joint first");
-    }
-    JointVector theta(n);
-    for (int i = 0; i < n; ++i) theta[i] = theta_deg[static_cast<size_t>(i)] / kDegreesPerRadian;
-    request.theta = theta;
-    request.theta0_deg = theta_deg.front();
-  } else {
-    request.theta0_deg = parse_number(args.theta0_deg, "--theta0-deg");
-  }
+  GeometryRequest geometry = read_geometry(args.geometry);
+  request.input = std::move(geometry.input);
+  request.geometry = geometry.geometry;
+  request.theta = geometry.theta;
+  request.theta0_deg = geometry.theta0_deg ? *geometry.theta0_deg : parse_number(args.theta0_deg, "--theta0-deg");
 
   const long long samples = parse_integer(args.samples, "--samples");
   if (samples < 2 || samples > kMaxSamples) {
@@ -339,27 +309,12 @@ Subcommand add_energy_command(CLI::App& parent) {
       "  loopfarm energy --geometry loop.toml --samples 64 --csv curve.csv --plot curve.png --log\n"
       "Exit codes: 0 done, 1 failure (e.g. gnuplot missing), 2 bad input.\n");
 
-  args->a_option = app->add_option("--a", args->a, "link lengths a1,...,an (4 <= n <= 8), each >= 0")
-                       ->type_name("LIST");
-  args->alpha_option =
-      app->add_option("--alpha-deg", args->alpha_deg, "link twists alpha1,...,alphan [deg]")->type_name("LIST");
-  args->d_option = app->add_option("--d", args->d, "joint offsets d1,...,dn (default: all 0)")->type_name("LIST");
-  args->geometry_option =
-      app->add_option("--geometry", args->geometry,
-                      "TOML file with arrays a, alpha_deg and optionally d, instead of --a/--alpha-deg/--d")
-          ->type_name("FILE");
-  args->geometry_option->excludes(args->a_option)->excludes(args->alpha_option)->excludes(args->d_option);
-
-  args->theta_option =
-      app->add_option("--theta-deg", args->theta_deg,
-                      "initial joint angles theta1,...,thetan [deg]: theta1 is theta0, the others the passive "
-                      "angles' starting guess (default: the loop is assembled automatically)")
-          ->type_name("LIST");
+  add_geometry_options(*app, args->geometry);
   CLI::Option* theta0 =
       app->add_option("--theta0-deg", args->theta0_deg, "input angle theta0 the cycle starts at [deg]")
           ->type_name("DEG")
           ->capture_default_str();
-  args->theta_option->excludes(theta0);
+  args->geometry.theta_option->excludes(theta0);
 
   app->add_option("--samples", args->samples, "samples N over the cycle (>= 2)")
       ->type_name("N")
