@@ -1,6 +1,7 @@
 #include "loopfarm/local_dimension.hpp"
 
 #include <cmath>
+#include <vector>
 
 #include <Eigen/SVD>
 #include <gtest/gtest.h>
@@ -87,6 +88,28 @@ TEST(LocalDimension, PlanarCrankFamilyHasSevenParameters) {
   for (int i = 0; i < 4; ++i) C(i, n + i) = 1;
   for (int i = 0; i < 4; ++i) C(4, 2 * n + i) = 1;
   expect_matches_family(cycle_jacobian(g, nullptr), g, C, 7);
+}
+
+TEST(LocalDimension, CoaxialTrivialFamilyHasFiveParameters) {
+  // Axes 1 and 3 coincide: a1 = a2, alpha1 = alpha2, a3 = a4, alpha3 =
+  // alpha4, d2 = d4 = 0, d1 = -d3 (7 conditions). With theta2 = theta4 = pi
+  // links 2 and 4 fold back over links 1 and 3, and the loop turns about the
+  // shared axis with theta3 = -theta1.
+  const int n = 4;
+  LoopGeometry g = LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5},
+                                              std::vector<double>{40, 40, 70, 70},
+                                              std::vector<double>{0.3, 0.0, -0.3, 0.0});
+  JointVector start(4);
+  start << rad(30), rad(180), rad(-30), rad(180);
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(7, 3 * n);
+  C(0, 0) = 1, C(0, 1) = -1;
+  C(1, 2) = 1, C(1, 3) = -1;
+  C(2, n + 0) = 1, C(2, n + 1) = -1;
+  C(3, n + 2) = 1, C(3, n + 3) = -1;
+  C(4, 2 * n + 1) = 1;
+  C(5, 2 * n + 3) = 1;
+  C(6, 2 * n + 0) = 1, C(6, 2 * n + 2) = 1;
+  expect_matches_family(cycle_jacobian(g, &start), g, C, 5);
 }
 
 TEST(LocalDimension, SphericalLoopsFillTheSpaceOfTwists) {
