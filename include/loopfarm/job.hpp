@@ -104,7 +104,9 @@ struct OptimizerSettings {
   double xtol_rel = 1e-10;
   double ftol_rel = 0.0;               // 0: not used
   double ftol_abs = 0.0;               // 0: not used
-  double stopval = 1e-30;              // stop once E_mean is below this
+  // Stop once the objective is below this: 1e-26 is deformations of about
+  // 1e-13, near round-off (a zero polished further gains nothing).
+  double stopval = 1e-26;
   int max_evaluations = 500;           // cycle evaluations per start
   double time_limit = 30.0;            // seconds per start; 0: none
 };

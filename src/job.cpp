@@ -1,0 +1,509 @@
+// Job files: parsing and validation (job.hpp, docs/job-file.md).
+//
+// Every check names the file, the line and the key ("FILE:LINE: KEY: what"),
+// so that a mistake in a long job file is found at once.
+#include "loopfarm/job.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <optional>
+#include <set>
+
+#include <nlopt.h>
+#include <toml++/toml.h>
+
+namespace loopfarm {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRadiansPerDegree = kPi / 180.0;
+
+std::string format(double value) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.10g", value);
+  return buffer;
+}
+
+// The reader of one job file: where it is and how to complain.
+struct Reader {
+  std::string file;
+
+  [[noreturn]] void fail(const toml::source_region& where, const std::string& key, const std::string& message) const {
+    throw JobError(file, static_cast<int>(where.begin.line), key, message);
+  }
+
+  static std::string describe(const toml::node& node) {
+    if (const auto* s = node.as_string()) return "the string \"" + s->get() + "\"";
+    if (const auto* b = node.as_boolean()) return std::string("the boolean ") + (b->get() ? "true" : "false");
+    if (const auto* i = node.as_integer()) return "the integer " + std::to_string(i->get());
+    if (const auto* f = node.as_floating_point()) return "the number " + format(f->get());
+    if (node.is_table()) return "a table";
+    if (node.is_array()) return "an array";
+    return "a date or time";
+  }
+
+  double number(const toml::node& node, const std::string& key) const {
+    double value = 0.0;
+    if (const auto* i = node.as_integer()) {
+      value = static_cast<double>(i->get());
+    } else if (const auto* f = node.as_floating_point()) {
+      value = f->get();
+    } else {
+      fail(node.source(), key, "expected a number, got " + describe(node));
+    }
+    // TOML has nan and inf literals; no job setting has a use for them.
+    if (!std::isfinite(value)) fail(node.source(), key, "got " + format(value) + "; must be a finite number");
+    return value;
+  }
+
+  long long integer(const toml::node& node, const std::string& key) const {
+    const auto* i = node.as_integer();
+    if (i == nullptr) fail(node.source(), key, "expected an integer, got " + describe(node));
+    return i->get();
+  }
+
+  bool boolean(const toml::node& node, const std::string& key) const {
+    const auto* b = node.as_boolean();
+    if (b == nullptr) fail(node.source(), key, "expected true or false, got " + describe(node));
+    return b->get();
+  }
+
+  std::string string(const toml::node& node, const std::string& key) const {
+    const auto* s = node.as_string();
+    if (s == nullptr) fail(node.source(), key, "expected a string, got " + describe(node));
+    return s->get();
+  }
+
+  const toml::table& table(const toml::node& node, const std::string& key) const {
+    const toml::table* t = node.as_table();
+    if (t == nullptr) fail(node.source(), key, "expected a table [" + key + "], got " + describe(node));
+    return *t;
+  }
+
+  // number > 0 (strict) or >= 0.
+  double positive(const toml::node& node, const std::string& key, bool strict) const {
+    const double value = number(node, key);
+    if (strict ? !(value > 0.0) : !(value >= 0.0)) {
+      fail(node.source(), key, "got " + format(value) + "; must be " + (strict ? "> 0" : ">= 0"));
+    }
+    return value;
+  }
+};
+
+// The settings tables and their keys; anything else is an error.
+const std::set<std::string> kTables = {"loop", "space", "optimizer", "search", "steering", "output"};
+
+// A parameter name in [space]: kind and 1-based joint, or a default ("a").
+struct ParameterName {
+  ParameterKind kind = ParameterKind::a;
+  int joint = 0;  // 1-based; 0 for the default of the kind
+};
+
+std::optional<ParameterName> parse_parameter_name(const std::string& name) {
+  struct Prefix {
+    const char* text;
+    ParameterKind kind;
+    bool degrees;
+  };
+  // Longest prefixes first: "alpha" before "a".
+  static const Prefix prefixes[] = {{"alpha", ParameterKind::alpha, true},
+                                    {"theta", ParameterKind::theta, true},
+                                    {"a", ParameterKind::a, false},
+                                    {"d", ParameterKind::d, false}};
+  for (const Prefix& p : prefixes) {
+    const std::string prefix = p.text;
+    if (name.rfind(prefix, 0) != 0) continue;
+    std::string rest = name.substr(prefix.size());
+    if (p.degrees) {
+      if (rest.size() < 4 || rest.substr(rest.size() - 4) != "_deg") return std::nullopt;
+      rest = rest.substr(0, rest.size() - 4);
+    }
+    if (rest.empty()) return ParameterName{p.kind, 0};
+    if (!std::all_of(rest.begin(), rest.end(), [](char c) { return c >= '0' && c <= '9'; })) return std::nullopt;
+    if (rest.size() > 2 || rest[0] == '0') return std::nullopt;
+    return ParameterName{p.kind, std::stoi(rest)};
+  }
+  return std::nullopt;
+}
+
+bool is_angle(ParameterKind kind) { return kind == ParameterKind::alpha || kind == ParameterKind::theta; }
+bool is_length(ParameterKind kind) { return kind == ParameterKind::a || kind == ParameterKind::d; }
+
+// What a tie may point at: lengths to lengths, twists to twists, angles to angles.
+bool same_unit(ParameterKind a, ParameterKind b) {
+  return (is_length(a) && is_length(b)) || a == b;
+}
+
+const char* unit_name(ParameterKind kind) {
+  switch (kind) {
+    case ParameterKind::a:
+    case ParameterKind::d: return "a length (a or d)";
+    case ParameterKind::alpha: return "a twist (alpha)";
+    case ParameterKind::theta: return "an initial angle (theta)";
+  }
+  return "";
+}
+
+// A tie's text as written: "a1" or "-a1".
+struct TieText {
+  std::string source;
+  double sign = 1.0;
+};
+
+ParameterSpec read_spec(const Reader& r, const toml::node& node, const std::string& key, ParameterKind kind,
+                        bool allow_tie, std::optional<TieText>* tie) {
+  const double unit = is_angle(kind) ? kRadiansPerDegree : 1.0;
+  ParameterSpec spec;
+  spec.line = static_cast<int>(node.source().begin.line);
+  if (node.is_integer() || node.is_floating_point()) {
+    spec.mode = ParameterSpec::Mode::fixed;
+    spec.value = r.number(node, key) * unit;
+    return spec;
+  }
+  if (const toml::array* range = node.as_array()) {
+    if (range->size() != 2) {
+      r.fail(node.source(), key, "a range is [lo, hi]; got an array of " + std::to_string(range->size()) + " values");
+    }
+    const double lo = r.number(*range->get(0), key);
+    const double hi = r.number(*range->get(1), key);
+    if (lo > hi) r.fail(node.source(), key, "range [" + format(lo) + ", " + format(hi) + "] has lo > hi");
+    if (lo == hi) {
+      spec.mode = ParameterSpec::Mode::fixed;
+      spec.value = lo * unit;
+    } else {
+      spec.mode = ParameterSpec::Mode::range;
+      spec.lo = lo * unit;
+      spec.hi = hi * unit;
+    }
+    return spec;
+  }
+  if (node.is_string()) {
+    if (!allow_tie) r.fail(node.source(), key, "a default is a number or a range [lo, hi], not a tie");
+    std::string text = r.string(node, key);
+    TieText t;
+    if (!text.empty() && text[0] == '-') {
+      t.sign = -1.0;
+      text = text.substr(1);
+    }
+    t.source = text;
+    *tie = t;
+    spec.mode = ParameterSpec::Mode::tied;
+    spec.sign = t.sign;
+    return spec;
+  }
+  r.fail(node.source(), key,
+         "expected a number (fixed), a range [lo, hi] or the name of another parameter (tied), got " +
+             Reader::describe(node));
+}
+
+ParameterSpace read_space(const Reader& r, const toml::table* table, int joints) {
+  ParameterSpace space;
+  space.joints = joints;
+  space.specs.resize(static_cast<size_t>(kParameterKinds * joints));
+  // Built-in defaults (docs/job-file.md).
+  auto range = [](double lo, double hi) {
+    ParameterSpec s;
+    s.mode = ParameterSpec::Mode::range;
+    s.lo = lo;
+    s.hi = hi;
+    return s;
+  };
+  std::array<ParameterSpec, kParameterKinds> defaults = {range(0.5, 5.0), range(0.0, kPi), range(-1.0, 1.0),
+                                                         range(-kPi, kPi)};
+  std::vector<std::optional<TieText>> ties(space.specs.size());
+  std::vector<std::string> keys(space.specs.size());
+  std::vector<toml::source_region> places(space.specs.size());
+  std::vector<bool> named(space.specs.size(), false);
+
+  if (table) {
+    // Defaults first, whatever their place in the file.
+    for (const auto& [key, node] : *table) {
+      const std::string name(key.str());
+      const std::string full = "space." + name;
+      const std::optional<ParameterName> p = parse_parameter_name(name);
+      if (!p) {
+        r.fail(key.source(), full,
+               "unknown parameter; expected a1..a" + std::to_string(joints) + ", alpha1_deg.., d1.., theta1_deg.. "
+               "or a default a, alpha_deg, d, theta_deg");
+      }
+      if (p->joint > joints) {
+        r.fail(key.source(), full, "joint " + std::to_string(p->joint) + " but [loop] joints = " + std::to_string(joints));
+      }
+      if (p->joint == 0) defaults[static_cast<size_t>(p->kind)] = read_spec(r, node, full, p->kind, false, nullptr);
+    }
+  }
+  for (int kind = 0; kind < kParameterKinds; ++kind) {
+    for (int j = 0; j < joints; ++j) {
+      const int i = space.index(static_cast<ParameterKind>(kind), j);
+      space.specs[static_cast<size_t>(i)] = defaults[static_cast<size_t>(kind)];
+      keys[static_cast<size_t>(i)] = "space." + space.name(i);
+    }
+  }
+  if (table) {
+    for (const auto& [key, node] : *table) {
+      const std::string name(key.str());
+      const ParameterName p = *parse_parameter_name(name);
+      if (p.joint == 0) continue;
+      const int i = space.index(p.kind, p.joint - 1);
+      if (name != space.name(i)) {
+        r.fail(key.source(), "space." + name, "write it " + space.name(i));  // e.g. a leading zero
+      }
+      space.specs[static_cast<size_t>(i)] = read_spec(r, node, keys[static_cast<size_t>(i)], p.kind, true,
+                                                      &ties[static_cast<size_t>(i)]);
+      places[static_cast<size_t>(i)] = node.source();
+      named[static_cast<size_t>(i)] = true;
+    }
+  }
+  // Resolve the ties now that every parameter is known.
+  for (size_t i = 0; i < space.specs.size(); ++i) {
+    if (!ties[i]) continue;
+    const std::string& key = keys[i];
+    const std::optional<ParameterName> p = parse_parameter_name(ties[i]->source);
+    if (!p || p->joint == 0 || p->joint > joints ||
+        space.name(space.index(p->kind, p->joint - 1)) != ties[i]->source) {
+      r.fail(places[i], key, "tied to \"" + ties[i]->source + "\", which is not a parameter of this " +
+                                 std::to_string(joints) + "-joint loop");
+    }
+    const int source = space.index(p->kind, p->joint - 1);
+    const ParameterKind kind = static_cast<ParameterKind>(static_cast<int>(i) / joints);
+    if (source == static_cast<int>(i)) r.fail(places[i], key, "tied to itself");
+    if (!same_unit(kind, p->kind)) {
+      r.fail(places[i], key, "tied to " + ties[i]->source + ", " + unit_name(p->kind) + "; " + space.name(static_cast<int>(i)) +
+                                 " is " + unit_name(kind));
+    }
+    if (space.specs[static_cast<size_t>(source)].mode == ParameterSpec::Mode::tied) {
+      r.fail(places[i], key, "tied to " + ties[i]->source + ", which is itself tied; tie to its source instead");
+    }
+    space.specs[i].source = source;
+  }
+  // Link lengths must stay >= 0 whatever the search does.
+  for (int j = 0; j < joints; ++j) {
+    const size_t i = static_cast<size_t>(space.index(ParameterKind::a, j));
+    const ParameterSpec& s = space.specs[i];
+    double lo = 0.0;
+    switch (s.mode) {
+      case ParameterSpec::Mode::fixed: lo = s.value; break;
+      case ParameterSpec::Mode::range: lo = s.lo; break;
+      case ParameterSpec::Mode::tied: {
+        const ParameterSpec& src = space.specs[static_cast<size_t>(s.source)];
+        const double src_lo = src.mode == ParameterSpec::Mode::fixed ? src.value : src.lo;
+        const double src_hi = src.mode == ParameterSpec::Mode::fixed ? src.value : src.hi;
+        lo = s.sign > 0 ? src_lo : -src_hi;
+        break;
+      }
+    }
+    if (lo < 0.0) {
+      const std::string why = s.mode == ParameterSpec::Mode::tied ? "the tie can make it " + format(lo)
+                                                                   : "it can be " + format(lo);
+      const toml::source_region where = named[i] ? places[i] : toml::source_region{};
+      r.fail(where, keys[i], "a link length must be >= 0, but " + why);
+    }
+  }
+  return space;
+}
+
+template <class Handler>
+void for_each_key(const Reader& r, const toml::table& table, const std::string& name,
+                  const std::set<std::string>& allowed, Handler handler) {
+  for (const auto& [key, node] : table) {
+    const std::string k(key.str());
+    const std::string full = name + "." + k;
+    if (!allowed.count(k)) {
+      std::string list;
+      for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
+      r.fail(key.source(), full, "unknown key; [" + name + "] has " + list);
+    }
+    handler(k, full, node);
+  }
+}
+
+Job parse_table(const toml::table& root, const std::string& file) {
+  const Reader r{file};
+  Job job;
+  job.path = file;
+  for (const auto& [key, node] : root) {
+    const std::string k(key.str());
+    if (!kTables.count(k)) {
+      r.fail(key.source(), k, "unknown table or key; a job has [loop], [space], [optimizer], [search], "
+                              "[steering] and [output]");
+    }
+    r.table(node, k);
+  }
+  auto section = [&](const char* name) -> const toml::table* {
+    const toml::node* node = root.get(name);
+    return node ? node->as_table() : nullptr;
+  };
+
+  if (const toml::table* t = section("loop")) {
+    for_each_key(r, *t, "loop", {"joints", "compliance", "stiffness_ratio", "samples", "range_deg"},
+                 [&](const std::string& k, const std::string& full, const toml::node& node) {
+                   if (k == "joints") {
+                     const long long n = r.integer(node, full);
+                     if (n < kMinJoints || n > kMaxJoints) {
+                       r.fail(node.source(), full, "got " + std::to_string(n) + "; a loop has 4 to 8 joints");
+                     }
+                     job.loop.joints = static_cast<int>(n);
+                   } else if (k == "compliance") {
+                     const std::string c = r.string(node, full);
+                     if (c != "paper" && c != "full") {
+                       r.fail(node.source(), full, "got \"" + c + "\"; expected \"paper\" (a and alpha springy) or "
+                                                   "\"full\" (a, alpha and d)");
+                     }
+                     job.loop.compliance = compliance_from_string(c);
+                   } else if (k == "stiffness_ratio") {
+                     job.loop.stiffness_ratio = r.positive(node, full, true);
+                   } else if (k == "samples") {
+                     const long long n = r.integer(node, full);
+                     if (n < 4 || n > 100000) r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [4, 100000]");
+                     job.loop.samples = static_cast<int>(n);
+                   } else if (k == "range_deg") {
+                     const double range = r.number(node, full);
+                     if (!(range > 0.0 && range <= 360.0)) {
+                       r.fail(node.source(), full, "got " + format(range) + "; must be in (0, 360]");
+                     }
+                     // 360 must be exactly 2 pi: the library tests for a full turn.
+                     job.loop.range = range / 360.0 * (2.0 * kPi);
+                   }
+                 });
+  }
+  const toml::node* space_node = root.get("space");
+  job.space = read_space(r, space_node ? space_node->as_table() : nullptr, job.loop.joints);
+
+  if (const toml::table* t = section("optimizer")) {
+    for_each_key(r, *t, "optimizer",
+                 {"algorithm", "xtol_rel", "ftol_rel", "ftol_abs", "stopval", "max_evaluations", "time_limit_s"},
+                 [&](const std::string& k, const std::string& full, const toml::node& node) {
+                   if (k == "algorithm") {
+                     job.optimizer.algorithm = r.string(node, full);
+                     const std::string& a = job.optimizer.algorithm;
+                     if (a == "GD_STOGO" || a == "GD_STOGO_RAND" || a == "GN_AGS") {
+                       r.fail(node.source(), full, "\"" + a + "\" is not built into Debian's NLopt");
+                     }
+                     if (!is_known_algorithm(a)) {
+                       r.fail(node.source(), full, "unknown algorithm \"" + a + "\"; expected \"gauss-newton\" or an "
+                                                   "NLopt name such as \"LD_LBFGS\" or \"LN_BOBYQA\"");
+                     }
+                   } else if (k == "xtol_rel") {
+                     job.optimizer.xtol_rel = r.positive(node, full, false);
+                   } else if (k == "ftol_rel") {
+                     job.optimizer.ftol_rel = r.positive(node, full, false);
+                   } else if (k == "ftol_abs") {
+                     job.optimizer.ftol_abs = r.positive(node, full, false);
+                   } else if (k == "stopval") {
+                     job.optimizer.stopval = r.number(node, full);
+                   } else if (k == "max_evaluations") {
+                     const long long n = r.integer(node, full);
+                     if (n <= 0 || n > 100000000) r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [1, 1e8]");
+                     job.optimizer.max_evaluations = static_cast<int>(n);
+                   } else if (k == "time_limit_s") {
+                     job.optimizer.time_limit = r.positive(node, full, false);
+                   }
+                 });
+  }
+  if (const toml::table* t = section("search")) {
+    for_each_key(r, *t, "search", {"starts", "seed", "zero_threshold"},
+                 [&](const std::string& k, const std::string& full, const toml::node& node) {
+                   if (k == "starts") {
+                     const long long n = r.integer(node, full);
+                     if (n <= 0) r.fail(node.source(), full, "got " + std::to_string(n) + "; must be > 0");
+                     job.search.starts = static_cast<long>(n);
+                   } else if (k == "seed") {
+                     const long long s = r.integer(node, full);
+                     if (s < 0) r.fail(node.source(), full, "got " + std::to_string(s) + "; must be >= 0");
+                     job.search.seed = static_cast<std::uint64_t>(s);
+                   } else if (k == "zero_threshold") {
+                     job.search.zero_threshold = r.positive(node, full, true);
+                   }
+                 });
+  }
+  if (const toml::table* t = section("steering")) {
+    for_each_key(r, *t, "steering", {"nontrivial", "min_travel_deg", "deflate", "deflation_power", "deflation_shift"},
+                 [&](const std::string& k, const std::string& full, const toml::node& node) {
+                   if (k == "nontrivial") {
+                     job.steering.nontrivial = r.boolean(node, full);
+                   } else if (k == "min_travel_deg") {
+                     job.steering.min_travel = r.positive(node, full, true) * kRadiansPerDegree;
+                   } else if (k == "deflation_power") {
+                     job.steering.deflation_power = r.positive(node, full, true);
+                   } else if (k == "deflation_shift") {
+                     job.steering.deflation_shift = r.positive(node, full, false);
+                   } else if (k == "deflate") {
+                     const toml::array* list = node.as_array();
+                     if (list == nullptr) {
+                       r.fail(node.source(), full, "expected a list of families such as [\"planar\", \"trivial\"], got " +
+                                                       Reader::describe(node));
+                     }
+                     for (const toml::node& item : *list) {
+                       const std::string family = r.string(item, full);
+                       if (family != "planar" && family != "spherical" && family != "trivial" && family != "bennett") {
+                         r.fail(item.source(), full, "unknown family \"" + family +
+                                                         "\"; expected planar, spherical, trivial or bennett");
+                       }
+                       if (std::count(job.steering.deflate.begin(), job.steering.deflate.end(), family)) {
+                         r.fail(item.source(), full, "\"" + family + "\" is listed twice");
+                       }
+                       job.steering.deflate.push_back(family);
+                     }
+                   }
+                 });
+  }
+  if (const toml::table* t = section("output")) {
+    for_each_key(r, *t, "output", {"database"}, [&](const std::string&, const std::string& full, const toml::node& node) {
+      const std::string path = r.string(node, full);
+      if (path.empty()) r.fail(node.source(), full, "empty path");
+      // Relative to the job file, so that a job runs the same from anywhere.
+      const std::filesystem::path p(path);
+      job.output.database = p.is_absolute() || file.empty()
+                                ? path
+                                : (std::filesystem::path(file).parent_path() / p).lexically_normal().string();
+    });
+  } else {
+    job.output.database =
+        (std::filesystem::path(file).parent_path() / job.output.database).lexically_normal().string();
+  }
+  return job;
+}
+
+}  // namespace
+
+JobError::JobError(std::string file, int line, std::string key, const std::string& message)
+    : std::runtime_error(file + ":" + std::to_string(line) + ": " + key + ": " + message),
+      file_(std::move(file)),
+      line_(line),
+      key_(std::move(key)) {}
+
+bool is_known_algorithm(const std::string& name) {
+  if (name == "gauss-newton") return true;
+  if (name == "GD_STOGO" || name == "GD_STOGO_RAND" || name == "GN_AGS") return false;  // not in Debian's build
+  return static_cast<int>(nlopt_algorithm_from_string(name.c_str())) >= 0;
+}
+
+Job parse_job(std::string_view text, const std::string& source_name) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& error) {
+    const auto& begin = error.source().begin;
+    std::string description(error.description());
+    std::replace(description.begin(), description.end(), '\n', ' ');
+    throw JobError(source_name, static_cast<int>(begin.line), "(syntax)", "invalid TOML: " + description);
+  }
+  return parse_table(root, source_name);
+}
+
+Job read_job_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw JobError(path, 0, "(file)", "is a directory, not a job file");
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) throw JobError(path, 0, "(file)", std::string("cannot read: ") + std::strerror(errno));
+  const std::string text{std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
+  if (stream.bad()) throw JobError(path, 0, "(file)", "read error");
+  return parse_job(text, path);
+}
+
+}  // namespace loopfarm

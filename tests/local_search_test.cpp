@@ -1,0 +1,125 @@
+#include "loopfarm/local_search.hpp"
+
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "loopfarm/job.hpp"
+#include "search_fixtures.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm {
+namespace {
+
+using testing::rad;
+
+Job bennett_job(const std::string& algorithm, int max_evaluations = 300) {
+  Job job = parse_job(testing::kBennettSpaceJob, "bennett.toml");
+  job.optimizer.algorithm = algorithm;
+  job.optimizer.max_evaluations = max_evaluations;
+  return job;
+}
+
+// The asymmetric Bennett condition, written without division.
+double bennett_condition(const Eigen::VectorXd& x) {
+  return x[1] * std::sin(x[2]) - x[0] * std::sin(x[3]);
+}
+
+LocalSearchSummary minimise(const Job& job, const Eigen::VectorXd& x0) {
+  CycleObjective objective(job.space, ObjectiveSettings::from_loop(job.loop),
+                           job.space.initial_angles(Eigen::VectorXd()));
+  LocalSearchOptions options;
+  options.settings = job.optimizer;
+  return local_minimize(objective, x0, options);
+}
+
+Eigen::VectorXd perturbed_paper_point() {
+  Eigen::VectorXd x(4);
+  x << 2.03, 4.01, rad(33), rad(86);  // off the family by about 3e-2 in the condition
+  return x;
+}
+
+TEST(GaussNewton, ReachesTheBennettFamilyQuadratically) {
+  const Job job = bennett_job("gauss-newton");
+  const Eigen::VectorXd x0 = perturbed_paper_point();
+  ASSERT_GT(std::abs(bennett_condition(x0)), 1e-2);
+  int accepted = 0;
+  std::vector<double> values;
+  CycleObjective objective(job.space, ObjectiveSettings::from_loop(job.loop),
+                           job.space.initial_angles(Eigen::VectorXd()));
+  LocalSearchOptions options;
+  options.settings = job.optimizer;
+  options.trace = [&](const SearchTraceRow& row) {
+    if (row.accepted) {
+      ++accepted;
+      values.push_back(row.value);
+    }
+  };
+  const LocalSearchSummary s = local_minimize(objective, x0, options);
+  EXPECT_EQ(s.status, SearchStatus::stopval_reached) << s.message;
+  EXPECT_LE(s.E_mean, job.optimizer.stopval);
+  // Independent of the elastic model: the closed-form Bennett condition.
+  EXPECT_LT(std::abs(bennett_condition(s.x)), 1e-12);
+  // Zero-residual Gauss-Newton: few steps, each multiplying the energy's
+  // order of magnitude by about 2 (quadratic convergence of the residual;
+  // a linear method would add a constant instead). Seen: 1e-4, 2e-10,
+  // 9e-18, 9e-28.
+  EXPECT_LE(accepted, 8);
+  ASSERT_GE(values.size(), 3u);
+  for (size_t k = 1; k < values.size(); ++k) {
+    if (values[k - 1] < 1e-2) {
+      EXPECT_GT(std::log10(values[k]) / std::log10(values[k - 1]), 1.5) << k;
+    }
+  }
+  // The objective is left at the returned point.
+  EXPECT_EQ(objective.last_x(), s.x);
+}
+
+TEST(NloptSearch, GradientAndDerivativeFreeAlgorithmsLandOnTheSameFamily) {
+  for (const std::string algorithm : {"LD_LBFGS", "LD_SLSQP", "LN_BOBYQA"}) {
+    const Job job = bennett_job(algorithm, 400);
+    const LocalSearchSummary s = minimise(job, perturbed_paper_point());
+    EXPECT_LT(s.E_mean, 1e-10) << algorithm << " " << to_string(s.status) << " " << s.message;
+    // E ~ condition^2: a 1e-10 energy puts the point within ~1e-4 of the family.
+    EXPECT_LT(std::abs(bennett_condition(s.x)), 1e-3) << algorithm;
+    EXPECT_LE(s.evaluations, 400 + 1) << algorithm;
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_GE(s.x[i], job.space.lower_bounds()[i]) << algorithm;
+      EXPECT_LE(s.x[i], job.space.upper_bounds()[i]) << algorithm;
+    }
+  }
+}
+
+TEST(LocalSearch, EveryLimitMapsToItsStatus) {
+  const Eigen::VectorXd x0 = perturbed_paper_point();
+  for (const std::string algorithm : {"gauss-newton", "LD_LBFGS", "LN_BOBYQA"}) {
+    Job job = bennett_job(algorithm, 3);
+    job.optimizer.stopval = 0.0;
+    const LocalSearchSummary s = minimise(job, x0);
+    EXPECT_EQ(s.status, SearchStatus::maxeval_reached) << algorithm << " " << s.message;
+    EXPECT_LE(s.evaluations, 4) << algorithm;
+    // Reaching zero: stopval.
+    job = bennett_job(algorithm, 400);
+    job.optimizer.stopval = 1e-6;
+    EXPECT_EQ(minimise(job, x0).status, SearchStatus::stopval_reached) << algorithm;
+  }
+  // An NLopt algorithm Debian's build lacks is an invalid argument, not a crash.
+  Job job = bennett_job("GD_STOGO", 10);
+  const LocalSearchSummary s = minimise(job, x0);
+  EXPECT_EQ(s.status, SearchStatus::invalid_args) << s.message;
+}
+
+TEST(LocalSearch, AStartThatCannotBeEvaluatedIsReportedNotCrashed) {
+  // A NaN start (as a corrupted replay could hand over): no cycle can be
+  // evaluated there, and every algorithm says so instead of crashing.
+  Eigen::VectorXd x0 = perturbed_paper_point();
+  x0[2] = std::nan("");
+  for (const std::string algorithm : {"gauss-newton", "LD_LBFGS", "LN_BOBYQA"}) {
+    const LocalSearchSummary s = minimise(bennett_job(algorithm, 20), x0);
+    EXPECT_EQ(s.status, SearchStatus::evaluation_failed) << algorithm << " " << s.message;
+  }
+}
+
+}  // namespace
+}  // namespace loopfarm
