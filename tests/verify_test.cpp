@@ -1,0 +1,160 @@
+#include "loopfarm/verify.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "loopfarm/assembly.hpp"
+#include "loopfarm/sample_loops.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm {
+namespace {
+
+using testing::deg;
+using testing::rad;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A start pose from the elastic assembly (only a guess: verify_motion solves
+// the rigid closure itself).
+JointVector assembled_at(const LoopGeometry& g, double theta0) {
+  const LoopModel model(g);
+  EquilibriumWorkspace ws(model);
+  return assemble(model, ws, theta0).state.theta;
+}
+
+TEST(Verify, BennettLoopsTurnFullyOnTheirClosedFormPath) {
+  struct Case {
+    LoopGeometry g;
+    JointVector (*angles)(const LoopGeometry&, double);
+  };
+  const Case cases[] = {{paper_bennett_loop(), bennett_angles},
+                        {bennett_loop_line_symmetric(2.0, rad(30), rad(90)), bennett_angles_line_symmetric}};
+  for (const Case& c : cases) {
+    const VerificationSummary v = verify_motion(c.g, c.angles(c.g, rad(120)));
+    EXPECT_TRUE(v.verified);
+    EXPECT_TRUE(v.full_turn);
+    EXPECT_TRUE(v.limit.empty()) << v.limit;
+    EXPECT_LT(v.worst_residual, 1e-12);
+    EXPECT_EQ(v.poses, 721);
+    // Independent: the closed-form Bennett angles (eqs. 2a, 4a).
+    for (size_t i = 0; i < v.input_angles.size(); i += 37) {
+      const JointVector expected = c.angles(c.g, v.input_angles[i]);
+      for (int k = 0; k < 4; ++k) EXPECT_NEAR(wrap_angle(v.joint_angles[i][k] - expected[k]), 0.0, 1e-9) << i << " " << k;
+    }
+  }
+}
+
+// Planar four-bar with the input at joint 1 between links 4 and 1: the
+// diagonal from joint 2 to joint 4 has delta^2 = a1^2 + a4^2 + 2 a1 a4 cos
+// theta1 = a2^2 + a3^2 + 2 a2 a3 cos theta3 (law of cosines, exterior angles).
+double diagonal_from_input(const LoopGeometry& g, double theta1) {
+  return g.a[0] * g.a[0] + g.a[3] * g.a[3] + 2 * g.a[0] * g.a[3] * std::cos(theta1);
+}
+double diagonal_from_coupler(const LoopGeometry& g, double theta3) {
+  return g.a[1] * g.a[1] + g.a[2] * g.a[2] + 2 * g.a[1] * g.a[2] * std::cos(theta3);
+}
+
+TEST(Verify, PlanarCrankTurnsFullyOnTheLawOfCosines) {
+  const LoopGeometry g = planar_four_bar(1.0, 3.0, 2.5, 3.5);  // Grashof, a1 the crank
+  const VerificationSummary v = verify_motion(g, assembled_at(g, 0.0));
+  EXPECT_TRUE(v.verified);
+  EXPECT_TRUE(v.full_turn);
+  for (size_t i = 0; i < v.joint_angles.size(); i += 11) {
+    EXPECT_NEAR(diagonal_from_input(g, v.joint_angles[i][0]), diagonal_from_coupler(g, v.joint_angles[i][2]), 1e-9) << i;
+  }
+}
+
+TEST(Verify, PlanarRockerStopsAtItsClosedFormDeadPoints) {
+  // a = (3, 1, 2.5, 2): delta^2 = 13 + 12 cos theta1 must lie in
+  // [(2.5 - 1)^2, (2.5 + 1)^2], so theta1 in [acos(-0.0625), acos(-0.896)].
+  const LoopGeometry g = planar_four_bar(3.0, 1.0, 2.5, 2.0);
+  const VerificationSummary v = verify_motion(g, assembled_at(g, rad(120)));
+  EXPECT_TRUE(v.verified);
+  EXPECT_FALSE(v.full_turn);
+  EXPECT_FALSE(v.limit.empty());
+  const double lo = std::acos((12.25 - 13.0) / 12.0);  // delta = 3.5
+  const double hi = std::acos((2.25 - 13.0) / 12.0);   // delta = 1.5
+  // The walk resolves a limit to the finest bisected step, 0.5 deg / 2^12;
+  // near a dead point the closure residual grows only as the square of the
+  // overshoot, so allow a few finest steps more.
+  const double resolution = rad(0.5) / 4096 * 8;
+  EXPECT_NEAR(v.range_lo, lo, std::max(resolution, 1e-4)) << deg(v.range_lo) << " vs " << deg(lo);
+  EXPECT_NEAR(v.range_hi, hi, std::max(resolution, 1e-4)) << deg(v.range_hi) << " vs " << deg(hi);
+  for (size_t i = 0; i < v.joint_angles.size(); i += 7) {
+    EXPECT_NEAR(diagonal_from_input(g, v.joint_angles[i][0]), diagonal_from_coupler(g, v.joint_angles[i][2]), 1e-9) << i;
+  }
+}
+
+TEST(Verify, SphericalCrankTurnsFully) {
+  const LoopGeometry g = spherical_four_bar(rad(20), rad(70), rad(60), rad(80));
+  const VerificationSummary v = verify_motion(g, assembled_at(g, 0.0));
+  EXPECT_TRUE(v.verified);
+  EXPECT_TRUE(v.full_turn);
+  EXPECT_LT(v.worst_residual, 1e-12);
+}
+
+TEST(Verify, RigidLoopsAreNotVerified) {
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    const LoopGeometry g = random_loop(4, seed);
+    const VerificationSummary v = verify_motion(g, assembled_at(g, 0.0));
+    EXPECT_FALSE(v.verified) << seed;
+    EXPECT_GT(v.worst_residual, 1e-4) << seed;
+  }
+  // The paper's loop with a1 = 2.03: close to movable, but not.
+  LoopGeometry g = paper_bennett_loop();
+  g.a[0] = 2.03;
+  const VerificationSummary v = verify_motion(g, bennett_angles(paper_bennett_loop(), rad(120)));
+  EXPECT_FALSE(v.verified);
+  EXPECT_FALSE(v.assembled);
+  EXPECT_GT(v.worst_residual, 1e-4);
+}
+
+TEST(Verify, AStructureThatClosesButCannotMoveIsNotVerified) {
+  // A planar 4R with a1 + a2 + a3 = a4 closes only stretched flat: a shaky
+  // structure, infinitesimally mobile (the residual grows as the square of
+  // the input's move), so the walk gets a few bisected micro-steps at most,
+  // never a full step.
+  const LoopGeometry g = planar_four_bar(1.0, 1.0, 1.0, 3.0);
+  JointVector flat(4);
+  flat << kPi, 0.0, 0.0, kPi;
+  const VerificationSummary v = verify_motion(g, flat);
+  EXPECT_TRUE(v.assembled);
+  EXPECT_LE(v.worst_residual, 1e-9);  // the micro-steps close to second order
+  EXPECT_FALSE(v.verified);
+  EXPECT_LT(v.range_hi - v.range_lo, rad(0.5));
+}
+
+TEST(Verify, CoaxialTrivialLoopMovesWithTwoJointsFrozen) {
+  // Axes 1 and 3 coincide when theta2 = theta4 = pi (links 2 and 4 folded
+  // back over links 1 and 3); the loop then turns about that axis only.
+  const LoopGeometry g = LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5},
+                                                    std::vector<double>{40, 40, 70, 70},
+                                                    std::vector<double>{0.3, 0.0, -0.3, 0.0});
+  JointVector start(4);
+  start << rad(30), kPi, rad(-30), kPi;
+  const VerificationSummary v = verify_motion(g, start);
+  EXPECT_TRUE(v.verified);
+  EXPECT_TRUE(v.full_turn);
+  EXPECT_NEAR(v.joint_travel[0], 2 * kPi, 1e-9);
+  EXPECT_NEAR(v.joint_travel[2], 2 * kPi, 1e-9);
+  EXPECT_LT(v.joint_travel[1], 1e-9);
+  EXPECT_LT(v.joint_travel[3], 1e-9);
+}
+
+TEST(Verify, BadInputThrows) {
+  const LoopGeometry g = paper_bennett_loop();
+  EXPECT_THROW(verify_motion(g, JointVector::Zero(3)), std::invalid_argument);
+  JointVector nan_start = bennett_angles(g, rad(120));
+  nan_start[1] = std::nan("");
+  EXPECT_THROW(verify_motion(g, nan_start), std::invalid_argument);
+  VerificationOptions coarse;
+  coarse.steps_per_turn = 100;
+  EXPECT_THROW(verify_motion(g, bennett_angles(g, rad(120)), coarse), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace loopfarm
