@@ -13,6 +13,8 @@
 
 #include "cli_support.hpp"
 #include "energy_command.hpp"
+#include "start_command.hpp"
+#include "verify_command.hpp"
 #include "subcommand.hpp"
 
 #ifndef LOOPFARM_VERSION
@@ -60,6 +62,8 @@ int main(int argc, char** argv) {
   // Every subcommand, in the order --help lists them.
   const std::vector<loopfarm::cli::Subcommand> commands{
       loopfarm::cli::add_energy_command(app),
+      loopfarm::cli::add_verify_command(app),
+      loopfarm::cli::add_start_command(app),
   };
 
   // CLI11 would call a mistyped subcommand "missing"; name it instead.

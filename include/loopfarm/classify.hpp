@@ -1,0 +1,80 @@
+// Classification of a movable loop into the known families (DESIGN.md, "Known
+// movable 4R loops"), with the residual of every condition of every family.
+//
+// Conditions are evaluated on every equivalent writing of the loop (cyclic
+// relabelling, reversal, axis flips: 2n * 2^n of them) and the best one is
+// kept, so that the answer does not depend on labels or axis directions.
+// Residuals are dimensionless: lengths divided by the length scale L.
+//
+//   bennett    (n = 4) a1 = a3, a2 = a4, alpha1 = alpha3, alpha2 = alpha4,
+//              d_i = 0, and a2 sin(alpha1) = a1 sin(alpha2) (asymmetric setup,
+//              paper eq. 1) or = -a1 sin(alpha2) (line-symmetric, eq. 3)
+//   planar     every sin(alpha_i) = 0, and the signed sum of the offsets (the
+//              sign turning at each alpha_i = pi) is zero
+//   spherical  every a_i = 0 and d_i = 0
+//   trivial    two joint axes coincide in the given pose and some joint stays
+//              frozen over the motion: a rigid rotation about the shared axis
+//
+// docs/classification.md has the details and the tolerances.
+#pragma once
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "loopfarm/loop.hpp"
+
+namespace loopfarm {
+
+enum class Family { bennett, planar, spherical, trivial, unclassified };
+const char* to_string(Family family);
+enum class BennettSetup { none, asymmetric, line_symmetric };
+const char* to_string(BennettSetup setup);
+
+struct ConditionResidual {
+  std::string name;   // e.g. "a1 - a3", in the best writing's labels
+  double residual = 0.0;
+};
+
+struct FamilyCheck {
+  Family family = Family::unclassified;
+  BennettSetup setup = BennettSetup::none;
+  double residual = 0.0;  // max |condition| of the best writing (inf where the family does not apply)
+  std::vector<ConditionResidual> conditions;
+};
+
+struct ClassifyOptions {
+  double tolerance = 1e-8;        // a family fits when its residual is at most this
+  double frozen_travel = 1e-6;    // [rad] a joint turning less than this over the motion is frozen
+};
+
+struct Classification {
+  Family family = Family::unclassified;
+  BennettSetup setup = BennettSetup::none;
+  double residual = 0.0;          // of the family found (of the nearest family when unclassified)
+  std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
+  std::vector<FamilyCheck> checks;  // bennett, planar, spherical, trivial, in this order
+};
+
+// `pose`: the joint angles of one assembled pose (for the coincidence of
+// axes); `joint_travel`: per joint, how far it turns over the verified motion
+// [rad], empty when unknown (then no loop is called trivial). Throws
+// std::invalid_argument for an invalid geometry or a pose of the wrong size.
+Classification classify(const LoopGeometry& geometry, const JointVector& pose, std::span<const double> joint_travel,
+                        const ClassifyOptions& options = {});
+
+// Distance of a geometry to a family's conditions, for steering the search
+// away from it (deflation): sqrt of the sum of the squared conditions of the
+// best writing, lengths divided by L; with its gradient with respect to
+// (a, alpha, d) when `gradient` is not null (a min over writings: smooth
+// away from the points where the best writing changes).
+//   planar, bennett: the conditions above;
+//   spherical: sqrt(sum a_i^2 + d_i^2) in the geometry's own units (in units
+//     of L it would be constant);
+//   trivial: the nearest coincidence of two axes that the geometry alone
+//     decides: a_i = 0 and sin(alpha_i) = 0 for adjacent axes, and for n = 4
+//     the coaxial 1-3 (or 2-4) conditions a1 = a2, alpha1 = alpha2, a3 = a4,
+//     alpha3 = alpha4, d2 = d4 = 0, d1 = -d3.
+double family_distance(Family family, const LoopGeometry& geometry, GeometryVector* gradient = nullptr);
+
+}  // namespace loopfarm

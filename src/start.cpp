@@ -1,0 +1,112 @@
+#include "loopfarm/start.hpp"
+
+#include <cmath>
+#include <limits>
+#include <span>
+#include <stdexcept>
+#include <vector>
+
+#include "loopfarm/sampler.hpp"
+
+namespace loopfarm {
+namespace {
+
+Family family_from_name(const std::string& name) {
+  for (Family f : {Family::bennett, Family::planar, Family::spherical, Family::trivial}) {
+    if (name == to_string(f)) return f;
+  }
+  throw std::invalid_argument("unknown family \"" + name + "\" to deflate");
+}
+
+}  // namespace
+
+ObjectiveSettings objective_settings(const Job& job) {
+  ObjectiveSettings s = ObjectiveSettings::from_loop(job.loop);
+  for (const std::string& name : job.steering.deflate) {
+    const Family family = family_from_name(name);
+    s.deflation.push_back({name, [family](const LoopGeometry& g, GeometryVector* gradient) {
+                             return family_distance(family, g, gradient);
+                           }});
+  }
+  s.deflation_power = job.steering.deflation_power;
+  s.deflation_shift = job.steering.deflation_shift;
+  s.nontrivial = job.steering.nontrivial;
+  s.min_travel = job.steering.min_travel;
+  return s;
+}
+
+CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
+                                    const Eigen::MatrixXd& jacobian, const StartOptions& options) {
+  CandidateAnalysis out;
+  out.verification = verify_motion(geometry, pose, options.verification);
+  const JointVector& travel = out.verification.joint_travel;
+  out.classification = classify(geometry, pose, std::span<const double>(travel.data(), static_cast<size_t>(travel.size())),
+                                options.classification);
+  out.canonical = canonical_form(geometry);
+  out.local_dimension = local_dimension(jacobian, options.rank_tolerance);
+  return out;
+}
+
+StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& options) {
+  StartSummary out;
+  out.index = index;
+  out.algorithm = job.optimizer.algorithm;
+  const StartPoint start = draw_start(job.space, job.search.seed, index);
+  out.initial_geometry = job.space.geometry(start.x);
+  out.initial_angles = start.theta;
+
+  // The unsteered energy at the start, for the record (and for comparing
+  // steered with unsteered runs on the same footing).
+  const ObjectiveSettings plain = ObjectiveSettings::from_loop(job.loop);
+  CycleObjective unsteered(job.space, plain, start.theta);
+  const ObjectiveValue initial = unsteered.evaluate(start.x, nullptr);
+  out.initial_E_mean = initial.ok ? initial.E_mean : std::numeric_limits<double>::quiet_NaN();
+
+  CycleObjective objective(job.space, objective_settings(job), start.theta);
+  LocalSearchOptions search;
+  search.settings = job.optimizer;
+  // NLopt's stochastic algorithms: a seed of their own per start.
+  search.random_seed = job.search.seed * 0x9E3779B97F4A7C15ull + index;
+  search.trace = options.trace;
+  const LocalSearchSummary result = local_minimize(objective, start.x, search);
+  out.status = result.status;
+  out.message = result.message;
+  out.evaluations = result.evaluations;
+  out.seconds = result.seconds;
+  out.objective = result.value;
+  out.final_geometry = job.space.geometry(result.x);
+  if (result.status == SearchStatus::evaluation_failed) {
+    out.E_mean = std::numeric_limits<double>::quiet_NaN();
+    out.E_max = out.E_mean;
+    return out;
+  }
+
+  // The final point without steering: its true energy and pose.
+  const ObjectiveValue final_value = unsteered.evaluate(result.x, nullptr);
+  if (!final_value.ok) {
+    out.E_mean = std::numeric_limits<double>::quiet_NaN();
+    out.E_max = out.E_mean;
+    return out;
+  }
+  out.E_mean = final_value.E_mean;
+  out.E_max = final_value.E_max;
+  out.failed_samples = final_value.failed_samples;
+  out.branch_jumps = final_value.branch_jumps;
+  out.final_angles = unsteered.start_state().theta;
+  out.zero = out.E_mean <= job.search.zero_threshold;
+  if (!out.zero) return out;
+
+  Eigen::MatrixXd jacobian;
+  unsteered.residual_jacobian(jacobian);
+  std::vector<bool> is_length;
+  for (int index : job.space.free_indices()) {
+    const int kind = index / job.space.joints;
+    is_length.push_back(kind == static_cast<int>(ParameterKind::a) || kind == static_cast<int>(ParameterKind::d));
+  }
+  out.candidate = analyse_candidate(out.final_geometry, out.final_angles,
+                                    dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry)),
+                                    options);
+  return out;
+}
+
+}  // namespace loopfarm

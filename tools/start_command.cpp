@@ -1,0 +1,129 @@
+#include "start_command.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "candidate_output.hpp"
+#include "cli_support.hpp"
+#include "loopfarm/job.hpp"
+#include "loopfarm/start.hpp"
+
+namespace loopfarm::cli {
+namespace {
+
+struct StartArguments {
+  std::string job;
+  std::string index = "0";
+  bool trace = false;
+  bool json = false;
+};
+
+std::string readable(double value) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.6g", value);
+  return buffer;
+}
+
+void print_geometry(const char* title, const LoopGeometry& g) {
+  std::printf("%s\n", title);
+  std::printf("  a                     %s\n", lengths_text(g.a).c_str());
+  std::printf("  alpha_deg             %s\n", degrees_text(g.alpha).c_str());
+  std::printf("  d                     %s\n", lengths_text(g.d).c_str());
+}
+
+void print_story(const Job& job, const StartSummary& s) {
+  std::printf("start %llu of %s (seed %llu, %d joints, %d free parameters)\n",
+              static_cast<unsigned long long>(s.index), job.path.c_str(),
+              static_cast<unsigned long long>(job.search.seed), job.loop.joints, job.space.free_count());
+  print_geometry("drawn geometry", s.initial_geometry);
+  std::printf("  theta_deg             %s\n", degrees_text(s.initial_angles).c_str());
+  std::printf("  E_mean                %s\n", readable(s.initial_E_mean).c_str());
+  std::printf("local minimisation (%s)\n", s.algorithm.c_str());
+  std::printf("  status                %s: %s\n", to_string(s.status), s.message.c_str());
+  std::printf("  evaluations           %d cycles in %s s\n", s.evaluations, readable(s.seconds).c_str());
+  std::printf("  objective             %s%s\n", readable(s.objective).c_str(),
+              job.steering.nontrivial || !job.steering.deflate.empty() ? " (steered)" : "");
+  print_geometry("final geometry", s.final_geometry);
+  std::printf("  theta_deg             %s (assembled at theta0)\n", degrees_text(s.final_angles).c_str());
+  std::printf("  E_mean                %s   [E / (k_a L^2)]\n", readable(s.E_mean).c_str());
+  std::printf("  E_max                 %s\n", readable(s.E_max).c_str());
+  std::printf("  failed samples        %d, branch jumps %d\n", s.failed_samples, s.branch_jumps);
+  std::printf("zero                    %s (threshold %s)\n", s.zero ? "yes" : "no",
+              readable(job.search.zero_threshold).c_str());
+  if (s.zero) print_candidate(s.candidate);
+}
+
+void print_json(const StartSummary& s) {
+  std::string json = "{";
+  json += "\"index\":" + std::to_string(s.index);
+  json += ",\"algorithm\":" + json_string(s.algorithm);
+  json += ",\"status\":" + json_string(to_string(s.status));
+  json += ",\"message\":" + json_string(s.message);
+  json += ",\"E_mean\":" + json_number(s.E_mean);
+  json += ",\"E_max\":" + json_number(s.E_max);
+  json += ",\"objective\":" + json_number(s.objective);
+  json += ",\"initial_E_mean\":" + json_number(s.initial_E_mean);
+  json += ",\"zero\":" + std::string(s.zero ? "true" : "false");
+  json += ",\"evaluations\":" + std::to_string(s.evaluations);
+  json += ",\"seconds\":" + json_number(s.seconds);
+  json += ",\"failed_samples\":" + std::to_string(s.failed_samples);
+  json += ",\"branch_jumps\":" + std::to_string(s.branch_jumps);
+  json += ",\"initial_geometry\":" + geometry_json(s.initial_geometry);
+  json += ",\"final_geometry\":" + geometry_json(s.final_geometry);
+  json += candidate_json_fields(s.candidate, s.zero);
+  json += "}\n";
+  std::fputs(json.c_str(), stdout);
+}
+
+int run_start_command(const StartArguments& args) {
+  Job job;
+  try {
+    job = read_job_file(args.job);
+  } catch (const JobError& error) {
+    throw UsageError("job file", error.what());
+  }
+  const long long index = parse_integer(args.index, "--index");
+  if (index < 0 || index >= job.search.starts) {
+    throw UsageError("--index", "got " + std::to_string(index) + "; the job has starts 0 to " +
+                                    std::to_string(job.search.starts - 1) + " ([search] starts = " +
+                                    std::to_string(job.search.starts) + ")");
+  }
+  StartOptions options;
+  if (args.trace) {
+    // With --json the trace goes to stderr, so that stdout stays one JSON object.
+    std::FILE* out = args.json ? stderr : stdout;
+    std::fprintf(out, "%5s %6s %-23s %-23s %-12s %-12s %-10s %s\n", "iter", "evals", "objective", "E_mean", "|grad|",
+                 "|step|", "damping", "accepted");
+    options.trace = [out](const SearchTraceRow& row) {
+      std::fprintf(out, "%5d %6d %-23.17g %-23.17g %-12.4g %-12.4g %-10.3g %s\n", row.iteration, row.evaluations, row.value,
+                  row.E_mean, row.gradient_norm, row.step_norm, row.damping, row.accepted ? "yes" : "no");
+    };
+  }
+  const StartSummary summary = run_start(job, static_cast<std::uint64_t>(index), options);
+  if (args.json) {
+    print_json(summary);
+  } else {
+    print_story(job, summary);
+  }
+  return kExitSuccess;
+}
+
+}  // namespace
+
+Subcommand add_start_command(CLI::App& parent) {
+  auto args = std::make_shared<StartArguments>();
+  CLI::App* app = parent.add_subcommand(
+      "start", "Run one start of a job: draw its geometry, minimise the cycle energy, and verify, classify and "
+               "canonicalise the result if it reaches zero.");
+  app->footer("Example:\n  loopfarm start jobs/paper-table1.toml --index 3 --trace\n"
+              "Exit codes: 0 done (whatever the start found), 1 failure, 2 bad input (job file, index).\n");
+  app->add_option("JOB", args->job, "job file (TOML, see docs/job-file.md)")->required()->type_name("JOB.toml");
+  app->add_option("--index", args->index, "start index, 0 <= I < [search] starts")->type_name("I")->capture_default_str();
+  app->add_flag("--trace", args->trace, "print every iteration of the local minimisation");
+  app->add_flag("--json", args->json, "print one JSON object instead of the story");
+  return {app, [args] { return run_start_command(*args); }};
+}
+
+}  // namespace loopfarm::cli
