@@ -202,6 +202,12 @@ Best best_trivial_geometric(const LoopGeometry& g, bool by_norm) {
   });
 }
 
+Best best_planar(const LoopGeometry& g, bool by_norm) {
+  // The offsets' signed sum depends on the axes' directions off the family;
+  // the best writing makes the distance independent of how it is written.
+  return best_over_writings(g, by_norm, [](const LoopGeometry& w, auto keep) { keep(planar_conditions(w), 0.0); });
+}
+
 FamilyCheck check_from(Family family, const Best& best) {
   FamilyCheck check;
   check.family = family;
@@ -286,8 +292,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
       bennett.setup = as_written_asym <= as_written_line ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
     }
   }
-  Conditions planar_c = planar_conditions(geometry);
-  FamilyCheck planar = check_from(Family::planar, Best{planar_c, nullptr, planar_c.max_abs(), 0.0});
+  FamilyCheck planar = check_from(Family::planar, best_planar(geometry, false));
   Conditions spherical_c = spherical_conditions(geometry, true);
   FamilyCheck spherical = check_from(Family::spherical, Best{spherical_c, nullptr, spherical_c.max_abs(), 0.0});
 
@@ -359,7 +364,12 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       writing = best.writing;
       break;
     }
-    case Family::planar: c = planar_conditions(geometry); break;
+    case Family::planar: {
+      Best best = best_planar(geometry, true);
+      c = std::move(best.conditions);
+      writing = best.writing;
+      break;
+    }
     case Family::spherical: c = spherical_conditions(geometry, false); break;
     case Family::trivial: {
       Best best = best_trivial_geometric(geometry, true);

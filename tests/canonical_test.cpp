@@ -1,0 +1,122 @@
+#include "loopfarm/canonical.hpp"
+
+#include <cstdint>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "loopfarm/sample_loops.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm {
+namespace {
+
+using testing::rad;
+
+// Another writing of the same loop, built with loop.hpp's own operations
+// (independent of the canonical form's internal maps): a relabelling, maybe
+// a reversal, some axis flips and a scale, chosen from `seed`.
+struct Rewritten {
+  LoopGeometry g;
+  JointVector theta;
+};
+
+Rewritten rewrite(const LoopGeometry& g, const JointVector& theta, std::uint64_t seed) {
+  const int n = g.joints();
+  std::uint64_t s = seed * 0x9E3779B97F4A7C15ull + 1;
+  auto next = [&s] {
+    s ^= s << 13;
+    s ^= s >> 7;
+    s ^= s << 17;
+    return s;
+  };
+  Rewritten r{g, theta};
+  const int shift = static_cast<int>(next() % static_cast<std::uint64_t>(n));
+  r.g = relabelled(r.g, shift);
+  r.theta = relabelled_angles(r.theta, shift);
+  if (next() % 2) {
+    r.g = reversed(r.g);
+    r.theta = reversed_angles(r.theta);
+  }
+  for (int j = 0; j < n; ++j) {
+    if (next() % 2) {
+      r.g = axis_flipped(r.g, j);
+      r.theta = axis_flipped_angles(r.theta, j);
+    }
+  }
+  const double factor = 0.25 + static_cast<double>(next() % 1000) / 100.0;
+  r.g.a *= factor;
+  r.g.d *= factor;
+  return r;
+}
+
+TEST(Canonical, EveryWritingOfALoopHasTheSameKey) {
+  for (int n = 4; n <= 8; ++n) {
+    for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+      const LoopGeometry g = random_loop(n, 100 * n + seed);
+      const std::string key = canonical_form(g).key;
+      for (std::uint64_t k = 0; k < 12; ++k) {
+        const Rewritten r = rewrite(g, random_angles(n, seed), 1000 * seed + k);
+        EXPECT_EQ(canonical_form(r.g).key, key) << n << " " << seed << " " << k;
+      }
+    }
+  }
+}
+
+TEST(Canonical, DifferentLoopsHaveDifferentKeys) {
+  std::set<std::string> keys;
+  int loops = 0;
+  for (int n = 4; n <= 8; ++n) {
+    for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+      keys.insert(canonical_form(random_loop(n, seed)).key);
+      ++loops;
+    }
+  }
+  EXPECT_EQ(static_cast<int>(keys.size()), loops);
+  // A small change of one parameter changes the key.
+  LoopGeometry g = paper_bennett_loop();
+  const std::string key = canonical_form(g).key;
+  g.a[0] += 1e-4;
+  EXPECT_NE(canonical_form(g).key, key);
+}
+
+TEST(Canonical, TheRepresentativeClosesWhereTheInputDid) {
+  const LoopGeometry g = paper_bennett_loop();
+  const JointVector theta = bennett_angles(g, rad(77));
+  for (std::uint64_t k = 0; k < 10; ++k) {
+    const Rewritten r = rewrite(g, theta, k);
+    ASSERT_LT(closure_residual(r.g, r.theta).norm(), 1e-12);
+    const CanonicalForm form = canonical_form(r.g);
+    EXPECT_LT(closure_residual(form.geometry, canonical_angles(form, r.theta)).norm(), 1e-12) << k;
+    EXPECT_NEAR(length_scale(form.geometry), 1.0, 1e-15);
+    EXPECT_NEAR(form.scale, length_scale(r.g), 1e-15);
+  }
+}
+
+TEST(Canonical, IsIdempotentAndSnapsTheTwistCut) {
+  const CanonicalForm form = canonical_form(random_loop(6, 3));
+  EXPECT_EQ(canonical_form(form.geometry).key, form.key);
+  // Twists of pi and -pi + 1e-12 are the same twist.
+  LoopGeometry a = planar_four_bar(1.0, 3.0, 2.5, 3.5);
+  a.alpha[1] = 3.14159265358979323846;
+  LoopGeometry b = a;
+  b.alpha[1] = -3.14159265358979323846 + 1e-12;
+  EXPECT_EQ(canonical_form(a).key, canonical_form(b).key);
+  // -0 and 0 are the same offset.
+  LoopGeometry c = a;
+  c.d[2] = -0.0;
+  EXPECT_EQ(canonical_form(c).key, canonical_form(a).key);
+  EXPECT_EQ(canonical_form(a).key.find("-0,"), std::string::npos);
+}
+
+TEST(Canonical, BadInputThrows) {
+  LoopGeometry g = paper_bennett_loop();
+  EXPECT_THROW(canonical_form(g, 0.0), std::invalid_argument);
+  g.alpha[2] = std::nan("");
+  EXPECT_THROW(canonical_form(g), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace loopfarm

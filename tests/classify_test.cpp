@@ -1,0 +1,171 @@
+#include "loopfarm/classify.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "loopfarm/sample_loops.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm {
+namespace {
+
+using testing::rad;
+
+constexpr double kTwoPi = 2 * 3.14159265358979323846;
+
+// A writing of the same loop by loop.hpp's operations (shift, reversal, flips).
+LoopGeometry rewritten(const LoopGeometry& g, int shift, bool reverse, unsigned flips) {
+  LoopGeometry out = relabelled(g, shift);
+  if (reverse) out = reversed(out);
+  for (int j = 0; j < g.joints(); ++j) {
+    if (flips >> j & 1u) out = axis_flipped(out, j);
+  }
+  return out;
+}
+
+const std::vector<double> kMoving(4, kTwoPi);  // every joint turns
+
+TEST(Classify, BennettLoopsInBothSetupsAndAnyWriting) {
+  for (double a1 : {1.0, 2.0, 3.5}) {
+    for (auto [alpha1, alpha2] : {std::pair{30.0, 90.0}, std::pair{50.0, 120.0}, std::pair{100.0, 20.0}}) {
+      const LoopGeometry asym = bennett_loop(a1, rad(alpha1), rad(alpha2));
+      const LoopGeometry line = bennett_loop_line_symmetric(a1, rad(alpha1), rad(alpha2));
+      const Classification ca = classify(asym, bennett_angles(asym, rad(40)), kMoving);
+      EXPECT_EQ(ca.family, Family::bennett);
+      EXPECT_EQ(ca.setup, BennettSetup::asymmetric);
+      EXPECT_LT(ca.residual, 1e-12);
+      const Classification cl = classify(line, bennett_angles_line_symmetric(line, rad(40)), kMoving);
+      EXPECT_EQ(cl.family, Family::bennett);
+      EXPECT_EQ(cl.setup, BennettSetup::line_symmetric);
+      EXPECT_LT(cl.residual, 1e-12);
+      // Any writing of the loop is still a Bennett loop.
+      for (unsigned flips : {0u, 5u, 6u, 13u}) {
+        const LoopGeometry w = rewritten(asym, static_cast<int>(flips % 4), flips % 2 == 1, flips);
+        EXPECT_EQ(classify(w, JointVector::Zero(4), kMoving).family, Family::bennett) << flips;
+      }
+    }
+  }
+}
+
+TEST(Classify, PlanarLoopsNeedParallelAxesAndClosingOffsets) {
+  const LoopGeometry crank = planar_four_bar(1.0, 3.0, 2.5, 3.5);
+  EXPECT_EQ(classify(crank, JointVector::Zero(4), kMoving).family, Family::planar);
+  LoopGeometry offsets = crank;
+  offsets.d << 0.3, -0.3, 0.2, -0.2;
+  EXPECT_EQ(classify(offsets, JointVector::Zero(4), kMoving).family, Family::planar);
+  // With a twist of pi the offset after it counts the other way.
+  LoopGeometry flipped = crank;
+  flipped.alpha[1] = 3.14159265358979323846;
+  flipped.d << 0.3, -0.3, -0.2, 0.2;  // +0.3 - 0.3, then the sign turns: -(-0.2) - 0.2 = 0
+  EXPECT_EQ(classify(flipped, JointVector::Zero(4), kMoving).family, Family::planar);
+  LoopGeometry open = crank;
+  open.d << 0.3, 0.1, 0.0, 0.0;
+  const Classification c = classify(open, JointVector::Zero(4), kMoving);
+  EXPECT_NE(c.family, Family::planar);
+  EXPECT_NEAR(c.checks[1].residual, 0.4 / length_scale(open), 1e-12);
+}
+
+TEST(Classify, SphericalLoop) {
+  const LoopGeometry g = spherical_four_bar(rad(20), rad(70), rad(60), rad(80));
+  const Classification c = classify(g, JointVector::Zero(4), kMoving);
+  EXPECT_EQ(c.family, Family::spherical);
+  EXPECT_EQ(c.residual, 0.0);
+}
+
+LoopGeometry coaxial_13() {
+  return LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5}, std::vector<double>{40, 40, 70, 70},
+                                    std::vector<double>{0.3, 0.0, -0.3, 0.0});
+}
+
+TEST(Classify, TrivialNeedsCoincidentAxesAndAFrozenJoint) {
+  const LoopGeometry g = coaxial_13();
+  JointVector pose(4);
+  pose << rad(30), rad(180), rad(-30), rad(180);
+  const std::vector<double> travel = {kTwoPi, 0.0, kTwoPi, 0.0};
+  const Classification c = classify(g, pose, travel);
+  EXPECT_EQ(c.family, Family::trivial);
+  EXPECT_NE(c.detail.find("axes 1 and 3"), std::string::npos) << c.detail;
+  EXPECT_NE(c.detail.find("joints 2, 4 frozen"), std::string::npos) << c.detail;
+  // Without a frozen joint, or without the travel, it is not called trivial.
+  EXPECT_NE(classify(g, pose, kMoving).family, Family::trivial);
+  EXPECT_NE(classify(g, pose, {}).family, Family::trivial);
+  // Parallel axes apart from each other do not coincide (a planar loop).
+  const LoopGeometry crank = planar_four_bar(1.0, 3.0, 2.5, 3.5);
+  EXPECT_EQ(classify(crank, JointVector::Zero(4), travel).family, Family::planar);
+  // In a pose where the axes do not coincide, neither.
+  JointVector apart = pose;
+  apart[1] = rad(120);
+  EXPECT_NE(classify(g, apart, travel).family, Family::trivial);
+}
+
+TEST(Classify, GenericAndNearlyMovableLoopsAreUnclassified) {
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    const Classification c = classify(random_loop(4, seed), random_angles(4, seed), kMoving);
+    EXPECT_EQ(c.family, Family::unclassified) << seed;
+    for (const FamilyCheck& check : c.checks) EXPECT_GT(check.residual, 1e-3) << seed << to_string(check.family);
+  }
+  LoopGeometry g = paper_bennett_loop();
+  g.a[0] += 1e-3;
+  const Classification c = classify(g, bennett_angles(paper_bennett_loop(), rad(40)), kMoving);
+  EXPECT_EQ(c.family, Family::unclassified);
+  // a1 - a3 = 1e-3 in units of L = sqrt(10): the Bennett residual says how far.
+  EXPECT_NEAR(c.checks[0].residual, 1e-3 / length_scale(g), 2e-4);
+  EXPECT_NE(c.detail.find("bennett"), std::string::npos) << c.detail;
+}
+
+TEST(FamilyDistance, ZeroOnTheFamilyPositiveOffItInvariantUnderWriting) {
+  struct Case {
+    Family family;
+    LoopGeometry member;
+  };
+  const Case cases[] = {{Family::bennett, bennett_loop(2.0, rad(40), rad(110))},
+                        {Family::planar, planar_four_bar(1.0, 3.0, 2.5, 3.5)},
+                        {Family::spherical, spherical_four_bar(rad(20), rad(70), rad(60), rad(80))},
+                        {Family::trivial, coaxial_13()}};
+  for (const Case& c : cases) {
+    EXPECT_LT(family_distance(c.family, c.member), 1e-12) << to_string(c.family);
+    const LoopGeometry generic = random_loop(4, 9);
+    const double d = family_distance(c.family, generic);
+    EXPECT_GT(d, 1e-2) << to_string(c.family);
+    for (unsigned flips : {3u, 9u, 14u}) {
+      const LoopGeometry w = rewritten(generic, static_cast<int>(flips % 4), flips % 2 == 0, flips);
+      EXPECT_NEAR(family_distance(c.family, w), d, 1e-12 * std::max(1.0, d)) << to_string(c.family) << flips;
+    }
+  }
+}
+
+TEST(FamilyDistance, GradientAgreesWithCentralDifferences) {
+  for (Family family : {Family::bennett, Family::planar, Family::spherical, Family::trivial}) {
+    for (std::uint64_t seed : {11u, 12u}) {
+      LoopGeometry g = random_loop(4, seed);
+      GeometryVector gradient;
+      family_distance(family, g, &gradient);
+      GeometryVector fd(12);
+      for (int j = 0; j < 12; ++j) {
+        auto at = [&](double h) {
+          LoopGeometry m = g;
+          double& p = j < 4 ? m.a[j] : (j < 8 ? m.alpha[j - 4] : m.d[j - 8]);
+          p += h;
+          return family_distance(family, m);
+        };
+        fd[j] = (at(1e-6) - at(-1e-6)) / 2e-6;
+      }
+      EXPECT_LT((gradient - fd).cwiseAbs().maxCoeff(), 1e-6 * std::max(1.0, fd.cwiseAbs().maxCoeff()))
+          << to_string(family) << " " << seed << "\n" << gradient.transpose() << "\n" << fd.transpose();
+    }
+  }
+}
+
+TEST(Classify, BadInputThrows) {
+  const LoopGeometry g = paper_bennett_loop();
+  EXPECT_THROW(classify(g, JointVector::Zero(3), kMoving), std::invalid_argument);
+  EXPECT_THROW(classify(g, JointVector::Zero(4), std::vector<double>(3, 0.0)), std::invalid_argument);
+  EXPECT_THROW(family_distance(Family::bennett, random_loop(5, 1)), std::invalid_argument);
+  EXPECT_THROW(family_distance(Family::unclassified, g), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace loopfarm
