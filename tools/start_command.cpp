@@ -16,6 +16,8 @@ namespace {
 struct StartArguments {
   std::string job;
   std::string index = "0";
+  std::string count = "1";
+  std::string algorithm;  // empty: the job's
   bool trace = false;
   bool json = false;
 };
@@ -84,12 +86,26 @@ int run_start_command(const StartArguments& args) {
   } catch (const JobError& error) {
     throw UsageError("job file", error.what());
   }
+  if (!args.algorithm.empty()) {
+    if (!is_known_algorithm(args.algorithm)) {
+      throw UsageError("--algorithm", "unknown algorithm \"" + args.algorithm +
+                                          "\"; expected gauss-newton or an NLopt name such as LD_LBFGS or LN_BOBYQA");
+    }
+    job.optimizer.algorithm = args.algorithm;
+  }
   const long long index = parse_integer(args.index, "--index");
   if (index < 0 || index >= job.search.starts) {
     throw UsageError("--index", "got " + std::to_string(index) + "; the job has starts 0 to " +
                                     std::to_string(job.search.starts - 1) + " ([search] starts = " +
                                     std::to_string(job.search.starts) + ")");
   }
+  const long long count = parse_integer(args.count, "--count");
+  if (count < 1 || index + count > job.search.starts) {
+    throw UsageError("--count", "got " + std::to_string(count) + "; starts " + std::to_string(index) + " to " +
+                                    std::to_string(index + count - 1) + " must lie in 0 to " +
+                                    std::to_string(job.search.starts - 1));
+  }
+  if (count > 1 && !args.json) throw UsageError("--count", "more than one start needs --json (one line per start)");
   StartOptions options;
   if (args.trace) {
     // With --json the trace goes to stderr, so that stdout stays one JSON object.
@@ -101,11 +117,14 @@ int run_start_command(const StartArguments& args) {
                   row.E_mean, row.gradient_norm, row.step_norm, row.damping, row.accepted ? "yes" : "no");
     };
   }
-  const StartSummary summary = run_start(job, static_cast<std::uint64_t>(index), options);
-  if (args.json) {
-    print_json(summary);
-  } else {
-    print_story(job, summary);
+  for (long long i = index; i < index + count; ++i) {
+    const StartSummary summary = run_start(job, static_cast<std::uint64_t>(i), options);
+    if (args.json) {
+      print_json(summary);
+      std::fflush(stdout);  // a line per start as it finishes, for long runs piped elsewhere
+    } else {
+      print_story(job, summary);
+    }
   }
   return kExitSuccess;
 }
@@ -121,6 +140,11 @@ Subcommand add_start_command(CLI::App& parent) {
               "Exit codes: 0 done (whatever the start found), 1 failure, 2 bad input (job file, index).\n");
   app->add_option("JOB", args->job, "job file (TOML, see docs/job-file.md)")->required()->type_name("JOB.toml");
   app->add_option("--index", args->index, "start index, 0 <= I < [search] starts")->type_name("I")->capture_default_str();
+  app->add_option("--count", args->count, "run starts I to I+N-1, one JSON line each (with --json)")
+      ->type_name("N")
+      ->capture_default_str();
+  app->add_option("--algorithm", args->algorithm, "override [optimizer] algorithm of the job")
+      ->type_name("NAME");
   app->add_flag("--trace", args->trace, "print every iteration of the local minimisation");
   app->add_flag("--json", args->json, "print one JSON object instead of the story");
   return {app, [args] { return run_start_command(*args); }};
