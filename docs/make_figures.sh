@@ -101,4 +101,44 @@ set arrow from 0,graph 0 to 0,graph 1 nohead dt 3; set arrow from 180,graph 0 to
 plot "$out/folded_a1_2.03.csv" every ::1 using $wrapped:2 smooth unique with linespoints pt 7 ps 0.4 title "E(theta_1)"
 EOF
 
+# --- Table 1: the zeros of the paper's search form a Bennett family -----------
+# Every start of jobs/paper-table1.toml (Gauss-Newton), one JSON line each; the
+# final (alpha1, alpha2) of each start against the family
+# sin(alpha2)/a2 = sin(alpha1)/a1 at the extreme length ratios the scopes allow.
+table1_starts=64
+: >"$out/table1_starts.jsonl"
+echo "+ for i in 0..$((table1_starts - 1)): loopfarm start jobs/paper-table1.toml --index \$i --json" >&2
+for ((i = 0; i < table1_starts; ++i)); do
+  "$loopfarm" start jobs/paper-table1.toml --index "$i" --json >>"$out/table1_starts.jsonl"
+done
+# One row per start: index, zero (1/0), a1, a2, alpha1_deg, alpha2_deg of the final geometry.
+echo "# index zero a1 a2 alpha1_deg alpha2_deg" >"$out/table1_final.dat"
+while IFS= read -r line; do
+  index=$(sed -n 's/.*"index":\([0-9]*\).*/\1/p' <<<"$line")
+  zero=$(sed -n 's/.*"zero":\(true\|false\).*/\1/p' <<<"$line")
+  final=$(sed -n 's/.*"final_geometry":{"a":\[\([^],]*\),\([^],]*\),[^]]*\],"alpha_deg":\[\([^],]*\),\([^],]*\),.*/\1 \2 \3 \4/p' <<<"$line")
+  echo "$index $([[ $zero == true ]] && echo 1 || echo 0) $final" >>"$out/table1_final.dat"
+done <"$out/table1_starts.jsonl"
+gnuplot <<EOF
+$common
+set output "$out/table1_bennett_family.png"
+set title "Table 1 search: where $table1_starts Gauss-Newton starts end, against the Bennett family"
+set xlabel "alpha_1 [deg]"; set ylabel "alpha_2 [deg]"; set xrange [0:180]; set yrange [0:180]
+set datafile separator whitespace
+set xtics 0,30,180; set ytics 0,30,180; set key center center
+d2r = pi/180
+r_lo = 3.96/2.05; r_hi = 4.05/1.96
+f(x, r) = (r*sin(x*d2r) <= 1) ? asin(r*sin(x*d2r))/d2r : 1/0
+set samples 2000
+plot f(x, r_lo) with lines lc rgb "gray" title "sin(alpha_2) = (a_2/a_1) sin(alpha_1), a_2/a_1 = 3.96/2.05", \
+     180 - f(x, r_lo) with lines lc rgb "gray" notitle, \
+     f(x, r_hi) with lines dt 2 lc rgb "gray" title "a_2/a_1 = 4.05/1.96", \
+     180 - f(x, r_hi) with lines dt 2 lc rgb "gray" notitle, \
+     "$out/table1_final.dat" using (\$2 == 1 ? \$5 : 1/0):6 with points pt 7 ps 1.2 lc rgb "blue" title "zero", \
+     "$out/table1_final.dat" using (\$2 == 0 ? \$5 : 1/0):6 with points pt 6 ps 1.2 lc rgb "red" title "not a zero", \
+     "-" with points pt 3 ps 3 lc rgb "black" title "the paper's (30, 90) deg"
+30 90
+e
+EOF
+
 echo "figures written to $out/" >&2

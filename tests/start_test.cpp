@@ -1,0 +1,65 @@
+// analyse_candidate: verification, then classification, strict first and
+// loosened to the rigid residual only when no family fits strictly.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/start.hpp"
+#include "loopfarm/verify.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm {
+namespace {
+
+using testing::rad;
+
+// Some joint angles that close the loop, from the rigid verification's own
+// assembly (started from a rough guess).
+JointVector assembled(const LoopGeometry& g, const JointVector& guess) {
+  const VerificationSummary v = verify_motion(g, guess);
+  EXPECT_TRUE(v.assembled);
+  return v.joint_angles.empty() ? guess : v.joint_angles.front();
+}
+
+TEST(AnalyseCandidate, ExactBennettLoopNearlyPlanarStaysBennett) {
+  // Twists 1e-7 rad short of 180 deg: a Bennett loop to round-off, and within
+  // 1e-6 of planar. The strict pass must call it what it exactly is.
+  const double eps = 1e-7;
+  const LoopGeometry g = bennett_loop(2.0, M_PI - eps, M_PI - 2.0 * eps);
+  const JointVector pose = bennett_angles(g, rad(120));
+  const CandidateAnalysis c = analyse_candidate(g, pose, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
+  ASSERT_TRUE(c.verification.verified);
+  EXPECT_EQ(c.classification.family, Family::bennett) << c.classification.detail;
+  EXPECT_GT(c.classification.checks[1].residual, ClassifyOptions{}.tolerance);  // planar: not strictly
+}
+
+TEST(AnalyseCandidate, NearPlanarZeroIsPlanarOnTheLoosenedTolerance) {
+  // A parallelogram with every twist 1e-6 rad: not movable in exact terms
+  // (sin(alpha1)/a1 != sin(alpha2)/a2 by 2.5e-7), but it closes along the
+  // whole turn to second order in the twist, far below the verification's
+  // 1e-9: the kind of zero a local search lands on. Strictly (1e-8) it fits
+  // no family; loosened to the square root of its rigid residual it is planar.
+  const double eps = 1e-6;
+  LoopGeometry g = bennett_loop(2.0, eps, std::asin(2.0 * std::sin(eps)));
+  const JointVector guess = bennett_angles(g, rad(120));
+  g.alpha[1] = g.alpha[3] = eps;
+  const JointVector pose = assembled(g, guess);
+  const CandidateAnalysis c = analyse_candidate(g, pose, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
+  ASSERT_TRUE(c.verification.verified) << c.verification.worst_residual;
+  EXPECT_GT(c.verification.worst_residual, 1e-15);
+  const Classification strict = classify(g, pose, {}, ClassifyOptions{});
+  EXPECT_EQ(strict.family, Family::unclassified) << strict.detail;
+  EXPECT_EQ(c.classification.family, Family::planar) << c.classification.detail;
+}
+
+TEST(AnalyseCandidate, RigidLoopIsNotVerifiedAndNotLoosened) {
+  const LoopGeometry g = random_loop(4, 7);
+  const JointVector pose = random_angles(4, 7);
+  const CandidateAnalysis c = analyse_candidate(g, pose, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
+  EXPECT_FALSE(c.verification.verified);
+  EXPECT_EQ(c.classification.family, Family::unclassified);
+}
+
+}  // namespace
+}  // namespace loopfarm
