@@ -444,6 +444,10 @@ Job parse_table(const toml::table& root, const std::string& file) {
                          r.fail(item.source(), full, "unknown family \"" + family +
                                                          "\"; expected planar, spherical, trivial or bennett");
                        }
+                       if (family == "bennett" && job.loop.joints != 4) {
+                         r.fail(item.source(), full, "\"bennett\" needs joints = 4 (Bennett loops have 4 joints), "
+                                                     "the job has " + std::to_string(job.loop.joints));
+                       }
                        if (std::count(job.steering.deflate.begin(), job.steering.deflate.end(), family)) {
                          r.fail(item.source(), full, "\"" + family + "\" is listed twice");
                        }
@@ -453,7 +457,12 @@ Job parse_table(const toml::table& root, const std::string& file) {
                  });
   }
   if (const toml::table* t = section("output")) {
-    for_each_key(r, *t, "output", {"database"}, [&](const std::string&, const std::string& full, const toml::node& node) {
+    for_each_key(r, *t, "output", {"database", "report_threshold"},
+                 [&](const std::string& k, const std::string& full, const toml::node& node) {
+      if (k == "report_threshold") {
+        job.output.report_threshold = r.positive(node, full, true);
+        return;
+      }
       const std::string path = r.string(node, full);
       if (path.empty()) r.fail(node.source(), full, "empty path");
       // Relative to the job file, so that a job runs the same from anywhere.
@@ -462,6 +471,10 @@ Job parse_table(const toml::table& root, const std::string& file) {
                                 ? path
                                 : (std::filesystem::path(file).parent_path() / p).lexically_normal().string();
     });
+    if (!t->contains("database")) {
+      job.output.database =
+          (std::filesystem::path(file).parent_path() / job.output.database).lexically_normal().string();
+    }
   } else {
     job.output.database =
         (std::filesystem::path(file).parent_path() / job.output.database).lexically_normal().string();
@@ -479,7 +492,11 @@ JobError::JobError(std::string file, int line, std::string key, const std::strin
 
 bool is_known_algorithm(const std::string& name) {
   if (name == "gauss-newton") return true;
-  if (name == "GD_STOGO" || name == "GD_STOGO_RAND" || name == "GN_AGS") return false;  // not in Debian's build
+  // Not in Debian's build of NLopt (they fail with invalid_args).
+  if (name == "GD_STOGO" || name == "GD_STOGO_RAND" || name == "GN_AGS" || name == "LD_LBFGS_NOCEDAL") return false;
+  // AUGLAG and MLSL drive a subsidiary local optimiser that a job cannot
+  // name; without one NLopt rejects them or crashes (MLSL, LD_AUGLAG).
+  if (name.find("AUGLAG") != std::string::npos || name.find("MLSL") != std::string::npos) return false;
   return static_cast<int>(nlopt_algorithm_from_string(name.c_str())) >= 0;
 }
 
@@ -493,7 +510,9 @@ Job parse_job(std::string_view text, const std::string& source_name) {
     std::replace(description.begin(), description.end(), '\n', ' ');
     throw JobError(source_name, static_cast<int>(begin.line), "(syntax)", "invalid TOML: " + description);
   }
-  return parse_table(root, source_name);
+  Job job = parse_table(root, source_name);
+  job.text = std::string(text);
+  return job;
 }
 
 Job read_job_file(const std::string& path) {

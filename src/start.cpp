@@ -41,15 +41,19 @@ CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVec
   CandidateAnalysis out;
   out.verification = verify_motion(geometry, pose, options.verification);
   const JointVector& travel = out.verification.joint_travel;
-  const std::span<const double> travel_span(travel.data(), static_cast<size_t>(travel.size()));
+  // The joint travel is over the verified motion; a loop that could not be
+  // followed has none (every joint would look frozen and the loop trivial).
+  const std::span<const double> travel_span =
+      out.verification.verified ? std::span<const double>(travel.data(), static_cast<size_t>(travel.size()))
+                                : std::span<const double>();
   out.classification = classify(geometry, pose, travel_span, options.classification);
-  // A zero found by a local method sits a distance eps from its family, and
-  // closes to about eps^2 (the residual vanishes to second order in the
-  // directions that keep the loop movable): near-planar loops with a twist of
-  // 1e-6 rad close to 1e-12. When no family fits at the strict tolerance, a
-  // verified loop is classified again with the family conditions met to
-  // about the square root of its rigid residual. Strict first, so that an
-  // exact Bennett loop with twists 1e-7 from planar stays a Bennett loop.
+  // Near the meeting of two families (a Bennett loop with tiny twists, a
+  // parallelogram) a loop a distance eps off both closes to about eps^2, the
+  // product of the two distances: a local search stops on such loops, and
+  // they verify. When no family fits at the strict tolerance, a verified loop
+  // is therefore classified again with the conditions met to about the square
+  // root of its rigid residual. Strict first, so that an exact Bennett loop
+  // with twists 1e-7 from planar stays a Bennett loop.
   if (out.classification.family == Family::unclassified && out.verification.verified) {
     ClassifyOptions loose = options.classification;
     loose.tolerance = std::max(loose.tolerance, 10.0 * std::sqrt(out.verification.worst_residual));

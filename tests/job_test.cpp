@@ -58,6 +58,7 @@ deflation_shift = 0.5
 
 [output]
 database = "out/results.sqlite"
+report_threshold = 1e-4
 )";
 
 TEST(Job, ParsesEveryTableInTheDocumentedUnits) {
@@ -107,6 +108,7 @@ TEST(Job, ParsesEveryTableInTheDocumentedUnits) {
   EXPECT_EQ(job.steering.deflation_power, 3.0);
   EXPECT_EQ(job.steering.deflation_shift, 0.5);
   EXPECT_EQ(job.output.database, "dir/out/results.sqlite");  // relative to the job file
+  EXPECT_EQ(job.output.report_threshold, 1e-4);
 }
 
 TEST(Job, EmptyFileGivesTheDocumentedDefaults) {
@@ -126,6 +128,10 @@ TEST(Job, EmptyFileGivesTheDocumentedDefaults) {
   EXPECT_FALSE(job.steering.nontrivial);
   EXPECT_TRUE(job.steering.deflate.empty());
   EXPECT_EQ(job.output.database, "loopfarm.sqlite");
+  EXPECT_EQ(job.output.report_threshold, 1e-6);
+  // An [output] table without a database keeps the default, still relative to the job file.
+  EXPECT_EQ(parse_job("[output]\nreport_threshold = 1e-3\n", "dir/job.toml").output.database, "dir/loopfarm.sqlite");
+  EXPECT_EQ(parse_job("[search]\nstarts = 5\n", "x.toml").text, "[search]\nstarts = 5\n");
 }
 
 TEST(ParameterSpace, GeometryHonoursFixedFreeAndTiedAndItsJacobianIsExact) {
@@ -227,6 +233,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadJob{"deflate_unknown", "[steering]\ndeflate = [\"conic\"]\n", 2, "steering.deflate", "\"conic\""},
         BadJob{"deflate_twice", "[steering]\ndeflate = [\"planar\", \"planar\"]\n", 2, "steering.deflate", "twice"},
         BadJob{"output_type", "[output]\ndatabase = 3\n", 2, "output.database", "expected a string"},
+        BadJob{"deflate_bennett_5r", "[loop]\njoints = 5\n[steering]\ndeflate = [\"bennett\"]\n", 4,
+               "steering.deflate", "joints = 4"},
+        BadJob{"algorithm_auglag", "[optimizer]\nalgorithm = \"LD_AUGLAG\"\n", 2, "optimizer.algorithm", "unknown"},
+        BadJob{"report_threshold", "[output]\nreport_threshold = -1\n", 2, "output.report_threshold", "> 0"},
         BadJob{"table_is_value", "loop = 4\n", 1, "loop", "expected a table"}),
     [](const ::testing::TestParamInfo<BadJob>& info) { return std::string(info.param.name); });
 

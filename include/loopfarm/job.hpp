@@ -128,11 +128,15 @@ struct SteeringSettings {
 };
 
 struct OutputSettings {
-  std::string database = "loopfarm.sqlite";
+  std::string database = "loopfarm.sqlite";  // relative paths are relative to the job file
+  // Starts whose final E_mean is at most this keep their final geometry in
+  // the database (every start keeps its energies, for the histogram of minima).
+  double report_threshold = 1e-6;
 };
 
 struct Job {
   std::string path;                    // the file it was read from
+  std::string text;                    // its text as read (the farm stores and hashes it)
   LoopSettings loop;
   ParameterSpace space;
   OptimizerSettings optimizer;
