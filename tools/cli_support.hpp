@@ -18,6 +18,9 @@ namespace loopfarm::cli {
 inline constexpr int kExitSuccess = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitUsage = 2;
+// loopfarm run stopped by a signal: everything finished is committed, and
+// running the same command again resumes.
+inline constexpr int kExitStopped = 3;
 
 // Bad input: an option value, a geometry file, an output path. `where` names
 // the flag ("--a") or the file position ("geom.toml:3 key \"a\"") so the user

@@ -13,6 +13,8 @@
 
 #include "cli_support.hpp"
 #include "energy_command.hpp"
+#include "report_command.hpp"
+#include "run_command.hpp"
 #include "start_command.hpp"
 #include "verify_command.hpp"
 #include "subcommand.hpp"
@@ -64,6 +66,8 @@ int main(int argc, char** argv) {
       loopfarm::cli::add_energy_command(app),
       loopfarm::cli::add_verify_command(app),
       loopfarm::cli::add_start_command(app),
+      loopfarm::cli::add_run_command(app),
+      loopfarm::cli::add_report_command(app),
   };
 
   // CLI11 would call a mistyped subcommand "missing"; name it instead.

@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Build loopfarm (Release, every core) and run it.
+# Build loopfarm (Release, every core), run the default job on all cores and
+# print its report.
 #
-# Until the search farm exists this shows the energy core on the paper's
-# example: the Bennett loop (a movable linkage: zero cycle energy) and the same
-# loop with a1 changed from 2 to 2.03 (no longer movable: positive energy).
-# Arguments are passed on to `loopfarm energy`, e.g. tools/run.sh --samples 64.
+#   tools/run.sh                        # jobs/default.toml into build/default.sqlite
+#   tools/run.sh jobs/paper-table1.toml # another job, into build/paper-table1.sqlite
+#
+# A second call resumes the same run (nothing repeated); delete the database
+# to start afresh. Arguments after the job go to `loopfarm run`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -13,17 +15,30 @@ cmake -S . -B build/release -DCMAKE_BUILD_TYPE=Release
 cmake --build build/release -j"$(nproc)"
 
 loopfarm=build/release/tools/loopfarm
+job="${1:-jobs/default.toml}"
+shift || true
+# The database goes to build/JOBNAME.sqlite (out of the source tree) unless
+# --db is given.
+db="build/$(basename "$job" .toml).sqlite"
+db_args=(--db "$db")
+for ((i = 1; i <= $#; ++i)); do
+  if [[ "${!i}" == --db ]]; then j=$((i + 1)); db="${!j}"; db_args=(); fi
+  if [[ "${!i}" == --db=* ]]; then db="${!i#--db=}"; db_args=(); fi
+done
 
-# ---------------------------------------------------------------------------
-# DEFAULT JOB GOES HERE: once `loopfarm run` and the report exist, this
-# becomes
-#   "$loopfarm" run jobs/default.toml
-#   "$loopfarm" report ...
-# and the two examples below can go.
-# ---------------------------------------------------------------------------
-
-echo "== the paper's Bennett loop: a = 2,4,2,4, alpha = 30,90,30,90 deg, at theta = 120,90,-120,-90 deg"
-"$loopfarm" energy --a 2,4,2,4 --alpha-deg 30,90,30,90 --theta-deg 120,90,-120,-90 "$@"
+echo "== loopfarm run $job on $(nproc) cores (database $db)"
+set +e
+LOOPFARM="$loopfarm" jobs/mpirun-local.sh "$job" "${db_args[@]}" "$@"
+code=$?
+set -e
+if [[ $code -ne 0 && $code -ne 3 ]]; then
+  echo "tools/run.sh: loopfarm run failed with exit code $code" >&2
+  exit "$code"
+fi
 echo
-echo "== the same loop perturbed: a1 = 2.03"
-"$loopfarm" energy --a 2.03,4,2,4 --alpha-deg 30,90,30,90 --theta-deg 120,90,-120,-90 "$@"
+echo "== loopfarm report $db --summary"
+"$loopfarm" report "$db" --summary
+echo
+echo "== loopfarm report $db --limit 20 (the zero-minimum cases, from zero energy upwards)"
+"$loopfarm" report "$db" --limit 20
+exit "$code"

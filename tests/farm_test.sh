@@ -1,0 +1,224 @@
+#!/usr/bin/env bash
+# The farm as users run it: `loopfarm run` alone and under mpirun, resume,
+# stop by signal, refusal of another job, and `loopfarm report`.
+#
+#   tests/farm_test.sh LOOPFARM SOURCE_DIR CASE [MPIEXEC]
+#
+# CASE: ranks | resume | signal | refuse | report. Each case makes its own
+# temporary directory and removes it. Exit 0 on success; on failure one line
+# saying what differed, and exit 1.
+set -euo pipefail
+loopfarm="$1"
+source_dir="$2"
+case_name="$3"
+mpiexec="${4:-mpirun}"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+
+fail() {
+  echo "farm_test $case_name: FAILED: $*" >&2
+  exit 1
+}
+
+# A small generic 4R job: its zeros include planar, trivial and Bennett loops,
+# so de-duplication and every family's columns are exercised.
+job="$tmp/job.toml"
+cat >"$job" <<'EOF'
+[loop]
+joints = 4
+samples = 16
+
+[optimizer]
+algorithm = "gauss-newton"
+max_evaluations = 100
+
+[search]
+starts = 40
+seed = 7
+
+[output]
+database = "job.sqlite"
+report_threshold = 1e-3
+EOF
+
+run1() { "$loopfarm" run "$job" --progress none "$@"; }
+run2() { "$mpiexec" --oversubscribe -np 2 "$loopfarm" run "$job" --progress none "$@"; }
+
+# Every column of the candidates table, and of the starts table but for the
+# wall time, in key order: what must not depend on ranks, chunks or timing.
+dump() {
+  sqlite3 "$1" "SELECT * FROM candidates ORDER BY candidate_id;" >"$2"
+  local columns
+  columns="$(sqlite3 "$1" "SELECT group_concat(name, ', ') FROM pragma_table_info('starts') WHERE name NOT IN ('seconds', 'session_id');")"
+  sqlite3 "$1" "SELECT $columns FROM starts ORDER BY run_id, start_index;" >>"$2"
+}
+
+same() {  # same A B WHAT
+  if ! cmp -s "$1" "$2"; then
+    diff "$1" "$2" | grep "^>" | head -3 | cut -c1-400 >&2
+    fail "$3"
+  fi
+}
+
+case "$case_name" in
+ranks)
+  # 1 rank with chunks of 7 against 2 ranks with chunks of 1.
+  "$loopfarm" run "$job" --db "$tmp/one.sqlite" --chunk 7 --progress log 2>"$tmp/err" || fail "1 rank exited with $?"
+  # Batch-log progress: the final line at least, with counts, rate and ETA.
+  grep -q "^loopfarm run: 40/40 starts (100.0%), .* starts/s, [0-9]* zero minima, [0-9]* candidates, ETA 0s$" \
+    "$tmp/err" || fail "no progress line: $(head -1 "$tmp/err")"
+  run2 --db "$tmp/two.sqlite" --chunk 1 || fail "2 ranks exited with $?"
+  dump "$tmp/one.sqlite" "$tmp/one.txt"
+  dump "$tmp/two.sqlite" "$tmp/two.txt"
+  [[ "$(sqlite3 "$tmp/one.sqlite" 'SELECT COUNT(*) FROM starts')" == 40 ]] || fail "not 40 starts"
+  [[ "$(sqlite3 "$tmp/one.sqlite" 'SELECT COUNT(*) FROM candidates')" -ge 2 ]] || fail "fewer than 2 candidates"
+  [[ "$(sqlite3 "$tmp/two.sqlite" 'SELECT ranks FROM runs')" == 2 ]] || fail "runs.ranks is not 2"
+  same "$tmp/one.txt" "$tmp/two.txt" "the databases of 1 and 2 ranks differ"
+  ;;
+resume)
+  # 15 starts, then the same job to 40: the same database as 40 at once.
+  run1 --db "$tmp/whole.sqlite"
+  run1 --db "$tmp/parts.sqlite" --starts 15
+  [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT COUNT(*) FROM starts')" == 15 ]] || fail "first part is not 15 starts"
+  run2 --db "$tmp/parts.sqlite" --starts 40 2>"$tmp/err" || fail "resume exited with $?"
+  grep -q "15 of 40 starts already committed" "$tmp/err" || fail "no resume message: $(head -1 "$tmp/err")"
+  [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT COUNT(*) FROM sessions')" == 2 ]] || fail "not 2 sessions"
+  [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT status FROM runs')" == complete ]] || fail "run not complete"
+  # A third call has nothing left to do and changes no start.
+  run1 --db "$tmp/parts.sqlite" || fail "a complete run's rerun exited with $?"
+  dump "$tmp/whole.sqlite" "$tmp/whole.txt"
+  dump "$tmp/parts.sqlite" "$tmp/parts.txt"
+  same "$tmp/whole.txt" "$tmp/parts.txt" "a run in two parts differs from one in one go"
+  ;;
+signal)
+  # SIGUSR1 (as Slurm's --signal sends it, forwarded by mpirun) while 2
+  # ranks run: exit 3, a line saying how to resume, and the resumed run
+  # equals an uninterrupted one.
+  sed -i 's/^starts = 40/starts = 400/' "$job"
+  set +e
+  # mpirun itself in the background (not a function's subshell), so that
+  # the signal reaches it.
+  "$mpiexec" --oversubscribe -np 2 "$loopfarm" run "$job" --progress none --db "$tmp/stopped.sqlite" 2>"$tmp/err" &
+  pid=$!
+  # Wait for the first commit (at most 20 s), then signal.
+  for ((i = 0; i < 200; ++i)); do
+    n="$(sqlite3 "$tmp/stopped.sqlite" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
+    [[ "${n:-0}" -gt 0 ]] && break
+    sleep 0.1
+  done
+  kill -USR1 "$pid"
+  wait "$pid"
+  code=$?
+  set -e
+  [[ $code -eq 3 ]] || fail "a stopped run exited with $code, not 3: $(tail -2 "$tmp/err")"
+  grep -q "resume with: loopfarm run" "$tmp/err" || fail "no resume line: $(tail -1 "$tmp/err")"
+  done_before="$(sqlite3 "$tmp/stopped.sqlite" 'SELECT COUNT(*) FROM starts')"
+  [[ "$done_before" -lt 400 ]] || fail "the run was not stopped early ($done_before starts)"
+  [[ "$(sqlite3 "$tmp/stopped.sqlite" 'SELECT status FROM runs')" == stopped ]] || fail "run status is not stopped"
+  run2 --db "$tmp/stopped.sqlite" || fail "resume after the signal exited with $?"
+  run2 --db "$tmp/straight.sqlite" || fail "uninterrupted run exited with $?"
+  [[ "$(sqlite3 "$tmp/stopped.sqlite" 'SELECT COUNT(*) FROM starts')" == 400 ]] || fail "resumed run lacks starts"
+  # Candidate ids may come in another order after a stop with gaps; compare
+  # the candidates by their first start, and every start.
+  for db in stopped straight; do
+    sqlite3 "$tmp/$db.sqlite" "SELECT first_run, first_start, family, canonical_key, hits FROM candidates ORDER BY first_run, first_start;" >"$tmp/$db.txt"
+    columns="$(sqlite3 "$tmp/$db.sqlite" "SELECT group_concat(name, ', ') FROM pragma_table_info('starts') WHERE name NOT IN ('seconds', 'candidate_id', 'session_id');")"
+    sqlite3 "$tmp/$db.sqlite" "SELECT $columns FROM starts ORDER BY start_index;" >>"$tmp/$db.txt"
+  done
+  same "$tmp/stopped.txt" "$tmp/straight.txt" "a stopped and resumed run differs from an uninterrupted one"
+  ;;
+refuse)
+  run1 --db "$tmp/a.sqlite" --starts 5
+  before="$(sha256sum "$tmp/a.sqlite")"
+  sed -i 's/^seed = 7/seed = 8/' "$job"
+  set +e
+  run1 --db "$tmp/a.sqlite" 2>"$tmp/err"
+  code=$?
+  set -e
+  [[ $code -eq 2 ]] || fail "another job on the database exited with $code, not 2"
+  [[ "$(wc -l <"$tmp/err")" -eq 1 ]] || fail "the refusal is not one line: $(cat "$tmp/err")"
+  grep -q -- "--new-run" "$tmp/err" || fail "the refusal does not mention --new-run: $(cat "$tmp/err")"
+  [[ "$(sha256sum "$tmp/a.sqlite")" == "$before" ]] || fail "the refused run changed the database"
+  run1 --db "$tmp/a.sqlite" --starts 5 --new-run || fail "--new-run exited with $?"
+  [[ "$(sqlite3 "$tmp/a.sqlite" 'SELECT COUNT(*) FROM runs')" == 2 ]] || fail "--new-run did not add a run"
+  # Bad input never touches the database: a broken job file, bad options.
+  before="$(sha256sum "$tmp/a.sqlite")"
+  printf '[search]\nstarts = 0\n' >"$tmp/bad.toml"
+  for args in "$tmp/bad.toml --db $tmp/a.sqlite" "$job --db $tmp/a.sqlite --chunk 0" "$job --db $tmp/a.sqlite --starts x"; do
+    set +e
+    # shellcheck disable=SC2086
+    "$loopfarm" run $args 2>"$tmp/err"
+    code=$?
+    set -e
+    [[ $code -eq 2 ]] || fail "'run $args' exited with $code, not 2"
+    [[ "$(wc -l <"$tmp/err")" -eq 1 ]] || fail "'run $args' printed more than one line"
+  done
+  [[ "$(sha256sum "$tmp/a.sqlite")" == "$before" ]] || fail "bad input changed the database"
+  # Not a loopfarm database: refused, untouched.
+  echo "not a database" >"$tmp/junk.sqlite"
+  set +e
+  run1 --db "$tmp/junk.sqlite" 2>"$tmp/err"
+  code=$?
+  set -e
+  [[ $code -eq 2 ]] || fail "a junk database exited with $code, not 2"
+  [[ "$(cat "$tmp/junk.sqlite")" == "not a database" ]] || fail "the junk file was changed"
+  ;;
+report)
+  run1 --db "$tmp/r.sqlite"
+  n="$(sqlite3 "$tmp/r.sqlite" 'SELECT COUNT(*) FROM candidates')"
+  "$loopfarm" report "$tmp/r.sqlite" >"$tmp/table.txt" || fail "report exited with $?"
+  [[ "$(wc -l <"$tmp/table.txt")" -eq $((n + 1)) ]] || fail "the table has not $n rows and a header"
+  "$loopfarm" report "$tmp/r.sqlite" --format csv >"$tmp/c.csv"
+  [[ "$(wc -l <"$tmp/c.csv")" -eq $((n + 1)) ]] || fail "the CSV has not $n rows and a header"
+  head -1 "$tmp/c.csv" | grep -q '^candidate_id,family,setup,' || fail "CSV header: $(head -1 "$tmp/c.csv")"
+  # Sorted by energy from zero upwards (no unclassified candidates here to come first).
+  if [[ "$(sqlite3 "$tmp/r.sqlite" "SELECT COUNT(*) FROM candidates WHERE family = 'unclassified'")" == 0 ]]; then
+    awk 'NR > 1 { print $4 }' "$tmp/table.txt" >"$tmp/e.txt"
+    sort -g "$tmp/e.txt" | cmp -s - "$tmp/e.txt" || fail "candidates are not sorted by E_mean"
+  fi
+  "$loopfarm" report "$tmp/r.sqlite" --format json >"$tmp/j.json"
+  [[ "$(grep -c '"candidate_id"' "$tmp/j.json")" -eq "$n" ]] || fail "the JSON has not $n objects"
+  "$loopfarm" report "$tmp/r.sqlite" --format markdown --limit 1 | grep -q '^| id | family' || fail "markdown header"
+  [[ "$("$loopfarm" report "$tmp/r.sqlite" --format csv --limit 1 | wc -l)" -eq 2 ]] || fail "--limit 1"
+  fam="$(sqlite3 "$tmp/r.sqlite" 'SELECT family FROM candidates ORDER BY candidate_id LIMIT 1')"
+  m="$(sqlite3 "$tmp/r.sqlite" "SELECT COUNT(*) FROM candidates WHERE family = '$fam'")"
+  [[ "$("$loopfarm" report "$tmp/r.sqlite" --family "$fam" --format csv | wc -l)" -eq $((m + 1)) ]] || fail "--family"
+  [[ "$("$loopfarm" report "$tmp/r.sqlite" --max-energy 0 --format csv | wc -l)" -le $((n + 1)) ]] || fail "--max-energy"
+  "$loopfarm" report "$tmp/r.sqlite" --summary >"$tmp/s.txt" || fail "--summary exited with $?"
+  grep -q "histogram of log10(E_mean)" "$tmp/s.txt" || fail "--summary has no histogram"
+  grep -q "candidates by family" "$tmp/s.txt" || fail "--summary has no family counts"
+  "$loopfarm" report "$tmp/r.sqlite" --limit 1 --plot "$tmp/plots" >/dev/null 2>&1 || fail "--plot exited with $?"
+  [[ -s "$tmp/plots/minima_histogram.png" ]] || fail "no histogram PNG"
+  ls "$tmp"/plots/candidate_*_cycle.png >/dev/null 2>&1 || fail "no cycle PNG"
+  # The report reads while a run writes (WAL): start a long run, report during it.
+  sed -i 's/^starts = 40/starts = 400/' "$job"
+  "$loopfarm" run "$job" --progress none --db "$tmp/live.sqlite" --new-run &
+  pid=$!
+  for ((i = 0; i < 200; ++i)); do
+    [[ "$(sqlite3 "$tmp/live.sqlite" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)" -gt 0 ]] && break
+    sleep 0.1
+  done
+  "$loopfarm" report "$tmp/live.sqlite" --summary >/dev/null || fail "report during a run exited with $?"
+  kill -INT "$pid"
+  set +e
+  wait "$pid"
+  code=$?
+  set -e
+  [[ $code -eq 3 || $code -eq 0 ]] || fail "SIGINT: exit $code"
+  # Bad input.
+  for args in "$tmp/nothing.sqlite" "$tmp/r.sqlite --format xml" "$tmp/r.sqlite --family conic" "$tmp/r.sqlite --limit -1" "$job"; do
+    set +e
+    # shellcheck disable=SC2086
+    "$loopfarm" report $args >/dev/null 2>"$tmp/err"
+    code=$?
+    set -e
+    [[ $code -eq 2 ]] || fail "'report $args' exited with $code, not 2"
+    [[ "$(wc -l <"$tmp/err")" -eq 1 ]] || fail "'report $args' printed $(wc -l <"$tmp/err") lines"
+  done
+  ;;
+*)
+  fail "unknown case"
+  ;;
+esac
+echo "farm_test $case_name: passed"

@@ -1,0 +1,618 @@
+// The results database: schema and pragmas, runs and resume, sessions,
+// commits (atomic, no duplicate starts), de-duplication of candidates
+// independent of commit order, refusal of foreign or damaged files without
+// touching them, and reading while a writer is busy. Records are built by
+// hand; no search runs.
+#include "loopfarm/results_database.hpp"
+
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace loopfarm {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A fresh directory per test, removed afterwards.
+class ResultsDatabaseTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    static int counter = 0;
+    dir_ = fs::temp_directory_path() /
+           ("loopfarm_results_database_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string file(const std::string& name) const { return (dir_ / name).string(); }
+
+  fs::path dir_;
+};
+
+// --- plain SQLite access, independent of the class under test ---------------
+
+struct RawConnection {
+  sqlite3* db = nullptr;
+  explicit RawConnection(const std::string& path, int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE) {
+    EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, flags, nullptr), SQLITE_OK) << path;
+  }
+  ~RawConnection() { sqlite3_close_v2(db); }
+  RawConnection(const RawConnection&) = delete;
+  RawConnection& operator=(const RawConnection&) = delete;
+};
+
+void exec(sqlite3* db, const std::string& sql) {
+  char* message = nullptr;
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
+  EXPECT_EQ(rc, SQLITE_OK) << sql << ": " << (message ? message : "");
+  sqlite3_free(message);
+}
+
+// Every row of a query, each value as text: NULL as "NULL", reals with %.17g
+// (so that rows compare exactly).
+std::vector<std::vector<std::string>> rows(sqlite3* db, const std::string& sql) {
+  sqlite3_stmt* s = nullptr;
+  std::vector<std::vector<std::string>> out;
+  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s, nullptr) != SQLITE_OK) {
+    ADD_FAILURE() << sql << ": " << sqlite3_errmsg(db);
+    return out;
+  }
+  while (sqlite3_step(s) == SQLITE_ROW) {
+    std::vector<std::string> row;
+    for (int c = 0; c < sqlite3_column_count(s); ++c) {
+      switch (sqlite3_column_type(s, c)) {
+        case SQLITE_NULL: row.push_back("NULL"); break;
+        case SQLITE_INTEGER: row.push_back(std::to_string(sqlite3_column_int64(s, c))); break;
+        case SQLITE_FLOAT: {
+          char buffer[40];
+          std::snprintf(buffer, sizeof buffer, "%.17g", sqlite3_column_double(s, c));
+          row.push_back(buffer);
+          break;
+        }
+        default: row.push_back(reinterpret_cast<const char*>(sqlite3_column_text(s, c)));
+      }
+    }
+    out.push_back(row);
+  }
+  sqlite3_finalize(s);
+  return out;
+}
+
+std::string value(sqlite3* db, const std::string& sql) {
+  const auto r = rows(db, sql);
+  return r.empty() || r[0].empty() ? "no row" : r[0][0];
+}
+
+std::int64_t count(sqlite3* db, const std::string& table) {
+  return std::stoll(value(db, "SELECT COUNT(*) FROM " + table));
+}
+
+std::string fmt(double x) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.17g", x);
+  return buffer;
+}
+
+double real(sqlite3* db, const std::string& sql) {
+  const std::string text = value(db, sql);
+  return text == "NULL" || text == "no row" ? std::nan("") : std::stod(text);
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// --- hand-built records -------------------------------------------------------
+
+RunIdentity identity(const std::string& text = "[search]\nstarts = 100\n", std::uint64_t seed = 1) {
+  RunIdentity id;
+  id.job_path = "jobs/test.toml";
+  id.job_text = text;
+  id.seed = seed;
+  id.starts = 100;
+  id.joints = 4;
+  id.zero_threshold = 1e-12;
+  id.report_threshold = 1e-6;
+  return id;
+}
+
+LoopGeometry geometry_deg(std::vector<double> a, std::vector<double> alpha_deg, std::vector<double> d) {
+  return LoopGeometry::from_degrees(a, alpha_deg, d);
+}
+
+StartRecord plain_start(std::uint64_t index, double E_mean) {
+  StartRecord r;
+  r.index = index;
+  r.status = "ftol_reached";
+  r.E_mean = E_mean;
+  r.E_max = 2.0 * E_mean;
+  r.objective = E_mean;
+  r.evaluations = 10 + static_cast<int>(index);
+  r.seconds = 0.5;
+  r.zero = E_mean <= 1e-12;
+  r.final_geometry = geometry_deg({1, 2, 3, 2.5}, {20, 70, 40, 110}, {0.1, -0.3, 0.2, 0});
+  r.final_angles = JointVector::Zero(4);
+  return r;
+}
+
+// A verified zero whose canonical geometry is `canonical` (length scale 1 not
+// enforced: the database stores what it is given).
+StartRecord verified_start(std::uint64_t index, const LoopGeometry& canonical, const std::string& key,
+                           double E_mean = 1e-20) {
+  StartRecord r = plain_start(index, E_mean);
+  r.status = "stopval_reached";
+  r.zero = true;
+  r.verified = true;
+  r.final_geometry = canonical;
+  CandidateRecord& c = r.candidate;
+  c.family = "bennett";
+  c.setup = "asymmetric";
+  c.detail = "asymmetric setup";
+  c.family_residual = 1e-15 * static_cast<double>(index + 1);  // differs per start: shows which one represents
+  c.bennett_residual = c.family_residual;
+  c.planar_residual = 0.5;
+  c.spherical_residual = 0.75;
+  c.trivial_residual = std::numeric_limits<double>::infinity();
+  c.rigid_residual = 1e-13;
+  c.full_turn = true;
+  c.range_lo_deg = 0.0;
+  c.range_hi_deg = 360.0;
+  c.local_dimension = 3;
+  c.free_parameters = 12;
+  c.singular_values = {2.0, 0.5, 1e-13};
+  c.canonical_key = key;
+  c.canonical_geometry = canonical;
+  return r;
+}
+
+LoopGeometry bennett_canonical() {
+  return geometry_deg({0.632456, 1.264911, 0.632456, 1.264911}, {30, 90, 30, 90}, {0, 0, 0, 0});
+}
+
+LoopGeometry shifted(LoopGeometry g, double delta) {
+  g.a.array() += delta;
+  g.alpha.array() += delta;
+  g.d.array() += delta;
+  return g;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const DatabaseError& e) {
+    return e.what();
+  }
+  return "no DatabaseError";
+}
+
+// --- tests --------------------------------------------------------------------
+
+TEST(JobHash, IsFnv1a64InHex) {
+  EXPECT_EQ(job_hash(""), "cbf29ce484222325");
+  EXPECT_EQ(job_hash("a"), "af63dc4c8601ec8c");
+  EXPECT_EQ(job_hash("foobar"), "85944171f73967e8");
+}
+
+TEST_F(ResultsDatabaseTest, CreatesTheSchemaWithItsPragmas) {
+  const std::string path = file("r.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    EXPECT_EQ(db.path(), path);
+    EXPECT_EQ(db.mode(), DatabaseMode::write);
+    sqlite3* h = db.handle();
+    EXPECT_EQ(value(h, "PRAGMA foreign_keys"), "1");
+    EXPECT_EQ(value(h, "PRAGMA synchronous"), "1");  // NORMAL
+    EXPECT_EQ(value(h, "PRAGMA busy_timeout"), std::to_string(kDatabaseBusyTimeoutMs));
+  }
+  RawConnection raw(path, SQLITE_OPEN_READONLY);
+  EXPECT_EQ(value(raw.db, "PRAGMA user_version"), "1");
+  EXPECT_EQ(value(raw.db, "PRAGMA application_id"), std::to_string(kDatabaseApplicationId));
+  EXPECT_EQ(value(raw.db, "PRAGMA journal_mode"), "wal");
+  const std::string schema = "SELECT type, name FROM sqlite_schema WHERE name NOT LIKE 'sqlite_%' ORDER BY 1, 2";
+  const auto objects = rows(raw.db, schema);
+  std::vector<std::string> names;
+  for (const auto& row : objects) names.push_back(row[0] + " " + row[1]);
+  EXPECT_EQ(names, (std::vector<std::string>{
+                       "index candidates_by_joints_family", "index sessions_by_run", "index starts_by_candidate",
+                       "index starts_zero_by_energy", "table candidates", "table runs", "table sessions",
+                       "table starts", "view energy_histogram", "view family_counts", "view run_summary",
+                       "view status_counts", "view zero_minima"}));
+  // Reopening an existing database neither fails nor changes the schema.
+  { ResultsDatabase again = ResultsDatabase::open(path, DatabaseMode::write); }
+  EXPECT_EQ(rows(raw.db, schema), objects);
+}
+
+TEST_F(ResultsDatabaseTest, ResumeFindsTheRunAndItsCommittedStarts) {
+  const std::string path = file("r.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const RunInfo run = db.open_run(identity());
+    EXPECT_EQ(run.run_id, 1);
+    EXPECT_TRUE(run.created);
+    EXPECT_EQ(run.committed_count(), 0u);
+    EXPECT_EQ(run.committed_prefix(), 0u);
+    EXPECT_FALSE(run.is_committed(0));
+    db.commit(run.run_id, {plain_start(0, 1.0), plain_start(2, 1.0), plain_start(1, 1.0)});
+    db.commit(run.run_id, {plain_start(7, 1.0), plain_start(5, 1.0)});
+  }
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  RunIdentity more = identity();
+  more.starts = 500;
+  more.job_path = "elsewhere/test.toml";
+  const RunInfo run = db.open_run(more);
+  EXPECT_EQ(run.run_id, 1);
+  EXPECT_FALSE(run.created);
+  ASSERT_EQ(run.committed.size(), 3u);
+  EXPECT_EQ(run.committed[0].first, 0u);
+  EXPECT_EQ(run.committed[0].last, 3u);
+  EXPECT_EQ(run.committed[1].first, 5u);
+  EXPECT_EQ(run.committed[1].last, 6u);
+  EXPECT_EQ(run.committed[2].first, 7u);
+  EXPECT_EQ(run.committed[2].last, 8u);
+  EXPECT_EQ(run.committed_count(), 5u);
+  EXPECT_EQ(run.committed_prefix(), 3u);
+  const std::vector<bool> expected = {true, true, true, false, false, true, false, true, false};
+  for (std::uint64_t i = 0; i < expected.size(); ++i) EXPECT_EQ(run.is_committed(i), expected[i]) << i;
+  EXPECT_FALSE(run.is_committed(~0ull));
+  EXPECT_EQ(rows(db.handle(), "SELECT starts, job_path, starts_done FROM runs"),
+            (std::vector<std::vector<std::string>>{{"500", "elsewhere/test.toml", "5"}}));
+}
+
+TEST_F(ResultsDatabaseTest, AnotherJobIsRefusedAndTheFileUntouched) {
+  const std::string path = file("r.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    db.commit(db.open_run(identity()).run_id, {plain_start(0, 1.0)});
+  }
+  const std::string before = file_bytes(path);
+  ASSERT_FALSE(before.empty());
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::string text = error_of([&] { db.open_run(identity("[search]\nstarts = 200\n")); });
+    EXPECT_NE(text.find(path), std::string::npos) << text;
+    EXPECT_NE(text.find("holds run 1 of job jobs/test.toml"), std::string::npos) << text;
+    EXPECT_NE(text.find("job text"), std::string::npos) << text;
+    EXPECT_NE(text.find("--new-run"), std::string::npos) << text;
+    EXPECT_EQ(text.find('\n'), std::string::npos) << text;
+    const std::string seed = error_of([&] { db.open_run(identity("[search]\nstarts = 100\n", 2)); });
+    EXPECT_NE(seed.find("differs in its seed"), std::string::npos) << seed;
+  }
+  EXPECT_EQ(file_bytes(path), before);
+  EXPECT_FALSE(fs::exists(path + "-wal"));
+}
+
+TEST_F(ResultsDatabaseTest, NewRunAddsARunAndBecomesTheOneResumed) {
+  const std::string path = file("r.sqlite");
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  EXPECT_EQ(db.open_run(identity()).run_id, 1);
+  db.commit(1, {plain_start(0, 1.0)});
+  const RunInfo second = db.open_run(identity("other job"), true);
+  EXPECT_EQ(second.run_id, 2);
+  EXPECT_TRUE(second.created);
+  EXPECT_EQ(second.committed_count(), 0u);
+  // The same job again with --new-run: a third run, not a resume.
+  EXPECT_EQ(db.open_run(identity("other job"), true).run_id, 3);
+  const RunInfo resumed = db.open_run(identity("other job"));
+  EXPECT_EQ(resumed.run_id, 3);
+  EXPECT_FALSE(resumed.created);
+  // Only the latest run resumes: the first job is now "another job".
+  EXPECT_NE(error_of([&] { db.open_run(identity()); }).find("holds run 3"), std::string::npos);
+  EXPECT_EQ(value(db.handle(), "SELECT group_concat(job_hash, ' ') FROM runs"),
+            job_hash(identity().job_text) + " " + job_hash("other job") + " " + job_hash("other job"));
+}
+
+TEST_F(ResultsDatabaseTest, DuplicateStartIndexThrowsAndWritesNothing) {
+  const std::string path = file("r.sqlite");
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  const std::int64_t run = db.open_run(identity()).run_id;
+  db.begin_session(run, 2);
+  db.commit(run, {plain_start(0, 1.0), verified_start(1, bennett_canonical(), "k1"), plain_start(5, 1.0)});
+  sqlite3* h = db.handle();
+  auto snapshot = [&] {
+    return std::vector<std::int64_t>{count(h, "starts"), count(h, "candidates"),
+                                     std::stoll(value(h, "SELECT starts_done FROM runs")),
+                                     std::stoll(value(h, "SELECT hits FROM candidates")),
+                                     std::stoll(value(h, "SELECT starts_done FROM sessions"))};
+  };
+  const auto before = snapshot();
+  EXPECT_EQ(before, (std::vector<std::int64_t>{3, 1, 3, 1, 3}));
+
+  // Starts 2 (a second hit of the candidate) and 3 are written before the
+  // duplicate 5 fails the commit: all of it is rolled back.
+  const std::string text = error_of([&] {
+    db.commit(run, {plain_start(5, 1.0), plain_start(3, 1.0), verified_start(2, bennett_canonical(), "k1")});
+  });
+  EXPECT_NE(text.find("start 5 of run 1 is already committed"), std::string::npos) << text;
+  EXPECT_EQ(snapshot(), before);
+  EXPECT_NE(error_of([&] { db.commit(run, {plain_start(4, 1.0), plain_start(4, 1.0)}); }).find("appears twice"),
+            std::string::npos);
+  EXPECT_EQ(snapshot(), before);
+  EXPECT_NE(error_of([&] { db.commit(9, {plain_start(4, 1.0)}); }).find("no run 9"), std::string::npos);
+  EXPECT_EQ(snapshot(), before);
+
+  // The connection is still usable and its candidate cache consistent.
+  db.commit(run, {verified_start(2, bennett_canonical(), "k1")});
+  EXPECT_EQ(count(h, "candidates"), 1);
+  EXPECT_EQ(value(h, "SELECT hits FROM candidates"), "2");
+}
+
+TEST_F(ResultsDatabaseTest, DeduplicationIsIndependentOfCommitOrder) {
+  // One linkage written twice: canonical geometries 1e-7 apart, keys that
+  // differ (a quantisation boundary), and a different linkage.
+  const LoopGeometry g = bennett_canonical();
+  const StartRecord early = verified_start(3, g, "key-a", 1e-22);
+  const StartRecord late = verified_start(8, shifted(g, 1e-7), "key-b", 1e-21);
+  const StartRecord other = verified_start(5, shifted(g, 1e-3), "key-c");
+
+  auto build = [&](const std::string& name, const std::vector<std::vector<StartRecord>>& commits) {
+    const std::string path = file(name);
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::int64_t run = db.open_run(identity()).run_id;
+    for (const auto& records : commits) db.commit(run, records);
+    return rows(db.handle(), "SELECT * FROM candidates ORDER BY candidate_id");
+  };
+  const auto forward = build("forward.sqlite", {{early}, {late}, {other}});
+  const auto backward = build("backward.sqlite", {{late}, {early}, {other}});
+  const auto one_commit = build("one.sqlite", {{other, late, early}});
+
+  ASSERT_EQ(forward.size(), 2u);
+  EXPECT_EQ(backward, forward);
+  EXPECT_EQ(one_commit, forward);  // within a commit records go in index order
+
+  const std::string path = file("forward.sqlite");
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
+  EXPECT_EQ(rows(db.handle(), "SELECT candidate_id, canonical_key, first_run, first_start, hits, E_mean, "
+                              "family_residual FROM candidates ORDER BY candidate_id"),
+            (std::vector<std::vector<std::string>>{{"1", "key-a", "1", "3", "2", fmt(1e-22), fmt(1e-15 * 4.0)},
+                                                   {"2", "key-c", "1", "5", "1", fmt(1e-20), fmt(1e-15 * 6.0)}}));
+  EXPECT_EQ(rows(db.handle(), "SELECT start_index, candidate_id FROM starts ORDER BY start_index"),
+            (std::vector<std::vector<std::string>>{{"3", "1"}, {"5", "2"}, {"8", "1"}}));
+}
+
+TEST_F(ResultsDatabaseTest, DeduplicationRules) {
+  ResultsDatabase db = ResultsDatabase::open(file("r.sqlite"), DatabaseMode::write);
+  const std::int64_t run = db.open_run(identity()).run_id;
+  // Twists across the wrap at +-180 deg are one linkage.
+  LoopGeometry near_pi = bennett_canonical();
+  near_pi.alpha[1] = kPi - 1e-8;
+  LoopGeometry near_minus_pi = near_pi;
+  near_minus_pi.alpha[1] = -kPi + 1e-8;
+  // Equal keys are one linkage whatever the numbers (the key is the primary test).
+  const LoopGeometry far = shifted(bennett_canonical(), 0.01);
+  const CommitSummary summary =
+      db.commit(run, {verified_start(0, near_pi, "wrap-1"), verified_start(1, near_minus_pi, "wrap-2"),
+                      verified_start(2, bennett_canonical(), "same"), verified_start(3, far, "same"),
+                      // Beyond the tolerance and another key: another candidate.
+                      verified_start(4, shifted(bennett_canonical(), 2e-5), "near")});
+  EXPECT_EQ(summary.starts, 5);
+  EXPECT_EQ(summary.zeros, 5);
+  EXPECT_EQ(summary.new_candidates, 3);
+  EXPECT_EQ(summary.repeat_hits, 2);
+  EXPECT_EQ(rows(db.handle(), "SELECT first_start, hits FROM candidates ORDER BY candidate_id"),
+            (std::vector<std::vector<std::string>>{{"0", "2"}, {"2", "2"}, {"4", "1"}}));
+  // A looser tolerance merges what a tight one keeps apart, with the nearest
+  // candidate: 3e-5 from the second, 5e-5 from the third.
+  db.commit(run, {verified_start(5, shifted(bennett_canonical(), -3e-5), "near-2")}, 1e-4);
+  EXPECT_EQ(rows(db.handle(), "SELECT first_start, hits FROM candidates ORDER BY candidate_id"),
+            (std::vector<std::vector<std::string>>{{"0", "2"}, {"2", "3"}, {"4", "1"}}));
+}
+
+TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
+  const std::string foreign = file("foreign.sqlite");
+  {
+    RawConnection raw(foreign);
+    exec(raw.db, "CREATE TABLE t (x); INSERT INTO t VALUES (1)");
+  }
+  const std::string garbage = file("garbage.sqlite");
+  {
+    std::ofstream out(garbage, std::ios::binary);
+    for (int i = 0; i < 5000; ++i) out.put(static_cast<char>((i * 7919) % 251));
+  }
+  const std::string newer = file("newer.sqlite");
+  {
+    { ResultsDatabase db = ResultsDatabase::open(newer, DatabaseMode::write); }
+    RawConnection raw(newer);
+    exec(raw.db, "PRAGMA user_version = 2");
+  }
+  const std::string damaged = file("damaged.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(damaged, DatabaseMode::write);
+    const std::int64_t run = db.open_run(identity()).run_id;
+    std::vector<StartRecord> records;
+    for (std::uint64_t i = 0; i < 300; ++i) records.push_back(plain_start(i, 1e-9));
+    db.commit(run, records);
+  }
+  {
+    // Scribble over the middle of the file: the header (page 1) stays intact.
+    std::fstream out(damaged, std::ios::binary | std::ios::in | std::ios::out);
+    out.seekp(static_cast<std::streamoff>(fs::file_size(damaged) / 2));
+    for (int i = 0; i < 4096; ++i) out.put(static_cast<char>(0xA5));
+  }
+
+  struct Case {
+    std::string path;
+    std::string why;
+  };
+  for (const Case& c : {Case{foreign, "not a loopfarm results database (PRAGMA application_id is 0x00000000"},
+                        Case{garbage, "not an SQLite database"}, Case{newer, "schema version 2 is newer"},
+                        Case{damaged, "damaged"}}) {
+    SCOPED_TRACE(c.path);
+    const std::string before = file_bytes(c.path);
+    const std::string text = error_of([&] { ResultsDatabase::open(c.path, DatabaseMode::write); });
+    EXPECT_NE(text.find(c.path), std::string::npos) << text;
+    EXPECT_NE(text.find(c.why), std::string::npos) << text;
+    EXPECT_EQ(text.find('\n'), std::string::npos) << text;
+    if (c.path != damaged) {  // read mode checks identity and version only
+      EXPECT_NE(error_of([&] { ResultsDatabase::open(c.path, DatabaseMode::read); }).find(c.why), std::string::npos);
+    }
+    EXPECT_EQ(file_bytes(c.path), before);
+  }
+  EXPECT_NE(error_of([&] { ResultsDatabase::open(file("missing.sqlite"), DatabaseMode::read); }).find("no such file"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(file("missing.sqlite")));
+  EXPECT_NE(error_of([&] { ResultsDatabase::open(file("no/such/dir/r.sqlite"), DatabaseMode::write); })
+                .find("cannot open"),
+            std::string::npos);
+}
+
+TEST_F(ResultsDatabaseTest, EmptyFileIsInitialised) {
+  const std::string path = file("empty.sqlite");
+  { std::ofstream touch(path); }
+  ASSERT_TRUE(fs::exists(path));
+  EXPECT_NE(error_of([&] { ResultsDatabase::open(path, DatabaseMode::read); }).find("empty"), std::string::npos);
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  EXPECT_EQ(value(db.handle(), "PRAGMA user_version"), "1");
+}
+
+TEST_F(ResultsDatabaseTest, ReadModeWorksWhileAWriterHoldsATransaction) {
+  const std::string path = file("r.sqlite");
+  ResultsDatabase writer = ResultsDatabase::open(path, DatabaseMode::write);
+  const std::int64_t run = writer.open_run(identity()).run_id;
+  writer.commit(run, {plain_start(0, 1.0), plain_start(1, 1.0)});
+
+  RawConnection busy(path);
+  exec(busy.db, "BEGIN IMMEDIATE");
+  exec(busy.db, "INSERT INTO starts (run_id, start_index, status, evaluations, zero, verified) "
+                "VALUES (1, 99, 'failure', 0, 0, 0)");
+  {
+    ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
+    EXPECT_EQ(count(reader.handle(), "starts"), 2);  // the committed state only
+    EXPECT_EQ(value(reader.handle(), "SELECT COUNT(*) FROM zero_minima"), "0");
+    // A reader never writes.
+    EXPECT_NE(error_of([&] { reader.commit(run, {plain_start(2, 1.0)}); }).find("read-only"), std::string::npos);
+    EXPECT_NE(error_of([&] { reader.open_run(identity()); }).find("read-only"), std::string::npos);
+    EXPECT_NE(value(reader.handle(), "PRAGMA query_only"), "0");
+  }
+  exec(busy.db, "COMMIT");
+  ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
+  EXPECT_EQ(count(reader.handle(), "starts"), 3);
+}
+
+TEST_F(ResultsDatabaseTest, GeometryColumnsAreNullBeyondNAndAboveTheReportThreshold) {
+  ResultsDatabase db = ResultsDatabase::open(file("r.sqlite"), DatabaseMode::write);
+  const std::int64_t run = db.open_run(identity()).run_id;  // report_threshold 1e-6
+  StartRecord nan = plain_start(2, std::numeric_limits<double>::quiet_NaN());
+  nan.status = "evaluation_failed";
+  db.commit(run, {plain_start(0, 1e-7), plain_start(1, 1e-3), nan, verified_start(3, bennett_canonical(), "k")});
+  sqlite3* h = db.handle();
+  // Which columns hold a value: the first 4 of each list, for starts 0 and 3 only.
+  std::string presence = "SELECT start_index";
+  for (const char* name : {"a", "alpha", "d"}) {
+    for (int i = 1; i <= 8; ++i) {
+      presence += std::string(", ") + name + std::to_string(i) + (std::string(name) == "alpha" ? "_deg" : "") +
+                  " IS NOT NULL";
+    }
+  }
+  const std::string four = "1,1,1,1,0,0,0,0";
+  auto joined = [](const std::vector<std::string>& row) {
+    std::string out;
+    for (size_t i = 1; i < row.size(); ++i) out += (i > 1 ? "," : "") + row[i];
+    return out;
+  };
+  const auto present = rows(h, presence + " FROM starts ORDER BY start_index");
+  ASSERT_EQ(present.size(), 4u);
+  EXPECT_EQ(joined(present[0]), four + "," + four + "," + four);
+  EXPECT_EQ(joined(present[1]), "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0");
+  EXPECT_EQ(joined(present[2]), joined(present[1]));
+  EXPECT_EQ(joined(present[3]), joined(present[0]));
+  // Lengths as given, twists in degrees.
+  EXPECT_EQ(real(h, "SELECT a4 FROM starts WHERE start_index = 0"), 2.5);
+  EXPECT_EQ(real(h, "SELECT d2 FROM starts WHERE start_index = 0"), -0.3);
+  EXPECT_NEAR(real(h, "SELECT alpha2_deg FROM starts WHERE start_index = 0"), 70.0, 1e-12);
+  EXPECT_NEAR(real(h, "SELECT alpha4_deg FROM candidates"), 90.0, 1e-12);
+  EXPECT_EQ(real(h, "SELECT a2 FROM candidates"), 1.264911);
+  EXPECT_EQ(rows(h, "SELECT E_mean, E_max, objective, zero, verified, candidate_id FROM starts WHERE start_index = 2"),
+            (std::vector<std::vector<std::string>>{{"NULL", "NULL", "NULL", "0", "0", "NULL"}}));
+  EXPECT_EQ(rows(h, "SELECT joints, family, setup, d4, a5, alpha5_deg, d8, trivial_residual, planar_residual, "
+                    "full_turn, singular_values, local_dimension, free_parameters FROM candidates"),
+            (std::vector<std::vector<std::string>>{{"4", "bennett", "asymmetric", "0", "NULL", "NULL", "NULL", "NULL",
+                                                    "0.5", "1", "[2,0.5," + fmt(1e-13) + "]", "3", "12"}}));
+}
+
+TEST_F(ResultsDatabaseTest, SessionsTrackInvocations) {
+  const std::string path = file("r.sqlite");
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  const std::int64_t run = db.open_run(identity()).run_id;
+  EXPECT_EQ(value(db.handle(), "SELECT status FROM runs"), "stopped");
+  EXPECT_EQ(db.begin_session(run, 4), 1);
+  EXPECT_NE(error_of([&] { db.begin_session(run, 4); }).find("still open"), std::string::npos);
+  EXPECT_EQ(rows(db.handle(), "SELECT status, ranks, ended_at FROM runs"),
+            (std::vector<std::vector<std::string>>{{"running", "4", "NULL"}}));
+  db.commit(run, {plain_start(0, 1.0), plain_start(1, 1e-13)});
+  db.end_session(RunStatus::stopped);
+  EXPECT_NE(error_of([&] { db.end_session(RunStatus::stopped); }).find("no session"), std::string::npos);
+  EXPECT_THROW(db.end_session(RunStatus::running), std::invalid_argument);
+  EXPECT_EQ(rows(db.handle(), "SELECT status, ended_at IS NULL, starts_done FROM runs"),
+            (std::vector<std::vector<std::string>>{{"stopped", "1", "2"}}));
+
+  EXPECT_EQ(db.begin_session(run, 2), 2);
+  db.commit(run, {plain_start(2, 1.0)});
+  db.commit(run, {plain_start(3, 1.0)});
+  db.end_session(RunStatus::complete);
+  EXPECT_EQ(rows(db.handle(), "SELECT session_id, run_id, ranks, status, starts_done, ended_at IS NOT NULL, "
+                              "loopfarm_version FROM sessions ORDER BY 1"),
+            (std::vector<std::vector<std::string>>{{"1", "1", "4", "stopped", "2", "1", LOOPFARM_VERSION},
+                                                   {"2", "1", "2", "complete", "2", "1", LOOPFARM_VERSION}}));
+  EXPECT_EQ(rows(db.handle(), "SELECT status, ranks, starts_done, ended_at IS NOT NULL, loopfarm_version FROM runs"),
+            (std::vector<std::vector<std::string>>{{"complete", "2", "4", "1", LOOPFARM_VERSION}}));
+  EXPECT_EQ(rows(db.handle(), "SELECT start_index, session_id FROM starts ORDER BY 1"),
+            (std::vector<std::vector<std::string>>{{"0", "1"}, {"1", "1"}, {"2", "2"}, {"3", "2"}}));
+  // ISO 8601 UTC.
+  const std::string started = value(db.handle(), "SELECT started_at FROM runs");
+  EXPECT_EQ(started.size(), 20u) << started;
+  EXPECT_EQ(started[10], 'T');
+  EXPECT_EQ(started.back(), 'Z');
+}
+
+TEST_F(ResultsDatabaseTest, ViewsAnswerTheCommonQuestions) {
+  ResultsDatabase db = ResultsDatabase::open(file("r.sqlite"), DatabaseMode::write);
+  const std::int64_t run = db.open_run(identity()).run_id;
+  StartRecord unverified = plain_start(4, 3e-14);
+  unverified.zero = true;
+  db.commit(run, {plain_start(0, 0.5), verified_start(1, bennett_canonical(), "k", 3e-20),
+                  verified_start(2, bennett_canonical(), "k", 3e-25), plain_start(3, 0.005), unverified,
+                  plain_start(5, 0.0)});
+  sqlite3* h = db.handle();
+  EXPECT_EQ(rows(h, "SELECT start_index, verified, family FROM zero_minima"),
+            (std::vector<std::vector<std::string>>{
+                {"5", "0", "NULL"}, {"2", "1", "bennett"}, {"1", "1", "bennett"}, {"4", "0", "NULL"}}));
+  EXPECT_EQ(rows(h, "SELECT * FROM family_counts"), (std::vector<std::vector<std::string>>{{"bennett", "1", "2"}}));
+  EXPECT_EQ(rows(h, "SELECT * FROM status_counts"),
+            (std::vector<std::vector<std::string>>{{"1", "ftol_reached", "4", "2", "0"},
+                                                   {"1", "stopval_reached", "2", "2", "2"}}));
+  EXPECT_EQ(rows(h, "SELECT log10_E_mean, starts FROM energy_histogram"),
+            (std::vector<std::vector<std::string>>{
+                {"NULL", "1"}, {"-25", "1"}, {"-20", "1"}, {"-14", "1"}, {"-3", "1"}, {"-1", "1"}}));
+  EXPECT_EQ(rows(h, "SELECT run_id, starts_done, zeros, verified, new_candidates, best_E_mean FROM run_summary"),
+            (std::vector<std::vector<std::string>>{{"1", "6", "4", "2", "1", "0"}}));
+}
+
+TEST_F(ResultsDatabaseTest, MovesKeepTheConnection) {
+  ResultsDatabase a = ResultsDatabase::open(file("r.sqlite"), DatabaseMode::write);
+  sqlite3* h = a.handle();
+  ResultsDatabase b = std::move(a);
+  EXPECT_EQ(b.handle(), h);
+  ResultsDatabase c = ResultsDatabase::open(file("s.sqlite"), DatabaseMode::write);
+  c = std::move(b);
+  EXPECT_EQ(c.handle(), h);
+  EXPECT_EQ(c.open_run(identity()).run_id, 1);
+}
+
+}  // namespace
+}  // namespace loopfarm
