@@ -177,14 +177,35 @@ report)
     awk 'NR > 1 { print $4 }' "$tmp/table.txt" >"$tmp/e.txt"
     sort -g "$tmp/e.txt" | cmp -s - "$tmp/e.txt" || fail "candidates are not sorted by E_mean"
   fi
+  # The CSV parses: SQLite's own CSV reader takes it back as a table with
+  # the same values as the database (ids, families, energies to the bit).
+  sqlite3 "$tmp/csv.sqlite" ".import --csv $tmp/c.csv report" || fail "the CSV does not import"
+  [[ "$(sqlite3 "$tmp/csv.sqlite" 'SELECT COUNT(*) FROM report')" -eq "$n" ]] || fail "the CSV imports to not $n rows"
+  sqlite3 "$tmp/csv.sqlite" "ATTACH '$tmp/r.sqlite' AS db; SELECT COUNT(*) FROM report r JOIN db.candidates c
+    ON c.candidate_id = CAST(r.candidate_id AS INTEGER) AND c.family = r.family
+    AND c.E_mean = CAST(r.E_mean AS REAL) AND c.a1 = CAST(r.a1 AS REAL);" >"$tmp/matched"
+  [[ "$(cat "$tmp/matched")" -eq "$n" ]] || fail "CSV rows do not match the database ($(cat "$tmp/matched") of $n)"
+  # The JSON parses (SQLite's JSON parser) to an array of n objects.
   "$loopfarm" report "$tmp/r.sqlite" --format json >"$tmp/j.json"
-  [[ "$(grep -c '"candidate_id"' "$tmp/j.json")" -eq "$n" ]] || fail "the JSON has not $n objects"
+  parsed="$(sqlite3 :memory: "SELECT json_valid(CAST(readfile('$tmp/j.json') AS TEXT)),
+    json_array_length(CAST(readfile('$tmp/j.json') AS TEXT)),
+    json_extract(CAST(readfile('$tmp/j.json') AS TEXT), '\$[0].family');")"
+  first_family="$(sqlite3 "$tmp/r.sqlite" "SELECT family FROM candidates ORDER BY family <> 'unclassified', E_mean, candidate_id LIMIT 1")"
+  [[ "$parsed" == "1|$n|$first_family" ]] || fail "the JSON does not parse to $n objects: $parsed"
   "$loopfarm" report "$tmp/r.sqlite" --format markdown --limit 1 | grep -q '^| id | family' || fail "markdown header"
   [[ "$("$loopfarm" report "$tmp/r.sqlite" --format csv --limit 1 | wc -l)" -eq 2 ]] || fail "--limit 1"
   fam="$(sqlite3 "$tmp/r.sqlite" 'SELECT family FROM candidates ORDER BY candidate_id LIMIT 1')"
   m="$(sqlite3 "$tmp/r.sqlite" "SELECT COUNT(*) FROM candidates WHERE family = '$fam'")"
   [[ "$("$loopfarm" report "$tmp/r.sqlite" --family "$fam" --format csv | wc -l)" -eq $((m + 1)) ]] || fail "--family"
   [[ "$("$loopfarm" report "$tmp/r.sqlite" --max-energy 0 --format csv | wc -l)" -le $((n + 1)) ]] || fail "--max-energy"
+  # The documented sqlite3 examples (docs/database.md) run on a real database.
+  mkdir "$tmp/doc"
+  sed -n '/^## Examples/,/^```$/p' "$source_dir/docs/database.md" | sed -n '/^```sh$/,/^```$/p' | sed '1d;$d' |
+    sed "s|loopfarm.sqlite|$tmp/r.sqlite|g" >"$tmp/doc/examples.sh"
+  [[ "$(grep -c '^sqlite3' "$tmp/doc/examples.sh")" -ge 5 ]] || fail "no sqlite3 examples found in docs/database.md"
+  (cd "$tmp/doc" && bash -euo pipefail examples.sh >out.txt 2>err.txt) || fail "docs/database.md examples: $(head -1 "$tmp/doc/err.txt")"
+  [[ ! -s "$tmp/doc/err.txt" ]] || fail "docs/database.md examples: $(head -1 "$tmp/doc/err.txt")"
+  grep -q "^\[loop\]" "$tmp/doc/job.toml" || fail "the documented job_text query did not give the job back"
   "$loopfarm" report "$tmp/r.sqlite" --summary >"$tmp/s.txt" || fail "--summary exited with $?"
   grep -q "histogram of log10(E_mean)" "$tmp/s.txt" || fail "--summary has no histogram"
   grep -q "candidates by family" "$tmp/s.txt" || fail "--summary has no family counts"

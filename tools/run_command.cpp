@@ -25,6 +25,7 @@
 #include <sqlite3.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -314,6 +315,19 @@ void worker_loop(const Job& job) {
   MPI_Recv(none.data(), count, MPI_UINT64_T, 0, kTagWork, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
 }
 
+// This process's peak resident memory [kB] (VmHWM), 0 where /proc is missing.
+long peak_memory_kb() {
+  std::FILE* status = std::fopen("/proc/self/status", "r");
+  if (status == nullptr) return 0;
+  char line[256];
+  long kb = 0;
+  while (std::fgets(line, sizeof line, status)) {
+    if (std::sscanf(line, "VmHWM: %ld kB", &kb) == 1) break;
+  }
+  std::fclose(status);
+  return kb;
+}
+
 std::string signal_name(int signal) {
   switch (signal) {
     case SIGINT: return "SIGINT";
@@ -389,6 +403,13 @@ int coordinate(const RunArguments& args, const RunSettings& s, ResultsDatabase& 
                  static_cast<long long>(plan.run_id), job.output.database.c_str(), plan.committed, counts.total);
   }
 
+  // Rank 0's own cost (messages, decoding, commits, progress), apart from
+  // its compute thread: what limits how many ranks one coordinator serves.
+  using Clock = std::chrono::steady_clock;
+  const auto session_start = Clock::now();
+  double coordination_s = 0.0;
+  long messages = 0;
+
   std::vector<StartRecord> batch;
   auto last_commit = std::chrono::steady_clock::now();
   auto commit = [&](std::vector<StartRecord> records) {
@@ -421,8 +442,10 @@ int coordinate(const RunArguments& args, const RunSettings& s, ResultsDatabase& 
       bool busy = false;
       int flag = 0;
       MPI_Status status;
+      const auto work_start = Clock::now();
       MPI_Iprobe(MPI_ANY_SOURCE, kTagRequest, MPI_COMM_WORLD, &flag, &status);
       if (flag) {
+        ++messages;
         busy = true;
         int from = 0;
         const std::string message = receive_bytes(status.MPI_SOURCE, kTagRequest, &from);
@@ -438,6 +461,7 @@ int coordinate(const RunArguments& args, const RunSettings& s, ResultsDatabase& 
       commit(commits.ready());
       flush(false);
       progress.update(counts);
+      coordination_s += std::chrono::duration<double>(Clock::now() - work_start).count();
       if (!busy) std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
     // What the thread finished between the last collect and its end.
@@ -451,8 +475,20 @@ int coordinate(const RunArguments& args, const RunSettings& s, ResultsDatabase& 
   const int signal = g_stop_signal.load();
   const bool complete = counts.done >= counts.total;
   db.end_session(complete ? RunStatus::complete : RunStatus::stopped);
+  const double wall_s = std::chrono::duration<double>(Clock::now() - session_start).count();
   std::fprintf(stderr, "loopfarm run: %ld of %ld starts committed to %s, %ld zero minima, %ld candidates\n", counts.done,
                counts.total, job.output.database.c_str(), counts.zeros, counts.candidates);
+  // Every rank's peak memory, gathered for the record (and the issue's
+  // "flat in the number of starts" check).
+  const long own_kb = peak_memory_kb();
+  std::vector<long> peak_kb(static_cast<size_t>(ranks));
+  MPI_Gather(&own_kb, 1, MPI_LONG, peak_kb.data(), 1, MPI_LONG, 0, MPI_COMM_WORLD);
+  std::fprintf(stderr,
+               "loopfarm run: this session %ld starts in %.1f s on %d ranks (%.3g starts/s); rank 0 coordination "
+               "%.3f s (%.2f%% of the wall time, %ld messages); peak memory per rank %.1f MB (rank 0) .. %.1f MB\n",
+               counts.done_here, wall_s, ranks, wall_s > 0 ? static_cast<double>(counts.done_here) / wall_s : 0.0,
+               coordination_s, wall_s > 0 ? 100.0 * coordination_s / wall_s : 0.0, messages, peak_kb[0] / 1024.0,
+               *std::max_element(peak_kb.begin(), peak_kb.end()) / 1024.0);
   if (!complete) {
     std::fprintf(stderr, "loopfarm run: stopped by %s; resume with: %s\n", signal_name(signal).c_str(),
                  resume_command(args, s).c_str());
@@ -515,6 +551,8 @@ int run_run_command(const RunArguments& args) {
   }
   if (rank != 0) {
     worker_loop(s.job);
+    const long own_kb = peak_memory_kb();
+    MPI_Gather(&own_kb, 1, MPI_LONG, nullptr, 0, MPI_LONG, 0, MPI_COMM_WORLD);
     return kExitSuccess;
   }
   try {
