@@ -14,9 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <map>
 #include <optional>
-#include <unordered_map>
 
 #include "loopfarm/loop.hpp"
 
@@ -144,6 +142,8 @@ std::string schema_sql() {
       "  hits INTEGER NOT NULL DEFAULT 1\n"
       ");\n"
       "CREATE INDEX candidates_by_joints_family ON candidates(joints, family);\n"
+      "CREATE INDEX candidates_by_key ON candidates(joints, canonical_key);\n"
+      "CREATE INDEX candidates_by_a1 ON candidates(joints, a1);\n"
       // WITHOUT ROWID: the primary key is the table's own b-tree, so a start
       // costs one row and no separate index (the database is sized per start).
       "CREATE TABLE starts (\n"
@@ -381,9 +381,9 @@ std::string json_array(const std::vector<double>& values) {
 }
 
 // What de-duplication compares of one candidate: its canonical geometry as the
-// database holds it (twists through their stored degrees, so that a cache
-// filled from inserts equals one loaded from the file) and its first start.
-struct CachedCandidate {
+// database holds it (twists through their stored degrees, so that a record
+// compares with a stored row exactly as the row would) and its first start.
+struct CanonicalEntry {
   std::int64_t id = 0;
   std::string key;
   int joints = 0;
@@ -392,68 +392,25 @@ struct CachedCandidate {
   std::int64_t first_start = 0;
 };
 
-// The candidates of one joint count, with lookups by key and by a1 (lengths
-// do not wrap, so a window on a1 bounds the numeric comparison).
-struct CandidateSet {
-  std::vector<CachedCandidate> rows;
-  std::unordered_map<std::string, size_t> by_key;
-  std::multimap<double, size_t> by_a1;
-
-  void add(CachedCandidate c) {
-    const size_t slot = rows.size();
-    by_key[c.key] = slot;
-    by_a1.emplace(c.values[0], slot);
-    rows.push_back(std::move(c));
+// The largest difference between two canonical geometries of n joints
+// (twists wrapped), stopping early once it exceeds `tolerance`.
+double canonical_distance(const CanonicalEntry& x, const CanonicalEntry& y, double tolerance) {
+  const int n = x.joints;
+  double distance = 0.0;
+  for (int i = 0; i < 3 * n && distance <= tolerance; ++i) {
+    const double difference = x.values[i] - y.values[i];
+    distance = std::max(distance, std::abs(i >= n && i < 2 * n ? wrap_angle(difference) : difference));
   }
-
-  void replace(size_t slot, CachedCandidate c) {
-    CachedCandidate& old = rows[slot];
-    auto key = by_key.find(old.key);
-    if (key != by_key.end() && key->second == slot) by_key.erase(key);
-    auto [lo, hi] = by_a1.equal_range(old.values[0]);
-    for (auto it = lo; it != hi; ++it) {
-      if (it->second == slot) {
-        by_a1.erase(it);
-        break;
-      }
-    }
-    old = std::move(c);
-    by_key[old.key] = slot;
-    by_a1.emplace(old.values[0], slot);
-  }
-
-  // The candidate with the key, else the one whose values are all within
-  // `tolerance` and nearest (largest difference smallest, then lowest id).
-  std::optional<size_t> find(const CachedCandidate& c, double tolerance) const {
-    if (auto key = by_key.find(c.key); key != by_key.end()) return key->second;
-    const int n = c.joints;
-    std::optional<size_t> best;
-    double best_distance = 0.0;
-    for (auto it = by_a1.lower_bound(c.values[0] - tolerance); it != by_a1.end(); ++it) {
-      if (it->first > c.values[0] + tolerance) break;
-      const CachedCandidate& other = rows[it->second];
-      double distance = 0.0;
-      for (int i = 0; i < 3 * n && distance <= tolerance; ++i) {
-        const double difference = c.values[i] - other.values[i];
-        distance = std::max(distance, std::abs(i >= n && i < 2 * n ? wrap_angle(difference) : difference));
-      }
-      if (distance > tolerance) continue;
-      if (!best || distance < best_distance || (distance == best_distance && other.id < rows[*best].id)) {
-        best = it->second;
-        best_distance = distance;
-      }
-    }
-    return best;
-  }
-};
+  return distance;
+}
 
 double stored_twist(double radians) { return radians * kDegreesPerRadian; }
 double twist_from_stored(double degrees) { return degrees * kRadiansPerDegree; }
 
-CachedCandidate cached_from_record(const StartRecord& r, std::int64_t run_id) {
+CanonicalEntry canonical_entry(const StartRecord& r, std::int64_t run_id) {
   const LoopGeometry& g = r.candidate.canonical_geometry;
   const int n = g.joints();
-  CachedCandidate c;
+  CanonicalEntry c;
   c.key = r.candidate.canonical_key;
   c.joints = n;
   for (int i = 0; i < n; ++i) {
@@ -521,15 +478,11 @@ struct ResultsDatabase::Impl {
   Statement insert_candidate;
   Statement replace_candidate;
   Statement hit_candidate;
-  Statement select_candidates;
+  Statement select_by_key;
+  Statement select_by_a1;
 
   std::int64_t session_id = 0;  // 0: no open session
   std::int64_t session_run = 0;
-
-  // Candidates by joint count, loaded on first use and kept while this
-  // connection is the only one that wrote (PRAGMA data_version unchanged).
-  std::map<int, CandidateSet> candidates;
-  std::int64_t data_version = -1;
 
   sqlite3* db() const { return connection.db; }
 
@@ -542,33 +495,58 @@ struct ResultsDatabase::Impl {
     return s.reset();
   }
 
-  CandidateSet& candidate_set(int joints);
+  std::optional<CanonicalEntry> find_candidate(const CanonicalEntry& incoming, double tolerance);
   std::int64_t place_candidate(std::int64_t run_id, const StartRecord& r, double tolerance, CommitSummary& summary);
   void bind_candidate(Statement& s, std::int64_t run_id, const StartRecord& r);
 };
 
-CandidateSet& ResultsDatabase::Impl::candidate_set(int joints) {
-  if (auto it = candidates.find(joints); it != candidates.end()) return it->second;
-  static const std::string sql = "SELECT candidate_id, canonical_key, first_run, first_start, " +
-                                 geometry_columns("", "") + " FROM candidates WHERE joints = ?1 ORDER BY candidate_id";
-  Statement& s = prepared(select_candidates, sql);
-  s.bind(1, joints);
-  CandidateSet& set = candidates[joints];
-  while (s.step("cannot read the candidates")) {
-    CachedCandidate c;
+// The stored candidate of the same linkage as `incoming`: the one with its
+// canonical key, else the nearest whose values are all within `tolerance`
+// (largest difference smallest, then lowest id). Looked up through the
+// indexes on (joints, canonical_key) and (joints, a1) -- lengths do not wrap,
+// so a window on a1 bounds the numeric comparison -- so that rank 0's memory
+// does not grow with the number of candidates.
+std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const CanonicalEntry& incoming,
+                                                                     double tolerance) {
+  const int n = incoming.joints;
+  auto read = [n](Statement& s) {
+    CanonicalEntry c;
     c.id = s.integer(0);
     c.key = s.text(1);
     c.first_run = s.integer(2);
     c.first_start = s.integer(3);
-    c.joints = joints;
-    for (int i = 0; i < joints; ++i) {
+    c.joints = n;
+    for (int i = 0; i < n; ++i) {
       c.values[i] = s.real(4 + i);
-      c.values[joints + i] = twist_from_stored(s.real(4 + kMaxJoints + i));
-      c.values[2 * joints + i] = s.real(4 + 2 * kMaxJoints + i);
+      c.values[n + i] = twist_from_stored(s.real(4 + kMaxJoints + i));
+      c.values[2 * n + i] = s.real(4 + 2 * kMaxJoints + i);
     }
-    set.add(std::move(c));
+    return c;
+  };
+  static const std::string columns =
+      "SELECT candidate_id, canonical_key, first_run, first_start, " + geometry_columns("", "") + " FROM candidates ";
+  Statement& by_key = prepared(select_by_key, columns + "WHERE joints = ?1 AND canonical_key = ?2 "
+                                                        "ORDER BY candidate_id LIMIT 1");
+  by_key.bind(1, n);
+  by_key.bind(2, incoming.key);
+  if (by_key.step("cannot read the candidates")) return read(by_key);
+
+  Statement& window = prepared(select_by_a1, columns + "WHERE joints = ?1 AND a1 BETWEEN ?2 AND ?3");
+  window.bind(1, n);
+  window.bind(2, incoming.values[0] - tolerance);
+  window.bind(3, incoming.values[0] + tolerance);
+  std::optional<CanonicalEntry> best;
+  double best_distance = 0.0;
+  while (window.step("cannot read the candidates")) {
+    CanonicalEntry other = read(window);
+    const double distance = canonical_distance(incoming, other, tolerance);
+    if (distance > tolerance) continue;
+    if (!best || distance < best_distance || (distance == best_distance && other.id < best->id)) {
+      best = std::move(other);
+      best_distance = distance;
+    }
   }
-  return set;
+  return best;
 }
 
 void ResultsDatabase::Impl::bind_candidate(Statement& s, std::int64_t run_id, const StartRecord& r) {
@@ -613,9 +591,8 @@ void ResultsDatabase::Impl::bind_candidate(Statement& s, std::int64_t run_id, co
 std::int64_t ResultsDatabase::Impl::place_candidate(std::int64_t run_id, const StartRecord& r, double tolerance,
                                                     CommitSummary& summary) {
   static const std::vector<std::string> columns = candidate_columns();
-  CachedCandidate incoming = cached_from_record(r, run_id);
-  CandidateSet& set = candidate_set(incoming.joints);
-  const std::optional<size_t> match = set.find(incoming, tolerance);
+  CanonicalEntry incoming = canonical_entry(r, run_id);
+  const std::optional<CanonicalEntry> match = find_candidate(incoming, tolerance);
   if (!match) {
     static const std::string sql = [] {
       std::string names, values;
@@ -628,13 +605,11 @@ std::int64_t ResultsDatabase::Impl::place_candidate(std::int64_t run_id, const S
     Statement& s = prepared(insert_candidate, sql);
     bind_candidate(s, run_id, r);
     s.run("cannot insert a candidate");
-    incoming.id = sqlite3_last_insert_rowid(db());
-    set.add(std::move(incoming));
     ++summary.new_candidates;
-    return set.rows.back().id;
+    return sqlite3_last_insert_rowid(db());
   }
 
-  CachedCandidate& existing = set.rows[*match];
+  const CanonicalEntry& existing = *match;
   const std::int64_t id = existing.id;
   ++summary.repeat_hits;
   // The earliest (run, start) represents the linkage, whatever the order of
@@ -652,8 +627,6 @@ std::int64_t ResultsDatabase::Impl::place_candidate(std::int64_t run_id, const S
     bind_candidate(s, run_id, r);
     s.bind(static_cast<int>(columns.size() + 1), id);
     s.run("cannot update a candidate");
-    incoming.id = id;
-    set.replace(*match, std::move(incoming));
   } else {
     Statement& s = prepared(hit_candidate, "UPDATE candidates SET hits = hits + 1 WHERE candidate_id = ?1");
     s.bind(1, id);
@@ -877,117 +850,103 @@ CommitSummary ResultsDatabase::commit(std::int64_t run_id, const std::vector<Sta
     }
   }
 
-  try {
-    Transaction transaction(m.path, db);
-    // Another connection's commit invalidates the cached candidates.
-    const std::int64_t version = query_integer(m.path, db, "PRAGMA data_version");
-    if (version != m.data_version) {
-      m.candidates.clear();
-      m.data_version = version;
+  Transaction transaction(m.path, db);
+  Statement run;
+  run.prepare(m.path, db, "SELECT joints, report_threshold FROM runs WHERE run_id = ?1");
+  run.bind(1, run_id);
+  if (!run.step("cannot read the run")) fail(m.path, "commit: no run " + std::to_string(run_id));
+  const int joints = static_cast<int>(run.integer(0));
+  const double report_threshold = run.real(1);
+  run.reset();
+
+  static const std::string insert_sql = [] {
+    std::string values;
+    for (int i = 1; i <= 12 + 3 * kMaxJoints; ++i) values += (i > 1 ? ", ?" : "?") + std::to_string(i);
+    return "INSERT INTO starts (run_id, start_index, session_id, status, E_mean, E_max, objective, evaluations, "
+           "seconds, zero, verified, candidate_id, " +
+           geometry_columns("", "") + ") VALUES (" + values + ")";
+  }();
+  const std::int64_t session = m.session_run == run_id ? m.session_id : 0;
+  for (const StartRecord* record : order) {
+    const StartRecord& r = *record;
+    const LoopGeometry& g = r.final_geometry;
+    check_geometry(m.path, g, "the final geometry", r.index);
+    if (g.joints() != 0 && g.joints() != joints) {
+      fail(m.path, "start " + std::to_string(r.index) + " has " + std::to_string(g.joints()) + " joints, run " +
+                       std::to_string(run_id) + " " + std::to_string(joints));
     }
-
-    Statement run;
-    run.prepare(m.path, db, "SELECT joints, report_threshold FROM runs WHERE run_id = ?1");
-    run.bind(1, run_id);
-    if (!run.step("cannot read the run")) fail(m.path, "commit: no run " + std::to_string(run_id));
-    const int joints = static_cast<int>(run.integer(0));
-    const double report_threshold = run.real(1);
-    run.reset();
-
-    static const std::string insert_sql = [] {
-      std::string values;
-      for (int i = 1; i <= 12 + 3 * kMaxJoints; ++i) values += (i > 1 ? ", ?" : "?") + std::to_string(i);
-      return "INSERT INTO starts (run_id, start_index, session_id, status, E_mean, E_max, objective, evaluations, "
-             "seconds, zero, verified, candidate_id, " +
-             geometry_columns("", "") + ") VALUES (" + values + ")";
-    }();
-    const std::int64_t session = m.session_run == run_id ? m.session_id : 0;
-    for (const StartRecord* record : order) {
-      const StartRecord& r = *record;
-      const LoopGeometry& g = r.final_geometry;
-      check_geometry(m.path, g, "the final geometry", r.index);
-      if (g.joints() != 0 && g.joints() != joints) {
-        fail(m.path, "start " + std::to_string(r.index) + " has " + std::to_string(g.joints()) + " joints, run " +
+    std::int64_t candidate_id = 0;
+    if (r.verified) {
+      check_geometry(m.path, r.candidate.canonical_geometry, "the canonical geometry", r.index);
+      if (r.candidate.canonical_geometry.joints() != joints) {
+        fail(m.path, "the canonical geometry of start " + std::to_string(r.index) + " has " +
+                         std::to_string(r.candidate.canonical_geometry.joints()) + " joints, run " +
                          std::to_string(run_id) + " " + std::to_string(joints));
       }
-      std::int64_t candidate_id = 0;
-      if (r.verified) {
-        check_geometry(m.path, r.candidate.canonical_geometry, "the canonical geometry", r.index);
-        if (r.candidate.canonical_geometry.joints() != joints) {
-          fail(m.path, "the canonical geometry of start " + std::to_string(r.index) + " has " +
-                           std::to_string(r.candidate.canonical_geometry.joints()) + " joints, run " +
-                           std::to_string(run_id) + " " + std::to_string(joints));
-        }
-        candidate_id = m.place_candidate(run_id, r, dedup_tolerance, summary);
-      }
-
-      Statement& s = m.prepared(m.insert_start, insert_sql);
-      int p = 1;
-      s.bind(p++, run_id);
-      s.bind(p++, static_cast<std::int64_t>(r.index));
-      if (session != 0) {
-        s.bind(p++, session);
-      } else {
-        s.bind_null(p++);
-      }
-      s.bind(p++, r.status);
-      s.bind(p++, r.E_mean);
-      s.bind(p++, r.E_max);
-      s.bind(p++, r.objective);
-      s.bind(p++, r.evaluations);
-      s.bind(p++, r.seconds);
-      s.bind(p++, r.zero);
-      s.bind(p++, r.verified);
-      if (candidate_id != 0) {
-        s.bind(p++, candidate_id);
-      } else {
-        s.bind_null(p++);
-      }
-      // The geometry of the minima worth looking at; NaN compares false.
-      const bool keep_geometry = r.E_mean <= report_threshold;
-      const int n = g.joints();
-      for (const JointVector* list : {&g.a, &g.alpha, &g.d}) {
-        const double factor = list == &g.alpha ? kDegreesPerRadian : 1.0;
-        for (int i = 0; i < kMaxJoints; ++i, ++p) {
-          if (keep_geometry && i < n) {
-            s.bind(p, (*list)[i] * factor);
-          } else {
-            s.bind_null(p);
-          }
-        }
-      }
-      std::string message;
-      const int rc = s.step_code(message);
-      if (rc == SQLITE_CONSTRAINT_PRIMARYKEY) {
-        fail(m.path, "start " + std::to_string(r.index) + " of run " + std::to_string(run_id) +
-                         " is already committed (nothing of this commit was written)");
-      }
-      if (rc != SQLITE_DONE) fail(m.path, "cannot insert start " + std::to_string(r.index) + ": " + message);
-      ++summary.starts;
-      if (r.zero) ++summary.zeros;
+      candidate_id = m.place_candidate(run_id, r, dedup_tolerance, summary);
     }
 
-    Statement progress;
-    progress.prepare(m.path, db,
-                     std::string("UPDATE runs SET starts_done = starts_done + ?1, updated_at = ") + kNow +
-                         " WHERE run_id = ?2");
-    progress.bind(1, summary.starts);
-    progress.bind(2, run_id);
-    progress.run("cannot update the run");
+    Statement& s = m.prepared(m.insert_start, insert_sql);
+    int p = 1;
+    s.bind(p++, run_id);
+    s.bind(p++, static_cast<std::int64_t>(r.index));
     if (session != 0) {
-      Statement done;
-      done.prepare(m.path, db, "UPDATE sessions SET starts_done = starts_done + ?1 WHERE session_id = ?2");
-      done.bind(1, summary.starts);
-      done.bind(2, session);
-      done.run("cannot update the session");
+      s.bind(p++, session);
+    } else {
+      s.bind_null(p++);
     }
-    transaction.commit();
-  } catch (...) {
-    // The cache may hold rows the rollback removed.
-    m.candidates.clear();
-    m.data_version = -1;
-    throw;
+    s.bind(p++, r.status);
+    s.bind(p++, r.E_mean);
+    s.bind(p++, r.E_max);
+    s.bind(p++, r.objective);
+    s.bind(p++, r.evaluations);
+    s.bind(p++, r.seconds);
+    s.bind(p++, r.zero);
+    s.bind(p++, r.verified);
+    if (candidate_id != 0) {
+      s.bind(p++, candidate_id);
+    } else {
+      s.bind_null(p++);
+    }
+    // The geometry of the minima worth looking at; NaN compares false.
+    const bool keep_geometry = r.E_mean <= report_threshold;
+    const int n = g.joints();
+    for (const JointVector* list : {&g.a, &g.alpha, &g.d}) {
+      const double factor = list == &g.alpha ? kDegreesPerRadian : 1.0;
+      for (int i = 0; i < kMaxJoints; ++i, ++p) {
+        if (keep_geometry && i < n) {
+          s.bind(p, (*list)[i] * factor);
+        } else {
+          s.bind_null(p);
+        }
+      }
+    }
+    std::string message;
+    const int rc = s.step_code(message);
+    if (rc == SQLITE_CONSTRAINT_PRIMARYKEY) {
+      fail(m.path, "start " + std::to_string(r.index) + " of run " + std::to_string(run_id) +
+                       " is already committed (nothing of this commit was written)");
+    }
+    if (rc != SQLITE_DONE) fail(m.path, "cannot insert start " + std::to_string(r.index) + ": " + message);
+    ++summary.starts;
+    if (r.zero) ++summary.zeros;
   }
+
+  Statement progress;
+  progress.prepare(m.path, db,
+                   std::string("UPDATE runs SET starts_done = starts_done + ?1, updated_at = ") + kNow +
+                       " WHERE run_id = ?2");
+  progress.bind(1, summary.starts);
+  progress.bind(2, run_id);
+  progress.run("cannot update the run");
+  if (session != 0) {
+    Statement done;
+    done.prepare(m.path, db, "UPDATE sessions SET starts_done = starts_done + ?1 WHERE session_id = ?2");
+    done.bind(1, summary.starts);
+    done.bind(2, session);
+    done.run("cannot update the session");
+  }
+  transaction.commit();
   return summary;
 }
 

@@ -229,7 +229,8 @@ TEST_F(ResultsDatabaseTest, CreatesTheSchemaWithItsPragmas) {
   std::vector<std::string> names;
   for (const auto& row : objects) names.push_back(row[0] + " " + row[1]);
   EXPECT_EQ(names, (std::vector<std::string>{
-                       "index candidates_by_joints_family", "index sessions_by_run", "index starts_by_candidate",
+                       "index candidates_by_a1", "index candidates_by_joints_family", "index candidates_by_key",
+                       "index sessions_by_run", "index starts_by_candidate",
                        "index starts_zero_by_energy", "table candidates", "table runs", "table sessions",
                        "table starts", "view energy_histogram", "view family_counts", "view run_summary",
                        "view status_counts", "view zero_minima"}));
