@@ -76,7 +76,7 @@ std::vector<std::string> candidate_columns() {
   for (const char* name : {"family_residual", "bennett_residual", "planar_residual", "spherical_residual",
                            "trivial_residual", "rigid_residual", "full_turn", "range_lo_deg", "range_hi_deg",
                            "local_dimension", "free_parameters", "singular_values", "E_mean", "E_max", "first_run",
-                           "first_start"}) {
+                           "first_start", "grid_cell"}) {
     out.push_back(name);
   }
   return out;
@@ -139,11 +139,12 @@ std::string schema_sql() {
       "  E_max REAL,\n"
       "  first_run INTEGER NOT NULL REFERENCES runs(run_id),\n"
       "  first_start INTEGER NOT NULL,\n"
+      "  grid_cell TEXT NOT NULL,\n"
       "  hits INTEGER NOT NULL DEFAULT 1\n"
       ");\n"
       "CREATE INDEX candidates_by_joints_family ON candidates(joints, family);\n"
       "CREATE INDEX candidates_by_key ON candidates(joints, canonical_key);\n"
-      "CREATE INDEX candidates_by_a1 ON candidates(joints, a1);\n"
+      "CREATE INDEX candidates_by_cell ON candidates(joints, grid_cell);\n"
       // WITHOUT ROWID: the primary key is the table's own b-tree, so a start
       // costs one row and no separate index (the database is sized per start).
       "CREATE TABLE starts (\n"
@@ -404,6 +405,55 @@ double canonical_distance(const CanonicalEntry& x, const CanonicalEntry& y, doub
   return distance;
 }
 
+// De-duplication looks a record up by the grid cell of its canonical
+// geometry: every value (a and d at L = 1, twists in radians) cut into cells
+// of width kGridCell, twists on a circle of whole cells so that -pi and pi
+// meet. Two geometries within the tolerance (< kGridCell) of each other lie
+// in the same cell or, for each value near a cell edge, the neighbouring one:
+// the lookup tries every such combination (usually one or two cells), so its
+// cost does not grow with the number of candidates, not even when thousands
+// share a value (searches that end on a bound).
+constexpr double kGridCell = 1e-3;
+constexpr long kTwistCells = 6283;  // round(2 pi / kGridCell): twists wrap on whole cells
+constexpr size_t kMaxCellCombinations = 4096;
+
+// Per value, the cells a geometry within `tolerance` may occupy (the first is
+// the value's own).
+std::vector<std::vector<long>> cell_options(const CanonicalEntry& c, double tolerance) {
+  const int n = c.joints;
+  constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
+  std::vector<std::vector<long>> options(static_cast<size_t>(3 * n));
+  for (int i = 0; i < 3 * n; ++i) {
+    const bool twist = i >= n && i < 2 * n;
+    const double width = twist ? kTwoPi / kTwistCells : kGridCell;
+    const double u = twist ? (c.values[i] + kTwoPi / 2) / width : c.values[i] / width;
+    const double cell = std::floor(u);
+    const double offset = (u - cell) * width;  // distance above the cell's lower edge
+    auto wrap = [twist](long k) { return twist ? ((k % kTwistCells) + kTwistCells) % kTwistCells : k; };
+    const long k = static_cast<long>(cell);
+    std::vector<long>& o = options[static_cast<size_t>(i)];
+    o.push_back(wrap(k));
+    if (offset <= tolerance) o.push_back(wrap(k - 1));
+    if (width - offset <= tolerance) o.push_back(wrap(k + 1));
+  }
+  return options;
+}
+
+std::string cell_name(const std::vector<std::vector<long>>& options, const std::vector<size_t>& choice) {
+  std::string out;
+  for (size_t i = 0; i < options.size(); ++i) {
+    if (i > 0) out += ',';
+    out += std::to_string(options[i][choice[i]]);
+  }
+  return out;
+}
+
+// The grid cell a candidate is stored under.
+std::string grid_cell(const CanonicalEntry& c) {
+  const auto options = cell_options(c, 0.0);
+  return cell_name(options, std::vector<size_t>(options.size(), 0));
+}
+
 double stored_twist(double radians) { return radians * kDegreesPerRadian; }
 double twist_from_stored(double degrees) { return degrees * kRadiansPerDegree; }
 
@@ -479,7 +529,8 @@ struct ResultsDatabase::Impl {
   Statement replace_candidate;
   Statement hit_candidate;
   Statement select_by_key;
-  Statement select_by_a1;
+  Statement select_by_cell;
+  Statement select_all;
 
   std::int64_t session_id = 0;  // 0: no open session
   std::int64_t session_run = 0;
@@ -503,9 +554,9 @@ struct ResultsDatabase::Impl {
 // The stored candidate of the same linkage as `incoming`: the one with its
 // canonical key, else the nearest whose values are all within `tolerance`
 // (largest difference smallest, then lowest id). Looked up through the
-// indexes on (joints, canonical_key) and (joints, a1) -- lengths do not wrap,
-// so a window on a1 bounds the numeric comparison -- so that rank 0's memory
-// does not grow with the number of candidates.
+// indexes on (joints, canonical_key) and (joints, grid_cell), so that rank
+// 0's memory does not grow with the number of candidates and a lookup costs
+// the same whatever their number.
 std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const CanonicalEntry& incoming,
                                                                      double tolerance) {
   const int n = incoming.joints;
@@ -531,20 +582,39 @@ std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const Canoni
   by_key.bind(2, incoming.key);
   if (by_key.step("cannot read the candidates")) return read(by_key);
 
-  Statement& window = prepared(select_by_a1, columns + "WHERE joints = ?1 AND a1 BETWEEN ?2 AND ?3");
-  window.bind(1, n);
-  window.bind(2, incoming.values[0] - tolerance);
-  window.bind(3, incoming.values[0] + tolerance);
   std::optional<CanonicalEntry> best;
   double best_distance = 0.0;
-  while (window.step("cannot read the candidates")) {
-    CanonicalEntry other = read(window);
-    const double distance = canonical_distance(incoming, other, tolerance);
-    if (distance > tolerance) continue;
-    if (!best || distance < best_distance || (distance == best_distance && other.id < best->id)) {
-      best = std::move(other);
-      best_distance = distance;
+  auto consider = [&](Statement& s) {
+    while (s.step("cannot read the candidates")) {
+      CanonicalEntry other = read(s);
+      const double distance = canonical_distance(incoming, other, tolerance);
+      if (distance > tolerance) continue;
+      if (!best || distance < best_distance || (distance == best_distance && other.id < best->id)) {
+        best = std::move(other);
+        best_distance = distance;
+      }
     }
+  };
+  const auto options = cell_options(incoming, tolerance);
+  size_t combinations = 1;
+  for (const auto& o : options) combinations = std::min(combinations * o.size(), kMaxCellCombinations + 1);
+  if (combinations > kMaxCellCombinations) {
+    // Only with a tolerance near the cell width: compare with every candidate.
+    Statement& all = prepared(select_all, columns + "WHERE joints = ?1");
+    all.bind(1, n);
+    consider(all);
+    return best;
+  }
+  // Every combination of each value's possible cells, odometer order.
+  std::vector<size_t> choice(options.size(), 0);
+  for (;;) {
+    Statement& cell = prepared(select_by_cell, columns + "WHERE joints = ?1 AND grid_cell = ?2");
+    cell.bind(1, n);
+    cell.bind(2, cell_name(options, choice));
+    consider(cell);
+    size_t i = 0;
+    while (i < choice.size() && ++choice[i] == options[i].size()) choice[i++] = 0;
+    if (i == choice.size()) break;
   }
   return best;
 }
@@ -583,6 +653,7 @@ void ResultsDatabase::Impl::bind_candidate(Statement& s, std::int64_t run_id, co
   s.bind(p++, r.E_max);
   s.bind(p++, run_id);
   s.bind(p++, static_cast<std::int64_t>(r.index));
+  s.bind(p++, grid_cell(canonical_entry(r, run_id)));
 }
 
 // The candidate_id for a verified record: an existing candidate of the same
@@ -830,7 +901,10 @@ CommitSummary ResultsDatabase::commit(std::int64_t run_id, const std::vector<Sta
                                       double dedup_tolerance) {
   Impl& m = impl();
   m.require_write("commit");
-  if (!(dedup_tolerance >= 0.0)) throw std::invalid_argument("commit: dedup_tolerance must be >= 0");
+  // The grid lookup looks one cell either way (find_candidate).
+  if (!(dedup_tolerance >= 0.0 && dedup_tolerance < kGridCell)) {
+    throw std::invalid_argument("commit: dedup_tolerance must be in [0, 1e-3)");
+  }
   CommitSummary summary;
   if (records.empty()) return summary;
   sqlite3* db = m.db();

@@ -229,7 +229,7 @@ TEST_F(ResultsDatabaseTest, CreatesTheSchemaWithItsPragmas) {
   std::vector<std::string> names;
   for (const auto& row : objects) names.push_back(row[0] + " " + row[1]);
   EXPECT_EQ(names, (std::vector<std::string>{
-                       "index candidates_by_a1", "index candidates_by_joints_family", "index candidates_by_key",
+                       "index candidates_by_cell", "index candidates_by_joints_family", "index candidates_by_key",
                        "index sessions_by_run", "index starts_by_candidate",
                        "index starts_zero_by_energy", "table candidates", "table runs", "table sessions",
                        "table starts", "view energy_histogram", "view family_counts", "view run_summary",
@@ -412,6 +412,41 @@ TEST_F(ResultsDatabaseTest, DeduplicationRules) {
   db.commit(run, {verified_start(5, shifted(bennett_canonical(), -3e-5), "near-2")}, 1e-4);
   EXPECT_EQ(rows(db.handle(), "SELECT first_start, hits FROM candidates ORDER BY candidate_id"),
             (std::vector<std::vector<std::string>>{{"0", "2"}, {"2", "3"}, {"4", "1"}}));
+}
+
+TEST_F(ResultsDatabaseTest, DeduplicationAcrossGridCellEdgesAndAmongManyEqualValues) {
+  // The lookup goes by grid cell (width 1e-3): two writings of one linkage
+  // on either side of a cell edge, in every value at once, are still one;
+  // and a thousand candidates that share a1 (as searches ending on a bound
+  // give) neither hide a match nor merge with each other. Checked against a
+  // brute-force comparison of every pair.
+  ResultsDatabase db = ResultsDatabase::open(file("r.sqlite"), DatabaseMode::write);
+  const std::int64_t run = db.open_run(identity()).run_id;
+  LoopGeometry edge = bennett_canonical();
+  edge.a << 0.632, 1.265, 0.632, 1.265;                  // lengths on cell edges (multiples of 1e-3)
+  const double twist_cell = 2 * kPi / 6283;
+  edge.alpha << -kPi + 100 * twist_cell, -kPi + 2000 * twist_cell, -kPi + 100 * twist_cell, kPi;  // twist edges; pi wraps
+  std::vector<StartRecord> records;
+  records.push_back(verified_start(0, shifted(edge, -4e-6), "edge-below"));
+  records.push_back(verified_start(1, shifted(edge, 4e-6), "edge-above"));
+  // 1000 candidates with the same a1, 1e-4 apart in alpha2: all distinct.
+  for (int k = 0; k < 1000; ++k) {
+    LoopGeometry g = bennett_canonical();
+    g.alpha[1] = 1.0 + 1e-4 * k;
+    records.push_back(verified_start(static_cast<std::uint64_t>(10 + k), g, "many-" + std::to_string(k)));
+  }
+  // And one more writing of the 500th, 3e-6 away: a hit, not a candidate.
+  LoopGeometry again = bennett_canonical();
+  again.alpha[1] = 1.0 + 1e-4 * 500 + 3e-6;
+  records.push_back(verified_start(2000, again, "many-500-again"));
+  const CommitSummary summary = db.commit(run, records);
+  EXPECT_EQ(summary.new_candidates, 1 + 1000);
+  EXPECT_EQ(summary.repeat_hits, 2);
+  EXPECT_EQ(rows(db.handle(), "SELECT hits FROM candidates WHERE first_start = 0"),
+            (std::vector<std::vector<std::string>>{{"2"}}));
+  EXPECT_EQ(rows(db.handle(), "SELECT hits FROM candidates WHERE first_start = 510"),
+            (std::vector<std::vector<std::string>>{{"2"}}));
+  EXPECT_THROW(db.commit(run, {plain_start(3000, 1.0)}, 1e-3), std::invalid_argument);
 }
 
 TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
