@@ -553,10 +553,16 @@ int run_run_command(const RunArguments& args) {
     worker_loop(s.job);
     const long own_kb = peak_memory_kb();
     MPI_Gather(&own_kb, 1, MPI_LONG, nullptr, 0, MPI_LONG, 0, MPI_COMM_WORLD);
-    return kExitSuccess;
+    // Every rank exits with rank 0's code, so that mpirun passes it on (3
+    // for a stopped run) and kills no rank that is still finalising.
+    int code = kExitFailure;
+    MPI_Bcast(&code, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    return code;
   }
   try {
-    return coordinate(args, s, *db, *plan, ranks);
+    int code = coordinate(args, s, *db, *plan, ranks);
+    MPI_Bcast(&code, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    return code;
   } catch (const std::exception& error) {
     try {
       db->end_session(RunStatus::failed);
