@@ -1,6 +1,13 @@
 // Counts every heap allocation the test program makes, so that a test can show
 // that a hot path allocates nothing. Include in exactly one file per test
-// program: it replaces the global operator new.
+// program: it replaces the global operator new and, on glibc, malloc itself.
+//
+// Both are needed: operator new alone misses Eigen, whose dynamic-size
+// matrices allocate with std::malloc (Eigen/src/Core/util/Memory.h), so a
+// regression from the fixed-capacity types of types.hpp to MatrixXd would
+// pass unseen. A malloc defined in the executable takes the place of libc's
+// for the whole process (ELF symbol interposition), libstdc++'s operator new
+// included; it forwards to glibc's own allocator.
 #pragma once
 
 #include <atomic>
@@ -11,6 +18,16 @@ namespace loopfarm::testing {
 inline std::atomic<long> g_allocations{0};
 inline long allocations() { return g_allocations.load(); }
 }  // namespace loopfarm::testing
+
+#if defined(__GLIBC__)
+extern "C" {
+void* __libc_malloc(std::size_t size);  // glibc's allocator, under its own name
+void* malloc(std::size_t size) {
+  ++loopfarm::testing::g_allocations;
+  return __libc_malloc(size);
+}
+}
+#endif
 
 void* operator new(std::size_t size) {
   ++loopfarm::testing::g_allocations;

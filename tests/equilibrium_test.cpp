@@ -271,11 +271,18 @@ TEST(Equilibrium, SolveDoesNotAllocate) {
     EXPECT_EQ(testing::allocations() - before, 0) << "n = " << n;
     EXPECT_GT(s.iterations, 0);
   }
-  // The counter works: an allocation is seen.
+  // The counter works: an allocation is seen, from new and from Eigen's
+  // dynamic-size matrices (std::malloc) alike.
   const long before = testing::allocations();
   auto* probe = new std::string(100, 'x');
   EXPECT_GT(testing::allocations() - before, 0);
   delete probe;
+#if defined(__GLIBC__)
+  const long before_eigen = testing::allocations();
+  Eigen::MatrixXd dynamic(7, 7);
+  dynamic.setZero();
+  EXPECT_GT(testing::allocations() - before_eigen, 0) << "an Eigen::MatrixXd allocation went uncounted";
+#endif
 }
 
 TEST(Equilibrium, NonFiniteGuessIsReportedNotThrown) {
