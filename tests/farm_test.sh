@@ -127,6 +127,31 @@ signal)
     sqlite3 "$tmp/$db.sqlite" "SELECT $columns FROM starts ORDER BY start_index;" >>"$tmp/$db.txt"
   done
   same "$tmp/stopped.txt" "$tmp/straight.txt" "a stopped and resumed run differs from an uninterrupted one"
+  # SIGTERM and SIGINT stop a run alike (one rank: without mpirun, which
+  # follows its SIGTERM with SIGKILL, both leave time): exit 3, the resume
+  # line, and the resumed run equals the uninterrupted one.
+  for signal in TERM INT; do
+    set +e
+    "$loopfarm" run "$job" --progress none --db "$tmp/$signal.sqlite" 2>"$tmp/err" &
+    pid=$!
+    for ((i = 0; i < 200; ++i)); do
+      n="$(sqlite3 "$tmp/$signal.sqlite" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
+      [[ "${n:-0}" -gt 0 ]] && break
+      sleep 0.1
+    done
+    kill -"$signal" "$pid"
+    wait "$pid"
+    code=$?
+    set -e
+    [[ $code -eq 3 ]] || fail "SIG$signal: exited with $code, not 3: $(tail -2 "$tmp/err")"
+    grep -q "stopped by SIG$signal; resume with: loopfarm run" "$tmp/err" || fail "SIG$signal: no resume line: $(tail -1 "$tmp/err")"
+    [[ "$(sqlite3 "$tmp/$signal.sqlite" 'SELECT status FROM runs')" == stopped ]] || fail "SIG$signal: run status is not stopped"
+    [[ "$(sqlite3 "$tmp/$signal.sqlite" 'SELECT COUNT(*) FROM starts')" -lt 400 ]] || fail "SIG$signal: not stopped early"
+    run2 --db "$tmp/$signal.sqlite" || fail "resume after SIG$signal exited with $?"
+    sqlite3 "$tmp/$signal.sqlite" "SELECT first_run, first_start, family, canonical_key, hits FROM candidates ORDER BY first_run, first_start;" >"$tmp/$signal.txt"
+    sqlite3 "$tmp/$signal.sqlite" "SELECT $columns FROM starts ORDER BY start_index;" >>"$tmp/$signal.txt"
+    same "$tmp/$signal.txt" "$tmp/straight.txt" "a run stopped by SIG$signal and resumed differs from an uninterrupted one"
+  done
   ;;
 refuse)
   run1 --db "$tmp/a.sqlite" --starts 5
