@@ -13,6 +13,7 @@
 
 #include "cli_support.hpp"
 #include "energy_command.hpp"
+#include "groundtruth_command.hpp"
 #include "report_command.hpp"
 #include "run_command.hpp"
 #include "start_command.hpp"
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
       loopfarm::cli::add_start_command(app),
       loopfarm::cli::add_run_command(app),
       loopfarm::cli::add_report_command(app),
+      loopfarm::cli::add_groundtruth_command(app),
   };
 
   // CLI11 would call a mistyped subcommand "missing"; name it instead.
