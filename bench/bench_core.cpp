@@ -1,6 +1,7 @@
 // Cost of the elastic-energy core: one warm equilibrium solve and one cycle,
 // for the paper's Bennett loop (movable: every sample converges to zero) and
-// for generic 4R loops (rigid: every sample carries energy).
+// for generic 4R loops (rigid: every sample carries energy); and the implicit
+// differentiation of a solved generic cycle (the Gauss-Newton Jacobian).
 //
 //   build/release/bench/loopfarm_bench
 //
@@ -69,15 +70,15 @@ void solve_step(benchmark::State& state, const Fixture& f, bool predicted) {
   state.counters["iterations"] = static_cast<double>(iterations) / static_cast<double>(solves);
 }
 
-void cycle(benchmark::State& state, const std::vector<Fixture>& fixtures) {
-  CycleOptions options;
-  options.samples = static_cast<int>(state.range(0));
-  struct Prepared {
-    LoopModel model;
-    EquilibriumWorkspace ws;
-    EquilibriumState start;
-    double theta0;
-  };
+// A fixture's model, workspace and assembled start.
+struct Prepared {
+  LoopModel model;
+  EquilibriumWorkspace ws;
+  EquilibriumState start;
+  double theta0;
+};
+
+std::vector<Prepared> prepare(const std::vector<Fixture>& fixtures) {
   std::vector<Prepared> prepared;
   prepared.reserve(fixtures.size());
   for (const Fixture& f : fixtures) {
@@ -86,6 +87,13 @@ void cycle(benchmark::State& state, const std::vector<Fixture>& fixtures) {
     EquilibriumState start = assembled(model, ws, f);
     prepared.push_back({model, ws, start, f.theta0});
   }
+  return prepared;
+}
+
+void cycle(benchmark::State& state, const std::vector<Fixture>& fixtures) {
+  CycleOptions options;
+  options.samples = static_cast<int>(state.range(0));
+  std::vector<Prepared> prepared = prepare(fixtures);
   CycleSummary summary;
   long cycles = 0, iterations = 0, refinements = 0, jumps = 0, failed = 0;
   size_t next = 0;
@@ -107,6 +115,31 @@ void cycle(benchmark::State& state, const std::vector<Fixture>& fixtures) {
   state.counters["fail_frac"] = static_cast<double>(failed) / samples;
 }
 
+// One implicit differentiation of a solved cycle (what a Gauss-Newton step
+// costs besides its cycles): d r / d(a, alpha, d) and the angles'
+// sensitivities, as the default job's steered objective asks, into matrices
+// reused from call to call. The cycles are solved before timing.
+void cycle_jacobian(benchmark::State& state, const std::vector<Fixture>& fixtures) {
+  CycleOptions options;
+  options.samples = static_cast<int>(state.range(0));
+  std::vector<Prepared> prepared = prepare(fixtures);
+  std::vector<CycleSummary> cycles(prepared.size());
+  for (size_t i = 0; i < prepared.size(); ++i) {
+    Prepared& p = prepared[i];
+    cycle_energy(p.model, p.ws, p.theta0, p.start, options, cycles[i]);
+  }
+  Eigen::MatrixXd jacobian, angles;
+  size_t next = 0;
+  for (auto _ : state) {
+    Prepared& p = prepared[next];
+    cycle_deformation_jacobian(p.model, p.ws, cycles[next], jacobian, &angles);
+    benchmark::DoNotOptimize(jacobian.data());
+    benchmark::ClobberMemory();
+    next = (next + 1) % prepared.size();
+  }
+  state.counters["samples"] = options.samples;
+}
+
 void BM_SolveWarm_Bennett(benchmark::State& state) { solve_step(state, bennett(), false); }
 void BM_SolveWarm_Generic(benchmark::State& state) { solve_step(state, generic(3), false); }
 void BM_SolvePredicted_Bennett(benchmark::State& state) { solve_step(state, bennett(), true); }
@@ -119,12 +152,19 @@ void BM_Cycle_Generic(benchmark::State& state) {
   cycle(state, fixtures);
 }
 
+void BM_CycleJacobian_Generic(benchmark::State& state) {
+  std::vector<Fixture> fixtures;
+  for (std::uint64_t seed : kGenericSeeds) fixtures.push_back(generic(seed));
+  cycle_jacobian(state, fixtures);
+}
+
 BENCHMARK(BM_SolveWarm_Bennett);
 BENCHMARK(BM_SolveWarm_Generic);
 BENCHMARK(BM_SolvePredicted_Bennett);
 BENCHMARK(BM_SolvePredicted_Generic);
 BENCHMARK(BM_Cycle_Bennett)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Cycle_Generic)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CycleJacobian_Generic)->Arg(32)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace loopfarm

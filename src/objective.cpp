@@ -138,10 +138,13 @@ ObjectiveValue CycleObjective::evaluate(const Eigen::VectorXd& x, Eigen::VectorX
   }
   v = cycle_value();
   const int n = geometry_.joints();
-  Eigen::MatrixXd angle_jacobian;
-  if (gradient && settings_.nontrivial) cycle_deformation_jacobian(*model_, *workspace_, cycle_, &angle_jacobian);
+  // The travel term's gradient needs the angles' sensitivities (steering()
+  // reads angle_jacobian_ only then).
+  if (gradient && settings_.nontrivial) {
+    cycle_deformation_jacobian(*model_, *workspace_, cycle_, deformation_jacobian_, &angle_jacobian_);
+  }
   GeometryVector steering_gradient = GeometryVector::Zero(3 * n);
-  v.steering_factor = steered() ? steering(&angle_jacobian, gradient ? &steering_gradient : nullptr) : 1.0;
+  v.steering_factor = steered() ? steering(&angle_jacobian_, gradient ? &steering_gradient : nullptr) : 1.0;
   v.value = v.steering_factor * v.E_mean;
   if (gradient) {
     const GeometryVector energy_gradient = cycle_energy_gradient(*model_, *workspace_, cycle_);
@@ -165,7 +168,8 @@ ObjectiveValue CycleObjective::evaluate_residuals(const Eigen::VectorXd& x, Eige
   v.steering_factor = steered() ? steering(nullptr, nullptr) : 1.0;
   v.value = v.steering_factor * v.E_mean;
   // r' = sqrt(M) r, so that |r'|^2 / 2 = M E_mean.
-  r = std::sqrt(v.steering_factor) * cycle_weighted_deformations(*model_, cycle_);
+  cycle_weighted_deformations(*model_, cycle_, r);
+  r *= std::sqrt(v.steering_factor);
   if (jacobian) residual_jacobian(*jacobian);
   return v;
 }
@@ -173,18 +177,20 @@ ObjectiveValue CycleObjective::evaluate_residuals(const Eigen::VectorXd& x, Eige
 void CycleObjective::residual_jacobian(Eigen::MatrixXd& jacobian) {
   if (!last_ok_) throw std::logic_error("CycleObjective::residual_jacobian: the last evaluation failed");
   const int n = geometry_.joints();
-  Eigen::MatrixXd angle_jacobian;
-  const Eigen::MatrixXd deformation_jacobian =
-      cycle_deformation_jacobian(*model_, *workspace_, cycle_, settings_.nontrivial ? &angle_jacobian : nullptr);
+  // Into the buffers of the last call: with the same sizes nothing here
+  // allocates (but the steering's family distances may).
+  cycle_deformation_jacobian(*model_, *workspace_, cycle_, deformation_jacobian_,
+                             settings_.nontrivial ? &angle_jacobian_ : nullptr);
   GeometryVector steering_gradient = GeometryVector::Zero(3 * n);
-  const double factor = steered() ? steering(&angle_jacobian, &steering_gradient) : 1.0;
+  const double factor = steered() ? steering(&angle_jacobian_, &steering_gradient) : 1.0;
   // dr'/dp = sqrt(M) dr/dp + r (dM/dp)ᵀ / (2 sqrt(M)), with r unsteered.
   const double root = std::sqrt(factor);
-  Eigen::MatrixXd total = root * deformation_jacobian;
+  deformation_jacobian_ *= root;
   if (steered()) {
-    total += cycle_weighted_deformations(*model_, cycle_) * (steering_gradient.transpose() / (2.0 * root));
+    cycle_weighted_deformations(*model_, cycle_, weighted_deformations_);
+    deformation_jacobian_.noalias() += weighted_deformations_ * (steering_gradient.transpose() / (2.0 * root));
   }
-  jacobian = total * geometry_jacobian_;
+  jacobian.noalias() = deformation_jacobian_ * geometry_jacobian_;
 }
 
 }  // namespace loopfarm

@@ -335,6 +335,24 @@ TEST(Cycle, RepeatedCycleWithTheSameSampleCountDoesNotAllocate) {
   EXPECT_EQ(s.failed_samples, 0);
 }
 
+// The Gauss-Newton hot path: every accepted step differentiates its cycle.
+TEST(Cycle, RepeatedDeformationJacobianIntoTheSameOutputDoesNotAllocate) {
+  for (const GradientCase& c : gradient_cases()) {
+    SolvedCycle s(c, 32);
+    Eigen::MatrixXd jacobian, angles;
+    cycle_deformation_jacobian(s.model, s.ws, s.summary, jacobian, &angles);
+    const Eigen::MatrixXd first = jacobian, first_angles = angles;
+    const long before = testing::allocations();
+    cycle_deformation_jacobian(s.model, s.ws, s.summary, jacobian, &angles);
+    cycle_deformation_jacobian(s.model, s.ws, s.summary, jacobian);
+    EXPECT_EQ(testing::allocations() - before, 0) << c.name;
+    // The same answer, bit for bit, as the first call and the allocating form.
+    EXPECT_TRUE(jacobian == first) << c.name;
+    EXPECT_TRUE(angles == first_angles) << c.name;
+    EXPECT_TRUE(cycle_deformation_jacobian(s.model, s.ws, s.summary) == first) << c.name;
+  }
+}
+
 TEST(Cycle, InvalidOptionsAreRejectedByName) {
   auto message = [](const CycleOptions& o) -> std::string {
     try {

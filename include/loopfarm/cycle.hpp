@@ -94,11 +94,21 @@ GeometryVector cycle_energy_gradient(const LoopModel& model, EquilibriumWorkspac
 // The residual vector r of the outer least-squares problem, E_mean = 1/2 |r|^2:
 // sample j's deformations weighted by sqrt(stiffness / N), stacked.
 Eigen::VectorXd cycle_weighted_deformations(const LoopModel& model, const CycleSummary& summary);
+// The same into `r`, resized as needed (no allocation when its size is unchanged).
+void cycle_weighted_deformations(const LoopModel& model, const CycleSummary& summary, Eigen::VectorXd& r);
 
 // d r / d(a, alpha, d): (N * deformation_count) x 3n, by implicit
 // differentiation of every sample's KKT system. The same differentiation
 // gives the joint angles' sensitivities: with `angle_jacobian`, row
 // j * n + i holds d theta_i(sample j) / d(a, alpha, d) (zero for the input).
+//
+// Into `jacobian` (and `*angle_jacobian`), resized as needed: with the same
+// N and model size a repeated call reuses their storage and does not allocate
+// (every per-sample buffer has a fixed size).
+void cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& workspace,
+                                const CycleSummary& summary, Eigen::MatrixXd& jacobian,
+                                Eigen::MatrixXd* angle_jacobian = nullptr);
+// The same, returning a new matrix.
 Eigen::MatrixXd cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& workspace,
                                            const CycleSummary& summary,
                                            Eigen::MatrixXd* angle_jacobian = nullptr);

@@ -116,6 +116,10 @@ class CycleObjective {
   std::unique_ptr<EquilibriumWorkspace> workspace_;
   EquilibriumState start_;
   CycleSummary cycle_;
+  // Buffers of the Jacobians, kept so that repeated evaluations reuse them.
+  Eigen::VectorXd weighted_deformations_;
+  Eigen::MatrixXd deformation_jacobian_;  // dr/d(a, alpha, d)
+  Eigen::MatrixXd angle_jacobian_;        // d theta / d(a, alpha, d), rows j * n + i
 };
 
 // Per joint, how far its angle turns over the cycle [rad]: max - min of the
