@@ -340,7 +340,8 @@ Job parse_table(const toml::table& root, const std::string& file) {
   };
 
   if (const toml::table* t = section("loop")) {
-    for_each_key(r, *t, "loop", {"joints", "compliance", "stiffness_ratio", "samples", "range_deg"},
+    for_each_key(r, *t, "loop", {"joints", "compliance", "stiffness_ratio", "samples", "range_deg", "closure_tolerance",
+                                        "stationarity_tolerance"},
                  [&](const std::string& k, const std::string& full, const toml::node& node) {
                    if (k == "joints") {
                      const long long n = r.integer(node, full);
@@ -368,6 +369,15 @@ Job parse_table(const toml::table& root, const std::string& file) {
                      }
                      // 360 must be exactly 2 pi: the library tests for a full turn.
                      job.loop.range = range / 360.0 * (2.0 * kPi);
+                   } else if (k == "closure_tolerance" || k == "stationarity_tolerance") {
+                     // Tolerances of the equilibrium solve, dimensionless; above 1e-3
+                     // a "converged" sample would not be an equilibrium at all.
+                     const double tolerance = r.positive(node, full, true);
+                     if (tolerance > 1e-3) {
+                       r.fail(node.source(), full, "got " + format(tolerance) + "; must be in (0, 1e-3]");
+                     }
+                     (k == "closure_tolerance" ? job.loop.closure_tolerance : job.loop.stationarity_tolerance) =
+                         tolerance;
                    }
                  });
   }

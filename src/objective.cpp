@@ -14,6 +14,8 @@ ObjectiveSettings ObjectiveSettings::from_loop(const LoopSettings& loop) {
   ObjectiveSettings s;
   s.equilibrium.compliance = loop.compliance;
   s.equilibrium.torsion_stiffness_ratio = loop.stiffness_ratio;
+  s.equilibrium.closure_tolerance = loop.closure_tolerance;
+  s.equilibrium.stationarity_tolerance = loop.stationarity_tolerance;
   s.cycle.samples = loop.samples;
   s.cycle.range = loop.range;
   return s;

@@ -110,7 +110,9 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   out.failed_samples = final_value.failed_samples;
   out.branch_jumps = final_value.branch_jumps;
   out.final_angles = unsteered.start_state().theta;
-  out.zero = out.E_mean <= job.search.zero_threshold;
+  // A failed sample's energy is that of wherever its solve stopped, often
+  // near zero (docs/stability.md, S4): a cycle with one is never a zero.
+  out.zero = out.E_mean <= job.search.zero_threshold && out.failed_samples == 0;
   if (!out.zero) return out;
 
   Eigen::MatrixXd jacobian;

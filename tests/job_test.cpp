@@ -1,4 +1,5 @@
 #include "loopfarm/job.hpp"
+#include "loopfarm/objective.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -60,6 +61,19 @@ deflation_shift = 0.5
 database = "out/results.sqlite"
 report_threshold = 1e-4
 )";
+
+TEST(Job, EquilibriumTolerancesDefaultToTheSolversAndCanBeSet) {
+  const Job defaults = parse_job("[loop]\njoints = 4\n", "d.toml");
+  EXPECT_EQ(defaults.loop.closure_tolerance, EquilibriumOptions{}.closure_tolerance);
+  EXPECT_EQ(defaults.loop.stationarity_tolerance, EquilibriumOptions{}.stationarity_tolerance);
+  const Job set = parse_job("[loop]\nclosure_tolerance = 1e-9\nstationarity_tolerance = 1e-7\n", "s.toml");
+  EXPECT_EQ(set.loop.closure_tolerance, 1e-9);
+  EXPECT_EQ(set.loop.stationarity_tolerance, 1e-7);
+  // ... and reach the solver of every cycle the search evaluates.
+  const ObjectiveSettings objective = ObjectiveSettings::from_loop(set.loop);
+  EXPECT_EQ(objective.equilibrium.closure_tolerance, 1e-9);
+  EXPECT_EQ(objective.equilibrium.stationarity_tolerance, 1e-7);
+}
 
 TEST(Job, ParsesEveryTableInTheDocumentedUnits) {
   const Job job = parse_job(kFullJob, "dir/full.toml");
@@ -206,6 +220,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadJob{"ratio_nan", "[loop]\nstiffness_ratio = nan\n", 2, "loop.stiffness_ratio", "finite"},
         BadJob{"samples_few", "[loop]\nsamples = 3\n", 2, "loop.samples", "[4, 100000]"},
         BadJob{"range_large", "[loop]\nrange_deg = 400\n", 2, "loop.range_deg", "(0, 360]"},
+        BadJob{"tolerance_large", "[loop]\nclosure_tolerance = 0.1\n", 2, "loop.closure_tolerance", "(0, 1e-3]"},
+        BadJob{"tolerance_zero", "[loop]\nstationarity_tolerance = 0.0\n", 2, "loop.stationarity_tolerance", "> 0"},
         BadJob{"space_unknown", "[space]\nb1 = 2\n", 2, "space.b1", "unknown parameter"},
         BadJob{"space_beyond_n", "[space]\na5 = 2\n", 2, "space.a5", "joints = 4"},
         BadJob{"space_lo_gt_hi", "\n[space]\nalpha1_deg = [90, 30]\n", 3, "space.alpha1_deg", "lo > hi"},

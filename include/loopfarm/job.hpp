@@ -97,6 +97,10 @@ struct LoopSettings {
   double stiffness_ratio = 1.0;        // k_t / (k_a L^2)
   int samples = 32;                    // N
   double range = 2.0 * 3.14159265358979323846;  // [rad]; 2 pi is a full turn
+  // The equilibrium solve's tolerances (EquilibriumOptions): closure residual
+  // (rotation [rad], translation / L) and stationarity, max-norms.
+  double closure_tolerance = EquilibriumOptions{}.closure_tolerance;
+  double stationarity_tolerance = EquilibriumOptions{}.stationarity_tolerance;
 };
 
 struct OptimizerSettings {
