@@ -153,7 +153,11 @@ std::string json_text(const std::vector<GroundTruthCase>& cases) {
     for (size_t i = 0; i < f.size(); ++i) out += (i ? ",\"" : "\"") + f[i].name + "\":" + f[i].json;
     out += ",\"geometry\":" + geometry_json(c.geometry);
     out += ",\"theta_deg\":[";
-    for (int i = 0; i < c.pose.size(); ++i) out += (i ? "," : "") + json_number(c.pose[i] * kDegreesPerRadian);
+    for (int i = 0; i < c.pose.size(); ++i) {
+      // Appended piecewise: GCC 12 warns (-Wrestrict, falsely) on "," + string here.
+      if (i > 0) out += ',';
+      out += json_number(c.pose[i] * kDegreesPerRadian);
+    }
     out += "]}";
   }
   out += cases.empty() ? "]\n" : "\n]\n";

@@ -17,6 +17,7 @@
 #include "report_command.hpp"
 #include "run_command.hpp"
 #include "start_command.hpp"
+#include "tradeoff_command.hpp"
 #include "verify_command.hpp"
 #include "subcommand.hpp"
 
@@ -70,6 +71,7 @@ int main(int argc, char** argv) {
       loopfarm::cli::add_run_command(app),
       loopfarm::cli::add_report_command(app),
       loopfarm::cli::add_groundtruth_command(app),
+      loopfarm::cli::add_tradeoff_command(app),
   };
 
   // CLI11 would call a mistyped subcommand "missing"; name it instead.

@@ -172,19 +172,23 @@ void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary&
   }
   std::fputs("\nunset output\n", gp);
   script.close();
+  render_gnuplot_script(gnuplot, script.path(), png, "--plot");
+}
 
+void render_gnuplot_script(const std::filesystem::path& gnuplot, const std::filesystem::path& script,
+                           const std::filesystem::path& png, const std::string& flag) {
   ScratchFile log(".log");
   log.close();
-  const int status = run_program(gnuplot, script.path(), log.path());
+  const int status = run_program(gnuplot, script, log.path());
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     const std::string message = first_line(log.path());
     const std::string how = WIFEXITED(status) ? "exit code " + std::to_string(WEXITSTATUS(status))
                                               : "signal " + std::to_string(WTERMSIG(status));
-    throw EnvironmentError("--plot: gnuplot failed (" + how + ")" + (message.empty() ? "" : ": " + message));
+    throw EnvironmentError(flag + ": gnuplot failed (" + how + ")" + (message.empty() ? "" : ": " + message));
   }
   std::error_code ec;
   const auto size = std::filesystem::file_size(png, ec);
-  if (ec || size == 0) throw EnvironmentError("--plot: gnuplot exited normally but wrote no image");
+  if (ec || size == 0) throw EnvironmentError(flag + ": gnuplot exited normally but wrote no image");
 }
 
 }  // namespace loopfarm::cli

@@ -35,4 +35,10 @@ inline constexpr double kLogFloor = 1e-32;
 void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary& summary,
                        const EnergyPlotStyle& style, const std::filesystem::path& png);
 
+// Runs gnuplot on a finished script that writes `png`. Throws
+// EnvironmentError naming `flag` if gnuplot fails (with its first error line)
+// or writes nothing.
+void render_gnuplot_script(const std::filesystem::path& gnuplot, const std::filesystem::path& script,
+                           const std::filesystem::path& png, const std::string& flag);
+
 }  // namespace loopfarm::cli

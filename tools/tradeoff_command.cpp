@@ -1,0 +1,293 @@
+#include "tradeoff_command.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "cli_support.hpp"
+#include "loopfarm/job.hpp"
+#include "loopfarm/tradeoff.hpp"
+#include "plot.hpp"
+
+namespace loopfarm::cli {
+namespace {
+
+struct TradeoffArguments {
+  std::string job;
+  std::string starts = "50";
+  std::string per_family = "4";
+  std::string generic = "8";
+  std::string perturbations = "1e-2,1e-3,1e-4,1e-5,1e-6,1e-7,1e-8";
+  std::string samples = "4,8,16,32,64,128";
+  std::string closure_tolerances = "1e-6,1e-8,1e-10,1e-13";
+  std::string compliances = "paper,full";
+  std::string algorithms = "gauss-newton,LD_LBFGS,LD_SLSQP,LD_MMA,LN_BOBYQA";
+  std::string zero_thresholds = "1e-8,1e-12,1e-16,1e-20,1e-24";
+  std::string ftol_rels = "0,1e-4,1e-3,1e-2";
+  std::string csv;
+  std::string plot;
+  bool quiet = false;
+};
+
+long long bounded_integer(const std::string& text, const std::string& flag, long long lo, long long hi) {
+  const long long value = parse_integer(text, flag);
+  if (value < lo || value > hi) {
+    throw UsageError(flag, "got " + std::to_string(value) + "; must be in [" + std::to_string(lo) + ", " +
+                               std::to_string(hi) + "]");
+  }
+  return value;
+}
+
+// Comma-separated words ("paper,full"); no empty elements, none twice.
+std::vector<std::string> parse_word_list(const std::string& text, const std::string& flag) {
+  std::vector<std::string> words;
+  std::set<std::string> seen;
+  size_t begin = 0;
+  while (true) {
+    const size_t comma = text.find(',', begin);
+    const std::string word = text.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin);
+    const std::string element = "element " + std::to_string(words.size() + 1) + " of " + quote_text(text);
+    if (word.empty()) throw UsageError(flag, element + " is empty");
+    if (!seen.insert(word).second) throw UsageError(flag, element + " is " + quote_text(word) + ": given twice");
+    words.push_back(word);
+    if (comma == std::string::npos) break;
+    begin = comma + 1;
+  }
+  return words;
+}
+
+// Numbers, each checked by `valid` (which says what is allowed), none twice.
+std::vector<double> checked_numbers(const std::string& text, const std::string& flag, bool (*valid)(double),
+                                    const std::string& allowed) {
+  const std::vector<double> values = parse_number_list(text, flag);
+  std::set<double> seen;
+  for (size_t i = 0; i < values.size(); ++i) {
+    const std::string element = "element " + std::to_string(i + 1) + " of " + quote_text(text) + " is " +
+                                format_double(values[i]);
+    if (!valid(values[i])) throw UsageError(flag, element + ": must be " + allowed);
+    if (!seen.insert(values[i]).second) throw UsageError(flag, element + ": given twice");
+  }
+  return values;
+}
+
+// Every flag checked here, so that a message names its flag; the library's
+// TradeoffOptions::validate stays as its own check.
+TradeoffOptions read_options(const TradeoffArguments& args) {
+  TradeoffOptions o;
+  o.starts = bounded_integer(args.starts, "--starts", 1, 1000000);
+  o.ground_truth.cases_per_family = static_cast<int>(bounded_integer(args.per_family, "--per-family", 0, 10000));
+  o.ground_truth.generic_loops = static_cast<int>(bounded_integer(args.generic, "--generic", 0, 10000));
+  o.ground_truth.relative_perturbations.clear();
+  if (args.perturbations != "none") {
+    o.ground_truth.relative_perturbations = checked_numbers(
+        args.perturbations, "--perturbations", [](double v) { return v > 0.0 && v < 1.0; }, "in (0, 1)");
+  }
+  o.samples.clear();
+  for (double n : checked_numbers(
+           args.samples, "--samples", [](double v) { return v >= 4 && v <= 100000 && v == std::floor(v); },
+           "a whole number in [4, 100000]")) {
+    o.samples.push_back(static_cast<int>(n));
+  }
+  o.closure_tolerances = checked_numbers(
+      args.closure_tolerances, "--closure-tolerances", [](double v) { return v > 0.0 && v <= 1e-5; }, "in (0, 1e-5]");
+  o.compliances = parse_word_list(args.compliances, "--compliances");
+  for (const std::string& c : o.compliances) {
+    if (c != "paper" && c != "full") {
+      throw UsageError("--compliances", quote_text(c) + " is not a compliance set; expected paper or full");
+    }
+  }
+  o.algorithms = parse_word_list(args.algorithms, "--algorithms");
+  for (const std::string& a : o.algorithms) {
+    if (!is_known_algorithm(a)) {
+      throw UsageError("--algorithms", quote_text(a) + " is not gauss-newton or an NLopt algorithm of this build");
+    }
+  }
+  o.zero_thresholds = checked_numbers(
+      args.zero_thresholds, "--zero-thresholds", [](double v) { return v > 0.0 && v < 1.0; }, "in (0, 1)");
+  o.ftol_rels = checked_numbers(
+      args.ftol_rels, "--ftol-rels", [](double v) { return v >= 0.0 && v < 1.0; }, "in [0, 1)");
+  o.validate();
+  return o;
+}
+
+std::string csv_text(const std::vector<TradeoffRow>& rows) {
+  std::string out =
+      "axis,value,median_seconds,p90_seconds,search_seconds,total_seconds,starts,zeros,zero_fraction,verified,"
+      "seconds_per_verified_zero,false_zeros,"
+      "worst_family_residual,movable_cases,missed_zeros,rigid_cases,rigid_read_as_zero,smallest_told_apart,"
+      "error_rate,pareto\n";
+  for (const TradeoffRow& r : rows) {
+    out += r.axis + "," + r.value + "," + format_double(r.median_seconds) + "," + format_double(r.p90_seconds) + "," +
+           format_double(r.search_seconds) + "," + format_double(r.total_seconds) + "," + std::to_string(r.starts) +
+           "," + std::to_string(r.zeros) + "," + format_double(r.zero_fraction()) + "," + std::to_string(r.verified) +
+           "," + format_double(r.seconds_per_verified_zero()) + "," +
+           std::to_string(r.false_zeros) + "," + format_double(r.worst_family_residual) + "," +
+           std::to_string(r.movable_cases) + "," + std::to_string(r.missed_zeros) + "," +
+           std::to_string(r.rigid_cases) + "," + std::to_string(r.rigid_read_as_zero) + "," +
+           format_double(r.smallest_told_apart) + "," + format_double(r.error_rate()) + "," +
+           (r.pareto ? "1" : "0") + "\n";
+  }
+  return out;
+}
+
+std::string name_of(const TradeoffRow& r) { return r.axis == "base" ? "base" : r.axis + "=" + r.value; }
+
+void print_table(const std::vector<TradeoffRow>& rows) {
+  std::printf("%-26s %10s %10s %9s %8s %6s %9s %8s %9s %10s %8s %s\n", "configuration", "median_ms", "p90_ms",
+              "zeros", "verified", "false", "fam_res", "missed", "rigid0", "told_apart", "error_%", "front");
+  for (const TradeoffRow& r : rows) {
+    const std::string zeros = std::to_string(r.zeros) + "/" + std::to_string(r.starts);
+    const std::string missed = std::to_string(r.missed_zeros) + "/" + std::to_string(r.movable_cases);
+    const std::string rigid = std::to_string(r.rigid_read_as_zero) + "/" + std::to_string(r.rigid_cases);
+    std::printf("%-26s %10.3f %10.3f %9s %8ld %6ld %9.1e %8s %9s %10.0e %8.2f %s\n", name_of(r).c_str(),
+                1e3 * r.median_seconds, 1e3 * r.p90_seconds, zeros.c_str(), r.verified, r.false_zeros,
+                r.worst_family_residual, missed.c_str(), rigid.c_str(), r.smallest_told_apart, 100.0 * r.error_rate(),
+                r.pareto ? "*" : "");
+  }
+}
+
+// Two panels, one labelled point per configuration: median seconds per start
+// against error rate (the Pareto front joined), and core-seconds per
+// verified zero against error rate (what a discovery costs).
+void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_name, const std::filesystem::path& png) {
+  const std::filesystem::path gnuplot = require_gnuplot("--plot");
+  ScratchFile data(".dat");
+  ScratchFile front(".dat");
+  std::vector<const TradeoffRow*> on_front;
+  for (const TradeoffRow& r : rows) {
+    // Labels without spaces or quotes: gnuplot reads them as one column. A
+    // configuration without a verified zero has no cost per zero (1/0 there).
+    const double per_zero = r.seconds_per_verified_zero();
+    std::fprintf(data.stream(), "%.17g %.17g %s %d %s\n", 1e3 * r.median_seconds, 100.0 * r.error_rate(),
+                 name_of(r).c_str(), r.pareto ? 1 : 0, std::isfinite(per_zero) ? format_double(per_zero).c_str() : "NaN");
+    if (r.pareto) on_front.push_back(&r);
+  }
+  std::sort(on_front.begin(), on_front.end(),
+            [](const TradeoffRow* a, const TradeoffRow* b) { return a->median_seconds < b->median_seconds; });
+  for (const TradeoffRow* r : on_front) {
+    std::fprintf(front.stream(), "%.17g %.17g\n", 1e3 * r->median_seconds, 100.0 * r->error_rate());
+  }
+  data.close();
+  front.close();
+  const std::string d = data.path().string();
+  ScratchFile script(".gp");
+  std::FILE* gp = script.stream();
+  std::fputs(
+      "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
+      "  set terminal pngcairo size 1500,650 enhanced\n"
+      "} else {\n"
+      "  set terminal png size 1500,650 enhanced\n"
+      "}\n",
+      gp);
+  std::fprintf(gp, "set output '%s'\n", png.string().c_str());
+  std::fprintf(gp, "set multiplot layout 1,2 title 'Speed against accuracy: %s, one point per configuration' noenhanced\n",
+               job_name.c_str());
+  std::fputs(
+      "set ylabel 'error rate [%]: (false + missed zeros + rigid read as zero) / judged'\n"
+      "set logscale x\nset grid\nset key top right\nset yrange [-1:*]\n"
+      "set offsets graph 0.02, graph 0.25, graph 0.1, 0\n"
+      "set xlabel 'median seconds of local minimisation per start [ms]'\n",
+      gp);
+  std::fprintf(gp,
+               "plot '%s' using 1:2 with lines lw 2 lc rgb '#c0392b' title 'Pareto front', \\\n"
+               "  '%s' using 1:($4 == 1 ? $2 : 1/0) with points pt 7 ps 1.4 lc rgb '#c0392b' notitle, \\\n"
+               "  '%s' using 1:($4 == 0 ? $2 : 1/0) with points pt 6 ps 1.2 lc rgb '#1f5fa8' title 'dominated', \\\n"
+               "  '%s' using 1:2:3 with labels offset 0.8,0.6 left font ',8' noenhanced notitle\n",
+               front.path().c_str(), d.c_str(), d.c_str(), d.c_str());
+  std::fputs("set xlabel 'core-seconds of search per verified zero [s]'\n", gp);
+  std::fprintf(gp,
+               "plot '%s' using 5:($4 == 1 ? $2 : 1/0) with points pt 7 ps 1.4 lc rgb '#c0392b' title 'on the front', \\\n"
+               "  '%s' using 5:($4 == 0 ? $2 : 1/0) with points pt 6 ps 1.2 lc rgb '#1f5fa8' title 'dominated', \\\n"
+               "  '%s' using 5:2:3 with labels offset 0.8,0.6 left font ',8' noenhanced notitle\n",
+               d.c_str(), d.c_str(), d.c_str());
+  std::fputs("unset multiplot\nunset output\n", gp);
+  script.close();
+  render_gnuplot_script(gnuplot, script.path(), png, "--plot");
+}
+
+int run_tradeoff_command(const TradeoffArguments& args) {
+  Job job;
+  try {
+    job = read_job_file(args.job);
+  } catch (const JobError& error) {
+    throw UsageError("job file", error.what());
+  }
+  TradeoffOptions options = read_options(args);
+  // Outputs are opened (and gnuplot found) before the work: a bad path fails at once.
+  std::optional<PendingOutput> csv;
+  if (!args.csv.empty()) csv.emplace(args.csv, "--csv");
+  std::optional<PendingOutput> plot;
+  if (!args.plot.empty()) {
+    require_gnuplot("--plot");
+    plot.emplace(args.plot, "--plot");
+  }
+  if (!args.quiet) {
+    options.progress = [](int done, int total, const std::string& name) {
+      std::fprintf(stderr, "loopfarm tradeoff: %d/%d configurations measured (%s)\n", done, total, name.c_str());
+    };
+  }
+  const std::vector<TradeoffRow> rows = run_tradeoff(job, options);
+  print_table(rows);
+  if (csv) {
+    std::fputs(csv_text(rows).c_str(), csv->stream());
+    csv->commit();
+  }
+  if (plot) {
+    plot->close();
+    plot_tradeoff(rows, std::filesystem::path(args.job).filename().string(), plot->temporary());
+    plot->commit();
+  }
+  return kExitSuccess;
+}
+
+}  // namespace
+
+Subcommand add_tradeoff_command(CLI::App& parent) {
+  auto args = std::make_shared<TradeoffArguments>();
+  CLI::App* app = parent.add_subcommand(
+      "tradeoff",
+      "Measure a job under many configurations, one choice changed at a time (cycle samples, equilibrium tolerance, "
+      "compliance, algorithm, its relative-decrease stop, zero threshold): seconds per start against accuracy on the job's starts and on the "
+      "ground-truth set. docs/tradeoff.md explains the measures and the chart.");
+  app->footer(
+      "Examples:\n"
+      "  loopfarm tradeoff jobs/default.toml --csv docs/tradeoff.csv --plot docs/tradeoff.png\n"
+      "  loopfarm tradeoff jobs/default.toml --starts 10 --algorithms gauss-newton,LD_LBFGS --samples 8,16\n"
+      "Runs on one core; each start and each ground-truth loop is measured under every configuration.\n"
+      "Exit codes: 0 done, 1 failure (gnuplot), 2 bad input.\n");
+  app->add_option("JOB", args->job, "job file (TOML): the base configuration and its starts")->required();
+  app->add_option("--starts", args->starts, "starts 0..N-1 of the job measured per configuration")
+      ->type_name("N")
+      ->capture_default_str();
+  app->add_option("--per-family", args->per_family, "ground truth: movable loops per family")
+      ->type_name("N")
+      ->capture_default_str();
+  app->add_option("--generic", args->generic, "ground truth: generic rigid loops")->type_name("N")->capture_default_str();
+  app->add_option("--perturbations", args->perturbations, "ground truth: relative perturbation sizes, or none")
+      ->type_name("LIST")
+      ->capture_default_str();
+  app->add_option("--samples", args->samples, "cycle samples N tried")->type_name("LIST")->capture_default_str();
+  app->add_option("--closure-tolerances", args->closure_tolerances,
+                  "equilibrium closure tolerances tried (stationarity 100x looser)")
+      ->type_name("LIST")
+      ->capture_default_str();
+  app->add_option("--compliances", args->compliances, "compliance sets tried")->type_name("LIST")->capture_default_str();
+  app->add_option("--algorithms", args->algorithms, "local algorithms tried")->type_name("LIST")->capture_default_str();
+  app->add_option("--zero-thresholds", args->zero_thresholds, "zero thresholds tried")
+      ->type_name("LIST")
+      ->capture_default_str();
+  app->add_option("--ftol-rels", args->ftol_rels, "relative-decrease stops of the local search tried (0: off)")
+      ->type_name("LIST")
+      ->capture_default_str();
+  app->add_option("--csv", args->csv, "write every measure of every configuration as CSV")->type_name("FILE");
+  app->add_option("--plot", args->plot, "draw seconds per start against error rate as PNG")->type_name("FILE.png");
+  app->add_flag("--quiet", args->quiet, "no progress lines on stderr");
+  return {app, [args] { return run_tradeoff_command(*args); }};
+}
+
+}  // namespace loopfarm::cli
