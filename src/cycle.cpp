@@ -580,17 +580,23 @@ void cycle_energy(const LoopModel& model, EquilibriumWorkspace& ws, double theta
   }
 }
 
-GeometryVector cycle_energy_gradient(const LoopModel& model, EquilibriumWorkspace& ws, const CycleSummary& summary) {
+GeometryVector cycle_energy_gradient(const LoopModel& model, EquilibriumWorkspace& ws, const CycleSummary& summary,
+                                     int sample) {
   const int n = model.joints();
   const int N = static_cast<int>(summary.samples.size());
+  if (sample >= N) throw std::invalid_argument("cycle_energy_gradient: sample " + std::to_string(sample) + " of " +
+                                               std::to_string(N));
   GeometryVector gradient = GeometryVector::Zero(3 * n);
-  for (const CycleSample& s : summary.samples) {
+  // The mean weighs every sample by 1/N; one sample's own energy, by 1.
+  const double weight = sample < 0 ? 1.0 / N : 1.0;
+  for (int j = sample < 0 ? 0 : sample; j < (sample < 0 ? N : sample + 1); ++j) {
+    const CycleSample& s = summary.samples[static_cast<size_t>(j)];
     // Envelope theorem: dE/dp~ = lambda^T dc/dp~ at the solution (the energy
     // itself does not depend on the geometry in normalised units).
     deformed_geometry(model, s.state.deformations, ws.deformed);
     compute_chain(ws.deformed, s.state.theta, ws.chain);
-    for (int j = 0; j < 3 * n; ++j) {
-      gradient[j] += s.state.multipliers.dot(residual_derivative(ws.chain, parameter_element(n, j))) / N;
+    for (int k = 0; k < 3 * n; ++k) {
+      gradient[k] += weight * s.state.multipliers.dot(residual_derivative(ws.chain, parameter_element(n, k)));
     }
   }
   Normalization(model).apply(gradient);  // dE/dp = Dᵀ dE/dp~

@@ -341,7 +341,7 @@ Job parse_table(const toml::table& root, const std::string& file) {
 
   if (const toml::table* t = section("loop")) {
     for_each_key(r, *t, "loop", {"joints", "compliance", "stiffness_ratio", "samples", "range_deg", "closure_tolerance",
-                                        "stationarity_tolerance"},
+                                        "stationarity_tolerance", "objective"},
                  [&](const std::string& k, const std::string& full, const toml::node& node) {
                    if (k == "joints") {
                      const long long n = r.integer(node, full);
@@ -369,6 +369,12 @@ Job parse_table(const toml::table& root, const std::string& file) {
                      }
                      // 360 must be exactly 2 pi: the library tests for a full turn.
                      job.loop.range = range / 360.0 * (2.0 * kPi);
+                   } else if (k == "objective") {
+                     const std::string o = r.string(node, full);
+                     if (o != "mean" && o != "max") {
+                       r.fail(node.source(), full, "got \"" + o + "\"; expected \"mean\" (E_mean) or \"max\" (E_max)");
+                     }
+                     job.loop.objective = o;
                    } else if (k == "closure_tolerance" || k == "stationarity_tolerance") {
                      // Tolerances of the equilibrium solve, dimensionless; above 1e-3
                      // a "converged" sample would not be an equilibrium at all.

@@ -16,6 +16,7 @@ ObjectiveSettings ObjectiveSettings::from_loop(const LoopSettings& loop) {
   s.equilibrium.torsion_stiffness_ratio = loop.stiffness_ratio;
   s.equilibrium.closure_tolerance = loop.closure_tolerance;
   s.equilibrium.stationarity_tolerance = loop.stationarity_tolerance;
+  s.measure = loop.objective == "max" ? CycleMeasure::max : CycleMeasure::mean;
   s.cycle.samples = loop.samples;
   s.cycle.range = loop.range;
   return s;
@@ -131,6 +132,36 @@ ObjectiveValue CycleObjective::cycle_value() const {
   return v;
 }
 
+int CycleObjective::measured_sample() const {
+  if (settings_.measure == CycleMeasure::mean) return -1;
+  int worst = 0;
+  for (int j = 1; j < static_cast<int>(cycle_.samples.size()); ++j) {
+    if (cycle_.samples[static_cast<size_t>(j)].energy > cycle_.samples[static_cast<size_t>(worst)].energy) worst = j;
+  }
+  return worst;
+}
+
+double CycleObjective::measured_energy() const {
+  return settings_.measure == CycleMeasure::mean ? cycle_.E_mean : cycle_.E_max;
+}
+
+void CycleObjective::measured_residuals(Eigen::VectorXd& r) const {
+  cycle_weighted_deformations(*model_, cycle_, r);
+  mask_to_measured_sample(r);
+}
+
+void CycleObjective::mask_to_measured_sample(Eigen::Ref<Eigen::MatrixXd> rows) const {
+  const int worst = measured_sample();
+  if (worst < 0) return;
+  // The stacked rows weigh each sample by sqrt(1/N); the worst sample alone
+  // by 1, so that |r|^2 / 2 is its energy, E_max; the others' rows vanish.
+  const int m = model_->deformation_count();
+  const double scale = std::sqrt(static_cast<double>(cycle_.samples.size()));
+  rows.topRows(worst * m).setZero();
+  rows.middleRows(worst * m, m) *= scale;
+  rows.bottomRows(rows.rows() - (worst + 1) * m).setZero();
+}
+
 ObjectiveValue CycleObjective::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient) {
   ObjectiveValue v;
   if (!run_cycle(x)) {
@@ -147,11 +178,12 @@ ObjectiveValue CycleObjective::evaluate(const Eigen::VectorXd& x, Eigen::VectorX
   }
   GeometryVector steering_gradient = GeometryVector::Zero(3 * n);
   v.steering_factor = steered() ? steering(&angle_jacobian_, gradient ? &steering_gradient : nullptr) : 1.0;
-  v.value = v.steering_factor * v.E_mean;
+  const double energy = measured_energy();
+  v.value = v.steering_factor * energy;
   if (gradient) {
-    const GeometryVector energy_gradient = cycle_energy_gradient(*model_, *workspace_, cycle_);
+    const GeometryVector energy_gradient = cycle_energy_gradient(*model_, *workspace_, cycle_, measured_sample());
     // d(M E)/dp = M dE/dp + E dM/dp, then through the ties to x.
-    const Eigen::VectorXd total = v.steering_factor * energy_gradient + v.E_mean * steering_gradient;
+    const Eigen::VectorXd total = v.steering_factor * energy_gradient + energy * steering_gradient;
     *gradient = geometry_jacobian_.transpose() * total;
   }
   return v;
@@ -168,9 +200,9 @@ ObjectiveValue CycleObjective::evaluate_residuals(const Eigen::VectorXd& x, Eige
   }
   v = cycle_value();
   v.steering_factor = steered() ? steering(nullptr, nullptr) : 1.0;
-  v.value = v.steering_factor * v.E_mean;
-  // r' = sqrt(M) r, so that |r'|^2 / 2 = M E_mean.
-  cycle_weighted_deformations(*model_, cycle_, r);
+  v.value = v.steering_factor * measured_energy();
+  // r' = sqrt(M) r, so that |r'|^2 / 2 = M E_mean (or M E_max).
+  measured_residuals(r);
   r *= std::sqrt(v.steering_factor);
   if (jacobian) residual_jacobian(*jacobian);
   return v;
@@ -187,9 +219,10 @@ void CycleObjective::residual_jacobian(Eigen::MatrixXd& jacobian) {
   const double factor = steered() ? steering(&angle_jacobian_, &steering_gradient) : 1.0;
   // dr'/dp = sqrt(M) dr/dp + r (dM/dp)ᵀ / (2 sqrt(M)), with r unsteered.
   const double root = std::sqrt(factor);
+  mask_to_measured_sample(deformation_jacobian_);
   deformation_jacobian_ *= root;
   if (steered()) {
-    cycle_weighted_deformations(*model_, cycle_, weighted_deformations_);
+    measured_residuals(weighted_deformations_);
     deformation_jacobian_.noalias() += weighted_deformations_ * (steering_gradient.transpose() / (2.0 * root));
   }
   jacobian.noalias() = deformation_jacobian_ * geometry_jacobian_;

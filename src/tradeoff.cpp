@@ -69,6 +69,9 @@ void TradeoffOptions::validate() const {
   for (const std::string& c : compliances) {
     if (c != "paper" && c != "full") fail("compliances: expected \"paper\" or \"full\", got \"" + c + "\"");
   }
+  for (const std::string& o : objectives) {
+    if (o != "mean" && o != "max") fail("objectives: expected \"mean\" or \"max\", got \"" + o + "\"");
+  }
   for (const std::string& a : algorithms) {
     if (!is_known_algorithm(a)) fail("algorithms: unknown algorithm \"" + a + "\"");
   }
@@ -113,6 +116,10 @@ std::vector<TradeoffConfiguration> tradeoff_configurations(const Job& base, cons
   for (const std::string& c : options.compliances) {
     if (compliance_from_string(c) == base.loop.compliance) continue;
     add("compliance", c, [&c](Job& job) { job.loop.compliance = compliance_from_string(c); });
+  }
+  for (const std::string& o : options.objectives) {
+    if (o == base.loop.objective) continue;
+    add("objective", o, [&o](Job& job) { job.loop.objective = o; });
   }
   for (const std::string& a : options.algorithms) {
     if (a == base.optimizer.algorithm) continue;

@@ -69,6 +69,10 @@ TEST(Job, EquilibriumTolerancesDefaultToTheSolversAndCanBeSet) {
   const Job set = parse_job("[loop]\nclosure_tolerance = 1e-9\nstationarity_tolerance = 1e-7\n", "s.toml");
   EXPECT_EQ(set.loop.closure_tolerance, 1e-9);
   EXPECT_EQ(set.loop.stationarity_tolerance, 1e-7);
+  EXPECT_EQ(defaults.loop.objective, "mean");
+  EXPECT_EQ(ObjectiveSettings::from_loop(defaults.loop).measure, CycleMeasure::mean);
+  EXPECT_EQ(ObjectiveSettings::from_loop(parse_job("[loop]\nobjective = \"max\"\n", "m.toml").loop).measure,
+            CycleMeasure::max);
   // ... and reach the solver of every cycle the search evaluates.
   const ObjectiveSettings objective = ObjectiveSettings::from_loop(set.loop);
   EXPECT_EQ(objective.equilibrium.closure_tolerance, 1e-9);
@@ -221,6 +225,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadJob{"samples_few", "[loop]\nsamples = 3\n", 2, "loop.samples", "[4, 100000]"},
         BadJob{"range_large", "[loop]\nrange_deg = 400\n", 2, "loop.range_deg", "(0, 360]"},
         BadJob{"tolerance_large", "[loop]\nclosure_tolerance = 0.1\n", 2, "loop.closure_tolerance", "(0, 1e-3]"},
+        BadJob{"objective", "[loop]\nobjective = \"median\"\n", 2, "loop.objective", "\"mean\""},
         BadJob{"tolerance_zero", "[loop]\nstationarity_tolerance = 0.0\n", 2, "loop.stationarity_tolerance", "> 0"},
         BadJob{"space_unknown", "[space]\nb1 = 2\n", 2, "space.b1", "unknown parameter"},
         BadJob{"space_beyond_n", "[space]\na5 = 2\n", 2, "space.a5", "joints = 4"},

@@ -99,7 +99,7 @@ class TradeoffCli : public ::testing::Test {
 // The smallest sweep that has every axis: two starts, one loop per family.
 const std::vector<std::string> kSmallSweep = {
     "{dir}/job.toml",   "--starts", "2", "--per-family", "1", "--generic", "1", "--perturbations", "1e-2",
-    "--samples",        "8,16",     "--closure-tolerances", "1e-8", "--compliances", "paper", "--algorithms",
+    "--samples",        "8,16",     "--closure-tolerances", "1e-8", "--compliances", "paper", "--objectives", "mean,max", "--algorithms",
     "gauss-newton,LD_LBFGS", "--zero-thresholds", "1e-20", "--ftol-rels", "0,1e-3"};
 
 TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
@@ -108,8 +108,9 @@ TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   const Result r = run(args);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> rows = split(read_file(dir_ / "t.csv"), '\n');
-  // Header, base, samples=16, closure_tolerance=1e-08, algorithm=LD_LBFGS, ftol_rel=0.001, then "" after the last newline.
-  ASSERT_EQ(rows.size(), 7u) << read_file(dir_ / "t.csv");
+  // Header, base, samples=16, closure_tolerance=1e-08, objective=max, algorithm=LD_LBFGS, ftol_rel=0.001,
+  // then "" after the last newline.
+  ASSERT_EQ(rows.size(), 8u) << read_file(dir_ / "t.csv");
   const std::vector<std::string> header = split(rows[0], ',');
   EXPECT_EQ(header.front(), "axis");
   EXPECT_EQ(header.back(), "pareto");
@@ -127,7 +128,8 @@ TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   EXPECT_EQ(split(rows[1], ',')[0], "base");
   EXPECT_GE(on_front, 1);  // the fastest configuration is always on the front
   // The table on stdout names every configuration; the PNG exists.
-  for (const char* name : {"base", "samples=16", "closure_tolerance=1e-08", "algorithm=LD_LBFGS", "ftol_rel=0.001"}) {
+  for (const char* name :
+       {"base", "samples=16", "closure_tolerance=1e-08", "objective=max", "algorithm=LD_LBFGS", "ftol_rel=0.001"}) {
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
   }
   EXPECT_GT(fs::file_size(dir_ / "t.png"), 1000u);
@@ -141,6 +143,7 @@ TEST_F(TradeoffCli, BadOptionsExitWithCode2NamingTheFlagAndLeaveFilesAlone) {
       {{"{dir}/job.toml", "--samples", "8.5"}, "--samples"},
       {{"{dir}/job.toml", "--algorithms", "gauss-newton,LD_FAST"}, "--algorithms"},
       {{"{dir}/job.toml", "--compliances", "rigid"}, "--compliances"},
+      {{"{dir}/job.toml", "--objectives", "mean,median"}, "--objectives"},
       {{"{dir}/job.toml", "--zero-thresholds", "nan"}, "--zero-thresholds"},
       {{"{dir}/job.toml", "--ftol-rels", "0,0"}, "--ftol-rels"},
       {{"{dir}/job.toml", "--closure-tolerances", "0.1"}, "--closure-tolerances"},

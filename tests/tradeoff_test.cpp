@@ -43,6 +43,7 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
   o.samples = {8, 16, 32};            // 16 is the base's
   o.closure_tolerances = {1e-8};
   o.compliances = {"paper", "full"};  // paper is the base's
+  o.objectives = {"mean"};            // the base's: no configuration
   o.algorithms = {"gauss-newton", "LD_LBFGS"};
   o.zero_thresholds = {1e-12, 1e-20};
   o.ftol_rels = {0.0, 1e-3};          // 0 is the base's
@@ -57,6 +58,7 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
     EXPECT_EQ(c.job.loop.compliance != base.loop.compliance, c.axis == "compliance") << c.name();
     EXPECT_EQ(c.job.search.zero_threshold != base.search.zero_threshold, c.axis == "zero_threshold") << c.name();
     EXPECT_EQ(c.job.optimizer.ftol_rel != base.optimizer.ftol_rel, c.axis == "ftol_rel") << c.name();
+    EXPECT_EQ(c.job.loop.objective, "mean") << c.name();
     EXPECT_EQ(c.job.loop.closure_tolerance != base.loop.closure_tolerance, c.axis == "closure_tolerance")
         << c.name();
     if (samples_axis) {
@@ -143,6 +145,7 @@ TEST(Tradeoff, InvalidOptionsAreRejectedByName) {
             std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.starts = 0; }).find("starts"), std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.ftol_rels = {-1.0}; }).find("ftol_rels"), std::string::npos);
+  EXPECT_NE(with([](TradeoffOptions& o) { o.objectives = {"median"}; }).find("median"), std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.ground_truth.cases_per_family = -1; }), "");
 }
 

@@ -26,6 +26,7 @@ struct TradeoffArguments {
   std::string samples = "4,8,16,32,64,128";
   std::string closure_tolerances = "1e-6,1e-8,1e-10,1e-13";
   std::string compliances = "paper,full";
+  std::string objectives = "mean,max";
   std::string algorithms = "gauss-newton,LD_LBFGS,LD_SLSQP,LD_MMA,LN_BOBYQA";
   std::string zero_thresholds = "1e-8,1e-12,1e-16,1e-20,1e-24";
   std::string ftol_rels = "0,1e-4,1e-3,1e-2";
@@ -99,6 +100,12 @@ TradeoffOptions read_options(const TradeoffArguments& args) {
   for (const std::string& c : o.compliances) {
     if (c != "paper" && c != "full") {
       throw UsageError("--compliances", quote_text(c) + " is not a compliance set; expected paper or full");
+    }
+  }
+  o.objectives = parse_word_list(args.objectives, "--objectives");
+  for (const std::string& objective : o.objectives) {
+    if (objective != "mean" && objective != "max") {
+      throw UsageError("--objectives", quote_text(objective) + " is not an objective; expected mean or max");
     }
   }
   o.algorithms = parse_word_list(args.algorithms, "--algorithms");
@@ -252,7 +259,7 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand(
       "tradeoff",
       "Measure a job under many configurations, one choice changed at a time (cycle samples, equilibrium tolerance, "
-      "compliance, algorithm, its relative-decrease stop, zero threshold): seconds per start against accuracy on the job's starts and on the "
+      "compliance, objective, algorithm, its relative-decrease stop, zero threshold): seconds per start against accuracy on the job's starts and on the "
       "ground-truth set. docs/tradeoff.md explains the measures and the chart.");
   app->footer(
       "Examples:\n"
@@ -277,6 +284,9 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
       ->type_name("LIST")
       ->capture_default_str();
   app->add_option("--compliances", args->compliances, "compliance sets tried")->type_name("LIST")->capture_default_str();
+  app->add_option("--objectives", args->objectives, "search objectives tried (mean: E_mean, max: E_max)")
+      ->type_name("LIST")
+      ->capture_default_str();
   app->add_option("--algorithms", args->algorithms, "local algorithms tried")->type_name("LIST")->capture_default_str();
   app->add_option("--zero-thresholds", args->zero_thresholds, "zero thresholds tried")
       ->type_name("LIST")

@@ -87,9 +87,11 @@ void cycle_energy(const LoopModel& model, EquilibriumWorkspace& workspace, doubl
                   CycleSummary& summary);
 
 // dE_mean / d(a, alpha, d) in GeometryVector order, in the geometry's own units
-// (per unit length, per radian), from each sample's multipliers.
+// (per unit length, per radian), from each sample's multipliers; with
+// `sample` >= 0, the derivative of that one sample's energy instead (of E_max
+// at its argmax, where the max is differentiable).
 GeometryVector cycle_energy_gradient(const LoopModel& model, EquilibriumWorkspace& workspace,
-                                     const CycleSummary& summary);
+                                     const CycleSummary& summary, int sample = -1);
 
 // The residual vector r of the outer least-squares problem, E_mean = 1/2 |r|^2:
 // sample j's deformations weighted by sqrt(stiffness / N), stacked.

@@ -101,6 +101,10 @@ struct LoopSettings {
   // (rotation [rad], translation / L) and stationarity, max-norms.
   double closure_tolerance = EquilibriumOptions{}.closure_tolerance;
   double stationarity_tolerance = EquilibriumOptions{}.stationarity_tolerance;
+  // What the search minimises of the cycle's energies: "mean" (E_mean, smooth:
+  // the default) or "max" (E_max, the paper's peak energy; non-smooth where
+  // the worst sample changes).
+  std::string objective = "mean";
 };
 
 struct OptimizerSettings {

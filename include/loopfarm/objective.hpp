@@ -42,9 +42,16 @@ struct DeflationTerm {
   FamilyDistance distance;
 };
 
+// Which of the cycle's energies the search minimises.
+enum class CycleMeasure {
+  mean,  // E_mean: smooth, the default
+  max,   // E_max: the paper's peak; its gradient and residuals are the worst sample's
+};
+
 struct ObjectiveSettings {
   EquilibriumOptions equilibrium;
   CycleOptions cycle;
+  CycleMeasure measure = CycleMeasure::mean;
   std::vector<DeflationTerm> deflation;
   double deflation_power = 2.0;
   double deflation_shift = 1.0;
@@ -58,7 +65,7 @@ struct ObjectiveSettings {
 
 struct ObjectiveValue {
   bool ok = false;               // assembled and the cycle evaluated
-  double value = 0.0;            // M * E_mean: what the optimiser sees
+  double value = 0.0;            // M * E_mean (or M * E_max): what the optimiser sees
   double E_mean = 0.0;
   double E_max = 0.0;
   double steering_factor = 1.0;  // M
@@ -102,6 +109,14 @@ class CycleObjective {
   double steering(const Eigen::MatrixXd* angle_jacobian, GeometryVector* gradient) const;
   // The last cycle's energies and counts (unsteered: M = 1).
   ObjectiveValue cycle_value() const;
+  // The measure of the last cycle: the sample it looks at (-1: all, the
+  // mean), its energy, and the residual rows that carry it.
+  int measured_sample() const;
+  double measured_energy() const;
+  void measured_residuals(Eigen::VectorXd& r) const;
+  // Keeps only the measured sample's rows of the stacked per-sample rows
+  // (scaled to weigh 1), for the max; leaves them all for the mean.
+  void mask_to_measured_sample(Eigen::Ref<Eigen::MatrixXd> rows) const;
   bool steered() const { return !settings_.deflation.empty() || settings_.nontrivial; }
 
   const ParameterSpace& space_;

@@ -2,7 +2,8 @@
 // same starts and the same ground truth (issue 5, docs/tradeoff.md).
 //
 // A configuration is the base job with one choice changed (cycle samples N,
-// equilibrium tolerance, compliance set, local algorithm, its relative-decrease
+// equilibrium tolerance, compliance set, objective (mean or max), local
+// algorithm, its relative-decrease
 // stop, zero threshold):
 // one axis at a time, so that each point of the chart says what that one
 // choice costs and buys. For each configuration:
@@ -37,6 +38,7 @@ struct TradeoffOptions {
   std::vector<int> samples = {4, 8, 16, 32, 64, 128};
   std::vector<double> closure_tolerances = {1e-6, 1e-8, 1e-10, 1e-13};  // stationarity 100x looser
   std::vector<std::string> compliances = {"paper", "full"};
+  std::vector<std::string> objectives = {"mean", "max"};  // [loop] objective
   std::vector<std::string> algorithms = {"gauss-newton", "LD_LBFGS", "LD_SLSQP", "LD_MMA", "LN_BOBYQA"};
   std::vector<double> zero_thresholds = {1e-8, 1e-12, 1e-16, 1e-20, 1e-24};
   // The local search's relative-decrease stop ([optimizer] ftol_rel; 0: off):
@@ -51,7 +53,8 @@ struct TradeoffOptions {
 
 // One configuration: the base job with at most one choice changed.
 struct TradeoffConfiguration {
-  // "base", "samples", "closure_tolerance", "compliance", "algorithm", "ftol_rel", "zero_threshold"
+  // "base", "samples", "closure_tolerance", "compliance", "objective", "algorithm", "ftol_rel",
+  // "zero_threshold"
   std::string axis;
   std::string value;  // the value on that axis, as text ("16", "1e-08", "LD_LBFGS")
   Job job;
