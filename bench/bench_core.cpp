@@ -7,12 +7,18 @@
 //
 // Counters: Newton iterations per solve or per cycle sample, bisections per
 // cycle, samples that jumped branch or failed. Figures are in README.md.
+//
+// And the steering's family distances (deflation), which a steered search
+// evaluates with every objective value and again with their gradients for
+// every Jacobian: planar and trivial (the default job's) over generic 4R
+// loops, with and without the gradient.
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
 #include <vector>
 
 #include "loopfarm/assembly.hpp"
+#include "loopfarm/classify.hpp"
 #include "loopfarm/cycle.hpp"
 #include "loopfarm/sample_loops.hpp"
 
@@ -140,6 +146,20 @@ void cycle_jacobian(benchmark::State& state, const std::vector<Fixture>& fixture
   state.counters["samples"] = options.samples;
 }
 
+// One family distance of a generic 4R loop, cycling through the fixed seeds.
+void BM_FamilyDistance(benchmark::State& state, Family family, bool with_gradient) {
+  std::vector<LoopGeometry> geometries;
+  for (std::uint64_t seed : kGenericSeeds) geometries.push_back(random_loop(4, seed));
+  GeometryVector gradient;
+  size_t next = 0;
+  for (auto _ : state) {
+    const double distance = family_distance(family, geometries[next], with_gradient ? &gradient : nullptr);
+    benchmark::DoNotOptimize(distance);
+    benchmark::DoNotOptimize(gradient.data());
+    next = (next + 1) % geometries.size();
+  }
+}
+
 void BM_SolveWarm_Bennett(benchmark::State& state) { solve_step(state, bennett(), false); }
 void BM_SolveWarm_Generic(benchmark::State& state) { solve_step(state, generic(3), false); }
 void BM_SolvePredicted_Bennett(benchmark::State& state) { solve_step(state, bennett(), true); }
@@ -165,6 +185,10 @@ BENCHMARK(BM_SolvePredicted_Generic);
 BENCHMARK(BM_Cycle_Bennett)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Cycle_Generic)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CycleJacobian_Generic)->Arg(32)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_FamilyDistance, planar, Family::planar, false);
+BENCHMARK_CAPTURE(BM_FamilyDistance, planar_gradient, Family::planar, true);
+BENCHMARK_CAPTURE(BM_FamilyDistance, trivial, Family::trivial, false);
+BENCHMARK_CAPTURE(BM_FamilyDistance, trivial_gradient, Family::trivial, true);
 
 }  // namespace
 }  // namespace loopfarm

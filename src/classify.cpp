@@ -1,58 +1,46 @@
 #include "loopfarm/classify.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cassert>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <limits>
+#include <span>
 #include <stdexcept>
 
 #include "representation.hpp"
 
+// Two paths share one set of condition formulas (the templates below):
+//
+// - the reporting path (classify, family_distance_report) writes out every
+//   writing of the loop as a LoopGeometry and keeps every condition of the
+//   best one with its name: what a report lists;
+// - the numeric path (family_distance, called on every evaluation of a
+//   steered search) looks each writing's parameters up in small tables filled
+//   once per call, keeps only the running sum of squares, gives a writing up
+//   as soon as it cannot beat the best so far, and writes out only the best
+//   writing, to differentiate it. It builds no string and allocates nothing.
+//
+// Both evaluate the same formulas on the same numbers in the same order, so
+// they pick the same writing and return the same distance bit for bit.
 namespace loopfarm {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// A family's conditions on one writing of the loop: values and their
-// derivatives with respect to that writing's parameters (a, alpha, d).
-struct Conditions {
-  std::vector<std::string> names;
-  std::vector<double> values;
-  std::vector<GeometryVector> gradients;
-
-  void add(std::string name, double value, GeometryVector gradient) {
-    names.push_back(std::move(name));
-    values.push_back(value);
-    gradients.push_back(std::move(gradient));
-  }
-  double max_abs() const {
-    double m = 0.0;
-    for (double v : values) m = std::max(m, std::abs(v));
-    return m;
-  }
-  double norm() const {
-    double s = 0.0;
-    for (double v : values) s += v * v;
-    return std::sqrt(s);
-  }
-  // d norm / dp, where the norm is not zero.
-  GeometryVector norm_gradient(int size) const {
-    GeometryVector g = GeometryVector::Zero(size);
-    const double n = norm();
-    if (n == 0.0) return g;
-    for (size_t i = 0; i < values.size(); ++i) g += (values[i] / n) * gradients[i];
-    return g;
-  }
-};
+constexpr double kPi = 3.14159265358979323846;  // as representation.cpp's twist offsets
 
 std::string label(const char* name, int k) { return name + std::to_string(k + 1); }
 
 // Helpers for conditions built from x / L, L the length scale.
 struct Scale {
   double L;
-  GeometryVector dL;
+  GeometryVector dL;  // empty on the numeric path's search, which takes no gradients
   int n;
   // d(x_i / L) for parameter index i (a or d); x_i its value.
   GeometryVector ratio_gradient(int i, double x) const {
+    assert(dL.size() == 3 * n);
     GeometryVector g = -(x / (L * L)) * dL;
     g[i] += 1.0 / L;
     return g;
@@ -61,104 +49,285 @@ struct Scale {
 
 Scale scale_of(const LoopGeometry& g) { return {length_scale(g), length_scale_gradient(g), g.joints()}; }
 
-// Bennett conditions (n = 4) on writing `g`; setup_sign +1 asymmetric, -1 line-symmetric.
-Conditions bennett_conditions(const LoopGeometry& g, double setup_sign) {
+// ---------------------------------------------------------------------------
+// Writings as the conditions read them: parameters a(k), alpha(k), d(k) in
+// the writing's labels, sin and cos of the twists, and the length scale.
+
+// A writing written out (detail::apply, or the geometry as written) with its
+// length scale and gradient.
+struct WrittenOut {
+  LoopGeometry g;
+  Scale s;
+  explicit WrittenOut(const LoopGeometry& geometry) : g(geometry), s(scale_of(g)) {}
+  int joints() const { return g.joints(); }
+  double a(int k) const { return g.a[k]; }
+  double alpha(int k) const { return g.alpha[k]; }
+  double d(int k) const { return g.d[k]; }
+  double sin_alpha(int k) const { return std::sin(g.alpha[k]); }
+  double cos_alpha(int k) const { return std::cos(g.alpha[k]); }
+  const Scale& scale() const { return s; }
+};
+
+// ---------------------------------------------------------------------------
+// Sinks: where a family's conditions go. Each condition comes as three lazy
+// parts, its name, its value and its gradient with respect to the writing's
+// (a, alpha, d); a sink evaluates only the parts it keeps.
+
+// The sum of the squared values in the order they come; every norm here is its sqrt.
+double sum_of_squares(std::span<const double> values) {
+  double s = 0.0;
+  for (double v : values) s += v * v;
+  return s;
+}
+
+// d norm / dp, where the norm is not zero.
+template <class Gradients>
+GeometryVector norm_gradient_of(std::span<const double> values, const Gradients& gradients, int size) {
+  GeometryVector g = GeometryVector::Zero(size);
+  const double n = std::sqrt(sum_of_squares(values));
+  if (n == 0.0) return g;
+  for (size_t i = 0; i < values.size(); ++i) g += (values[i] / n) * gradients[i];
+  return g;
+}
+
+// Reporting: every part of every condition.
+struct Conditions {
+  std::vector<std::string> names;
+  std::vector<double> values;
+  std::vector<GeometryVector> gradients;
+
+  template <class Name, class Value, class Gradient>
+  void add(const Name& name, const Value& value, const Gradient& gradient) {
+    names.emplace_back(name());
+    values.push_back(value());
+    gradients.push_back(gradient());
+  }
+  double max_abs() const {
+    double m = 0.0;
+    for (double v : values) m = std::max(m, std::abs(v));
+    return m;
+  }
+  double norm() const { return std::sqrt(sum_of_squares(values)); }
+  GeometryVector norm_gradient(int size) const { return norm_gradient_of(values, gradients, size); }
+};
+
+// The numeric path's best writing: values and gradients, no names, in fixed
+// storage (at most 2n conditions, the spherical family's).
+struct FixedConditions {
+  static constexpr int kCapacity = 2 * kMaxJoints;
+  int count = 0;
+  std::array<double, kCapacity> values;
+  std::array<GeometryVector, kCapacity> gradients;
+
+  template <class Name, class Value, class Gradient>
+  void add(const Name&, const Value& value, const Gradient& gradient) {
+    assert(count < kCapacity);
+    values[static_cast<size_t>(count)] = value();
+    gradients[static_cast<size_t>(count)] = gradient();
+    ++count;
+  }
+  std::span<const double> kept() const { return {values.data(), static_cast<size_t>(count)}; }
+  double norm() const { return std::sqrt(sum_of_squares(kept())); }
+  GeometryVector norm_gradient(int size) const { return norm_gradient_of(kept(), gradients, size); }
+};
+
+// The numeric path's search: only the running sum of squares, summed as
+// sum_of_squares sums it, and given up once it reaches `bound` (the best
+// writing's sum so far). A writing given up cannot be strictly better than
+// the best: adding a square never makes a floating-point sum smaller, and
+// sqrt is monotone.
+struct SquaredNorm {
+  double bound = kInf;
+  double sum = 0.0;
+  bool abandoned = false;
+
+  template <class Name, class Value, class Gradient>
+  void add(const Name&, const Value& value, const Gradient&) {
+    if (abandoned) return;
+    const double v = value();
+    sum += v * v;
+    abandoned = sum >= bound;
+  }
+};
+
+// ---------------------------------------------------------------------------
+// The conditions of each family on one writing `w`, into sink `c`.
+
+// Bennett conditions (n = 4) that both setups share: opposite links and
+// twists equal, no offsets.
+template <class Writing, class Sink>
+void bennett_common_conditions(const Writing& w, Sink& c) {
   const int n = 4;
-  const Scale s = scale_of(g);
-  Conditions c;
+  const Scale& s = w.scale();
   auto length_difference = [&](int i, int j) {  // (a_i - a_j) / L
-    c.add(label("a", i) + " - " + label("a", j), (g.a[i] - g.a[j]) / s.L,
-          s.ratio_gradient(i, g.a[i]) - s.ratio_gradient(j, g.a[j]));
+    c.add([&] { return label("a", i) + " - " + label("a", j); }, [&] { return (w.a(i) - w.a(j)) / s.L; },
+          [&]() -> GeometryVector { return s.ratio_gradient(i, w.a(i)) - s.ratio_gradient(j, w.a(j)); });
   };
   auto twist_difference = [&](int i, int j) {
-    GeometryVector grad = GeometryVector::Zero(3 * n);
-    grad[n + i] = 1.0;
-    grad[n + j] = -1.0;
-    c.add(label("alpha", i) + " - " + label("alpha", j), wrap_angle(g.alpha[i] - g.alpha[j]), grad);
+    c.add([&] { return label("alpha", i) + " - " + label("alpha", j); },
+          [&] { return wrap_angle(w.alpha(i) - w.alpha(j)); },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[n + i] = 1.0;
+            grad[n + j] = -1.0;
+            return grad;
+          });
   };
   length_difference(0, 2);
   length_difference(1, 3);
   twist_difference(0, 2);
   twist_difference(1, 3);
-  for (int k = 0; k < n; ++k) c.add(label("d", k), g.d[k] / s.L, s.ratio_gradient(2 * n + k, g.d[k]));
-  // (a2 sin alpha1 - +- a1 sin alpha2) / L, paper labels (1-based).
-  const double product = g.a[1] * std::sin(g.alpha[0]) - setup_sign * g.a[0] * std::sin(g.alpha[1]);
-  GeometryVector grad = -(product / (s.L * s.L)) * s.dL;
-  grad[1] += std::sin(g.alpha[0]) / s.L;
-  grad[0] += -setup_sign * std::sin(g.alpha[1]) / s.L;
-  grad[n + 0] += g.a[1] * std::cos(g.alpha[0]) / s.L;
-  grad[n + 1] += -setup_sign * g.a[0] * std::cos(g.alpha[1]) / s.L;
-  c.add(setup_sign > 0 ? "a2 sin(alpha1) - a1 sin(alpha2)" : "a2 sin(alpha1) + a1 sin(alpha2)", product / s.L, grad);
-  return c;
-}
-
-Conditions planar_conditions(const LoopGeometry& g) {
-  const int n = g.joints();
-  const Scale s = scale_of(g);
-  Conditions c;
-  double sign = 1.0, sum = 0.0;
-  GeometryVector dsum = GeometryVector::Zero(3 * n);
   for (int k = 0; k < n; ++k) {
-    GeometryVector grad = GeometryVector::Zero(3 * n);
-    grad[n + k] = std::cos(g.alpha[k]);
-    c.add("sin(" + label("alpha", k) + ")", std::sin(g.alpha[k]), grad);
-    // The offset d_k points along z_k, which is +-z_1 for parallel axes.
-    sum += sign * g.d[k];
-    dsum[2 * n + k] = sign;
-    if (std::cos(g.alpha[k]) < 0.0) sign = -sign;
+    c.add([&] { return label("d", k); }, [&] { return w.d(k) / s.L; },
+          [&] { return s.ratio_gradient(2 * n + k, w.d(k)); });
   }
-  GeometryVector grad = dsum / s.L - (sum / (s.L * s.L)) * s.dL;
-  c.add("signed sum of d / L", sum / s.L, grad);
-  return c;
 }
 
-Conditions spherical_conditions(const LoopGeometry& g, bool normalised) {
+// The Bennett condition of one setup; setup_sign +1 asymmetric, -1 line-symmetric.
+template <class Writing, class Sink>
+void bennett_setup_condition(const Writing& w, double setup_sign, Sink& c) {
+  const int n = 4;
+  const Scale& s = w.scale();
+  // (a2 sin alpha1 - +- a1 sin alpha2) / L, paper labels (1-based).
+  auto product = [&] { return w.a(1) * w.sin_alpha(0) - setup_sign * w.a(0) * w.sin_alpha(1); };
+  c.add([&] { return setup_sign > 0 ? "a2 sin(alpha1) - a1 sin(alpha2)" : "a2 sin(alpha1) + a1 sin(alpha2)"; },
+        [&] { return product() / s.L; },
+        [&] {
+          GeometryVector grad = -(product() / (s.L * s.L)) * s.dL;
+          grad[1] += w.sin_alpha(0) / s.L;
+          grad[0] += -setup_sign * w.sin_alpha(1) / s.L;
+          grad[n + 0] += w.a(1) * w.cos_alpha(0) / s.L;
+          grad[n + 1] += -setup_sign * w.a(0) * w.cos_alpha(1) / s.L;
+          return grad;
+        });
+}
+
+template <class Writing, class Sink>
+void bennett_conditions(const Writing& w, double setup_sign, Sink& c) {
+  bennett_common_conditions(w, c);
+  bennett_setup_condition(w, setup_sign, c);
+}
+
+template <class Writing, class Sink>
+void planar_conditions(const Writing& w, Sink& c) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  double sign = 1.0, sum = 0.0;
+  std::array<double, kMaxJoints> signs;  // the sign of each offset in the sum
+  for (int k = 0; k < n; ++k) {
+    c.add([&] { return "sin(" + label("alpha", k) + ")"; }, [&] { return w.sin_alpha(k); },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[n + k] = w.cos_alpha(k);
+            return grad;
+          });
+    // The offset d_k points along z_k, which is +-z_1 for parallel axes.
+    sum += sign * w.d(k);
+    signs[static_cast<size_t>(k)] = sign;
+    if (w.cos_alpha(k) < 0.0) sign = -sign;
+  }
+  c.add([] { return "signed sum of d / L"; }, [&] { return sum / s.L; },
+        [&]() -> GeometryVector {
+          GeometryVector dsum = GeometryVector::Zero(3 * n);
+          for (int k = 0; k < n; ++k) dsum[2 * n + k] = signs[static_cast<size_t>(k)];
+          return dsum / s.L - (sum / (s.L * s.L)) * s.dL;
+        });
+}
+
+// On the geometry as written (no writings): lengths in units of L when
+// `normalised`, else in the geometry's own units.
+template <class Sink>
+void spherical_conditions(const LoopGeometry& g, bool normalised, Sink& c) {
   const int n = g.joints();
   const double L = normalised ? length_scale(g) : 1.0;
-  Conditions c;
   for (int k = 0; k < n; ++k) {
-    GeometryVector grad = GeometryVector::Zero(3 * n);
-    grad[k] = 1.0 / L;  // (used unnormalised only, where L = 1)
-    c.add(label("a", k), g.a[k] / L, grad);
+    c.add([&] { return label("a", k); }, [&] { return g.a[k] / L; },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[k] = 1.0 / L;  // (used unnormalised only, where L = 1)
+            return grad;
+          });
   }
   for (int k = 0; k < n; ++k) {
-    GeometryVector grad = GeometryVector::Zero(3 * n);
-    grad[2 * n + k] = 1.0 / L;
-    c.add(label("d", k), g.d[k] / L, grad);
+    c.add([&] { return label("d", k); }, [&] { return g.d[k] / L; },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[2 * n + k] = 1.0 / L;
+            return grad;
+          });
   }
-  return c;
 }
 
 // Axes 1 and 2 of this writing coincide: a1 = 0 and sin(alpha1) = 0.
-Conditions adjacent_coaxial_conditions(const LoopGeometry& g) {
-  const int n = g.joints();
-  const Scale s = scale_of(g);
-  Conditions c;
-  c.add("a1", g.a[0] / s.L, s.ratio_gradient(0, g.a[0]));
-  GeometryVector grad = GeometryVector::Zero(3 * n);
-  grad[n] = std::cos(g.alpha[0]);
-  c.add("sin(alpha1)", std::sin(g.alpha[0]), grad);
-  return c;
+template <class Writing, class Sink>
+void adjacent_coaxial_conditions(const Writing& w, Sink& c) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  c.add([] { return "a1"; }, [&] { return w.a(0) / s.L; }, [&] { return s.ratio_gradient(0, w.a(0)); });
+  c.add([] { return "sin(alpha1)"; }, [&] { return w.sin_alpha(0); },
+        [&] {
+          GeometryVector grad = GeometryVector::Zero(3 * n);
+          grad[n] = w.cos_alpha(0);
+          return grad;
+        });
 }
 
 // Axes 1 and 3 of a 4R writing coincide (DESIGN.md).
-Conditions coaxial_13_conditions(const LoopGeometry& g) {
+template <class Writing, class Sink>
+void coaxial_13_conditions(const Writing& w, Sink& c) {
   const int n = 4;
-  const Scale s = scale_of(g);
-  Conditions c;
-  c.add("a1 - a2", (g.a[0] - g.a[1]) / s.L, s.ratio_gradient(0, g.a[0]) - s.ratio_gradient(1, g.a[1]));
-  c.add("a3 - a4", (g.a[2] - g.a[3]) / s.L, s.ratio_gradient(2, g.a[2]) - s.ratio_gradient(3, g.a[3]));
+  const Scale& s = w.scale();
+  c.add([] { return "a1 - a2"; }, [&] { return (w.a(0) - w.a(1)) / s.L; },
+        [&]() -> GeometryVector { return s.ratio_gradient(0, w.a(0)) - s.ratio_gradient(1, w.a(1)); });
+  c.add([] { return "a3 - a4"; }, [&] { return (w.a(2) - w.a(3)) / s.L; },
+        [&]() -> GeometryVector { return s.ratio_gradient(2, w.a(2)) - s.ratio_gradient(3, w.a(3)); });
   for (int pair : {0, 2}) {
-    GeometryVector grad = GeometryVector::Zero(3 * n);
-    grad[n + pair] = 1.0;
-    grad[n + pair + 1] = -1.0;
-    c.add(label("alpha", pair) + " - " + label("alpha", pair + 1), wrap_angle(g.alpha[pair] - g.alpha[pair + 1]), grad);
+    c.add([&] { return label("alpha", pair) + " - " + label("alpha", pair + 1); },
+          [&] { return wrap_angle(w.alpha(pair) - w.alpha(pair + 1)); },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[n + pair] = 1.0;
+            grad[n + pair + 1] = -1.0;
+            return grad;
+          });
   }
-  c.add("d2", g.d[1] / s.L, s.ratio_gradient(2 * n + 1, g.d[1]));
-  c.add("d4", g.d[3] / s.L, s.ratio_gradient(2 * n + 3, g.d[3]));
-  c.add("d1 + d3", (g.d[0] + g.d[2]) / s.L, s.ratio_gradient(2 * n, g.d[0]) + s.ratio_gradient(2 * n + 2, g.d[2]));
-  return c;
+  c.add([] { return "d2"; }, [&] { return w.d(1) / s.L; }, [&] { return s.ratio_gradient(2 * n + 1, w.d(1)); });
+  c.add([] { return "d4"; }, [&] { return w.d(3) / s.L; }, [&] { return s.ratio_gradient(2 * n + 3, w.d(3)); });
+  c.add([] { return "d1 + d3"; }, [&] { return (w.d(0) + w.d(2)) / s.L; },
+        [&]() -> GeometryVector { return s.ratio_gradient(2 * n, w.d(0)) + s.ratio_gradient(2 * n + 2, w.d(2)); });
 }
+
+// The condition sets of a writing that a family's score takes the best of,
+// numbered: for Bennett loops set 0 is the asymmetric setup and set 1 the
+// line-symmetric one; for trivial loops set 0 is axes 1 and 2 coinciding and
+// set 1 (n = 4) axes 1 and 3; planar loops have one set.
+int condition_sets(Family family, int joints) {
+  switch (family) {
+    case Family::bennett: return 2;
+    case Family::planar: return 1;
+    case Family::trivial: return joints == 4 ? 2 : 1;
+    case Family::spherical:
+    case Family::unclassified: break;
+  }
+  return 0;  // no writings
+}
+
+template <Family F, class Writing, class Sink>
+void condition_set(int set, const Writing& w, Sink& c) {
+  static_assert(F == Family::bennett || F == Family::planar || F == Family::trivial);
+  if constexpr (F == Family::bennett) {
+    bennett_conditions(w, set == 0 ? 1.0 : -1.0, c);
+  } else if constexpr (F == Family::planar) {
+    planar_conditions(w, c);
+  } else if (set == 0) {
+    adjacent_coaxial_conditions(w, c);
+  } else {
+    coaxial_13_conditions(w, c);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// The reporting path: every writing written out, every condition named.
 
 // The best writing's conditions for a family, by max |condition| (for
 // classification) or by norm (for distances).
@@ -166,46 +335,28 @@ struct Best {
   Conditions conditions;
   const detail::Representation* writing = nullptr;
   double score = kInf;
-  double setup_sign = 0.0;
+  double setup_sign = 0.0;  // Bennett: +1 asymmetric, -1 line-symmetric
 };
 
-template <class Make>
-Best best_over_writings(const LoopGeometry& g, bool by_norm, Make make) {
+template <Family F>
+Best best_over_writings(const LoopGeometry& g, bool by_norm) {
   Best best;
+  const int sets = condition_sets(F, g.joints());
   for (const detail::Representation& r : detail::representations(g.joints())) {
-    const LoopGeometry w = detail::apply(r, g);
-    make(w, [&](Conditions c, double setup_sign) {
+    const WrittenOut w(detail::apply(r, g));
+    for (int set = 0; set < sets; ++set) {
+      Conditions c;
+      condition_set<F>(set, w, c);
       const double score = by_norm ? c.norm() : c.max_abs();
       if (score < best.score) {
         best.score = score;
         best.conditions = std::move(c);
         best.writing = &r;
-        best.setup_sign = setup_sign;
+        best.setup_sign = F == Family::bennett ? (set == 0 ? 1.0 : -1.0) : 0.0;
       }
-    });
+    }
   }
   return best;
-}
-
-Best best_bennett(const LoopGeometry& g, bool by_norm) {
-  return best_over_writings(g, by_norm, [](const LoopGeometry& w, auto keep) {
-    keep(bennett_conditions(w, 1.0), 1.0);
-    keep(bennett_conditions(w, -1.0), -1.0);
-  });
-}
-
-Best best_trivial_geometric(const LoopGeometry& g, bool by_norm) {
-  const int n = g.joints();
-  return best_over_writings(g, by_norm, [n](const LoopGeometry& w, auto keep) {
-    keep(adjacent_coaxial_conditions(w), 0.0);
-    if (n == 4) keep(coaxial_13_conditions(w), 0.0);
-  });
-}
-
-Best best_planar(const LoopGeometry& g, bool by_norm) {
-  // The offsets' signed sum depends on the axes' directions off the family;
-  // the best writing makes the distance independent of how it is written.
-  return best_over_writings(g, by_norm, [](const LoopGeometry& w, auto keep) { keep(planar_conditions(w), 0.0); });
 }
 
 FamilyCheck check_from(Family family, const Best& best) {
@@ -242,6 +393,231 @@ AxisPair nearest_coincident_axes(const LoopGeometry& g, const JointVector& pose)
     }
   }
   return best;
+}
+
+// ---------------------------------------------------------------------------
+// The numeric path: the writings looked up, not written out.
+
+// The twist offsets detail::representations puts on a twist: none, one axis
+// flipped (pi), both axes flipped (pi + pi).
+constexpr std::array<double, 3> kTwistOffsets = {0.0, kPi, kPi + kPi};
+
+// One writing as indices into the values of one call (Tables).
+struct CompiledWriting {
+  std::array<std::uint8_t, kMaxJoints> a{};      // a'_k = Tables::a[a[k]]
+  std::array<std::uint8_t, kMaxJoints> twist{};  // alpha'_k = Tables::twist[twist[k]], likewise sin, cos
+  std::array<std::uint8_t, kMaxJoints> d{};      // d'_k = Tables::d[d[k]]
+};
+
+// The writings of an n-joint loop in detail::representations order: for each
+// of the 2n (shift, reversal) orders, its 2^n sets of axis flips, which
+// change signs and twist offsets but move no parameter.
+struct WritingTable {
+  const std::vector<detail::Representation>* representations = nullptr;
+  std::vector<CompiledWriting> writings;
+};
+
+// Whether two writings take their lengths and offsets from the same joints.
+[[maybe_unused]] bool same_places(const CompiledWriting& w, const CompiledWriting& v, int n) {
+  for (size_t k = 0; k < static_cast<size_t>(n); ++k) {
+    if (w.a[k] != v.a[k] || w.d[k] / 2 != v.d[k] / 2) return false;
+  }
+  return true;
+}
+
+WritingTable build_writing_table(int n) {
+  WritingTable table;
+  table.representations = &detail::representations(n);
+  [[maybe_unused]] const size_t flips = size_t{1} << n;
+  table.writings.reserve(table.representations->size());
+  for (size_t i = 0; i < table.representations->size(); ++i) {
+    const detail::Representation& r = (*table.representations)[i];
+    assert(r.flips == i % flips);
+    CompiledWriting w;
+    for (int k = 0; k < n; ++k) {
+      const auto ia = static_cast<size_t>(k), it = static_cast<size_t>(n + k), id = static_cast<size_t>(2 * n + k);
+      // a'_k = 1 * a_j + 0.
+      assert(r.sign[ia] == 1.0 && r.offset[ia] == 0.0 && !std::signbit(r.offset[ia]));
+      w.a[ia] = static_cast<std::uint8_t>(r.index[ia]);
+      // alpha'_k = wrap(1 * alpha_j + m pi).
+      assert(r.sign[it] == 1.0);
+      const auto m = static_cast<int>(std::find(kTwistOffsets.begin(), kTwistOffsets.end(), r.offset[it]) -
+                                      kTwistOffsets.begin());
+      assert(m < 3);
+      w.twist[ia] = static_cast<std::uint8_t>(3 * (r.index[it] - n) + m);
+      // d'_k = +-1 * d_j +- 0 (the offset's zero carries the sign).
+      const bool negated = r.sign[id] < 0.0;
+      assert(std::abs(r.sign[id]) == 1.0 && r.offset[id] == 0.0 && std::signbit(r.offset[id]) == negated);
+      w.d[ia] = static_cast<std::uint8_t>(2 * (r.index[id] - 2 * n) + (negated ? 1 : 0));
+    }
+    // Flips move no parameter, so a writing's lengths, and L, are those of its order's first writing.
+    assert(same_places(w, i % flips == 0 ? w : table.writings[i - i % flips], n));
+    table.writings.push_back(w);
+  }
+  return table;
+}
+
+// Built on first use, once per joint count (thread-safe static initialisation).
+template <int N>
+const WritingTable& writing_table_for() {
+  static const WritingTable table = build_writing_table(N);
+  return table;
+}
+
+const WritingTable& writing_table(int n) {
+  static_assert(kMinJoints == 4 && kMaxJoints == 8, "one case per joint count");
+  switch (n) {
+    case 4: return writing_table_for<4>();
+    case 5: return writing_table_for<5>();
+    case 6: return writing_table_for<6>();
+    case 7: return writing_table_for<7>();
+    case 8: return writing_table_for<8>();
+  }
+  throw std::logic_error("writing_table: unvalidated joint count " + std::to_string(n));
+}
+
+// The values the writings' parameters take for one geometry: every a_j, every
+// +-d_j, every twist alpha_j + m pi (m = 0, 1, 2) wrapped, with its sine and,
+// when asked, its cosine. Computed as detail::apply computes them (sign *
+// value + offset, twists then wrapped), so a lookup gives the written-out
+// writing's number bit for bit.
+struct Tables {
+  int n = 0;
+  std::array<double, kMaxJoints> a;
+  std::array<double, 2 * kMaxJoints> d;                // 2j: d_j, 2j + 1: -d_j
+  std::array<double, 3 * kMaxJoints> twist, sin, cos;  // 3j + m: alpha_j + m pi
+};
+
+Tables tabulate(const LoopGeometry& g, bool cosines) {
+  Tables t;
+  t.n = g.joints();
+  for (int j = 0; j < t.n; ++j) {
+    const auto ij = static_cast<size_t>(j);
+    t.a[ij] = 1.0 * g.a[j] + 0.0;
+    t.d[2 * ij] = 1.0 * g.d[j] + 0.0;
+    t.d[2 * ij + 1] = -1.0 * g.d[j] + -0.0;
+    for (size_t m = 0; m < 3; ++m) {
+      const double alpha = wrap_angle(1.0 * g.alpha[j] + kTwistOffsets[m]);
+      t.twist[3 * ij + m] = alpha;
+      t.sin[3 * ij + m] = std::sin(alpha);
+      if (cosines) t.cos[3 * ij + m] = std::cos(alpha);
+    }
+  }
+  return t;
+}
+
+// One writing as the conditions read it, from the tables.
+struct TabulatedWriting {
+  const Tables& t;
+  const CompiledWriting& w;
+  const Scale& s;  // L only: the search takes no gradients
+  int joints() const { return t.n; }
+  double a(int k) const { return t.a[w.a[static_cast<size_t>(k)]]; }
+  double alpha(int k) const { return t.twist[w.twist[static_cast<size_t>(k)]]; }
+  double d(int k) const { return t.d[w.d[static_cast<size_t>(k)]]; }
+  double sin_alpha(int k) const { return t.sin[w.twist[static_cast<size_t>(k)]]; }
+  double cos_alpha(int k) const { return t.cos[w.twist[static_cast<size_t>(k)]]; }
+  const Scale& scale() const { return s; }
+};
+
+// A writing's length scale as scale_of computes it on the written-out
+// writing: length_scale on its lengths and offsets, in its order.
+double length_scale_of(const Tables& t, const CompiledWriting& w) {
+  LoopGeometry lengths;
+  lengths.a.resize(t.n);
+  lengths.d.resize(t.n);
+  for (int k = 0; k < t.n; ++k) {
+    lengths.a[k] = t.a[w.a[static_cast<size_t>(k)]];
+    lengths.d[k] = t.d[w.d[static_cast<size_t>(k)]];
+  }
+  return length_scale(lengths);
+}
+
+// The best writing so far, kept as best_over_writings keeps it by norm: a
+// condition set replaces it only when its norm is strictly smaller, so the
+// first of equal ones stays.
+struct Search {
+  double sum = kInf;  // of squares, of the best writing's conditions
+  double norm = kInf;
+  int writing = -1;   // index in detail::representations order
+  int set = 0;        // which condition set (condition_set)
+
+  void keep(const SquaredNorm& c, int index, int which) {
+    // A sum not below the best's cannot have a smaller sqrt.
+    if (c.abandoned || !(c.sum < sum)) return;
+    const double candidate = std::sqrt(c.sum);
+    if (candidate < norm) {
+      sum = c.sum;
+      norm = candidate;
+      writing = index;
+      set = which;
+    }
+  }
+};
+
+template <Family F>
+Search best_writing(const LoopGeometry& g, const WritingTable& table) {
+  const int n = g.joints();
+  // Cosines only decide the planar signed sum; elsewhere they enter gradients alone.
+  const Tables t = tabulate(g, F == Family::planar);
+  const int sets = condition_sets(F, n);
+  const int flips = 1 << n;
+  Search best;
+  for (int order = 0; order < 2 * n; ++order) {
+    const int first = order * flips;
+    const Scale s{length_scale_of(t, table.writings[static_cast<size_t>(first)]), GeometryVector(), n};
+    for (int i = first; i < first + flips; ++i) {
+      const TabulatedWriting w{t, table.writings[static_cast<size_t>(i)], s};
+      if constexpr (F == Family::bennett) {
+        // The two setups share every condition but the last: sum those once.
+        SquaredNorm common{best.sum};
+        bennett_common_conditions(w, common);
+        for (int set = 0; set < 2; ++set) {
+          SquaredNorm c = common;
+          bennett_setup_condition(w, set == 0 ? 1.0 : -1.0, c);
+          best.keep(c, i, set);
+        }
+      } else {
+        for (int set = 0; set < sets; ++set) {
+          SquaredNorm c{best.sum};
+          condition_set<F>(set, w, c);
+          best.keep(c, i, set);
+        }
+      }
+    }
+  }
+  return best;
+}
+
+// The distance over the writings and, when `gradient` is not null, its
+// gradient: the best writing written out once and differentiated.
+template <Family F>
+double distance_over_writings(const LoopGeometry& g, GeometryVector* gradient) {
+  const int n = g.joints();
+  const WritingTable& table = writing_table(n);
+  const Search best = best_writing<F>(g, table);
+  assert(best.writing >= 0);  // every norm is finite: the conditions are in units of L
+  if (gradient) {
+    const detail::Representation& r = (*table.representations)[static_cast<size_t>(best.writing)];
+    const WrittenOut w(detail::apply(r, g));
+    FixedConditions c;
+    condition_set<F>(best.set, w, c);
+    assert(c.norm() == best.norm);  // the search's numbers, bit for bit
+    *gradient = detail::pull_back(r, c.norm_gradient(3 * n));
+  }
+  return best.norm;
+}
+
+double spherical_distance(const LoopGeometry& g, GeometryVector* gradient) {
+  if (gradient) {
+    FixedConditions c;
+    spherical_conditions(g, false, c);
+    *gradient = c.norm_gradient(3 * g.joints());
+    return c.norm();
+  }
+  SquaredNorm c;
+  spherical_conditions(g, false, c);
+  return std::sqrt(c.sum);
 }
 
 }  // namespace
@@ -283,19 +659,24 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   bennett.family = Family::bennett;
   bennett.residual = kInf;
   if (n == 4) {
-    const Best best = best_bennett(geometry, false);
+    const Best best = best_over_writings<Family::bennett>(geometry, false);
     bennett = check_from(Family::bennett, best);
     bennett.setup = best.setup_sign > 0 ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
-    const double as_written_asym = bennett_conditions(geometry, 1.0).max_abs();
-    const double as_written_line = bennett_conditions(geometry, -1.0).max_abs();
+    const WrittenOut as_written(geometry);
+    Conditions asym, line;
+    bennett_conditions(as_written, 1.0, asym);
+    bennett_conditions(as_written, -1.0, line);
+    const double as_written_asym = asym.max_abs();
+    const double as_written_line = line.max_abs();
     if (std::min(as_written_asym, as_written_line) <= options.tolerance) {
       bennett.setup = as_written_asym <= as_written_line ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
     }
   }
-  FamilyCheck planar = check_from(Family::planar, best_planar(geometry, false));
-  Conditions spherical_c = spherical_conditions(geometry, true);
-  FamilyCheck spherical = check_from(Family::spherical, Best{spherical_c, nullptr, spherical_c.max_abs(), 0.0});
-
+  FamilyCheck planar = check_from(Family::planar, best_over_writings<Family::planar>(geometry, false));
+  Best spherical_best;
+  spherical_conditions(geometry, true, spherical_best.conditions);
+  spherical_best.score = spherical_best.conditions.max_abs();
+  FamilyCheck spherical = check_from(Family::spherical, spherical_best);
   // Trivial: coincident axes in the pose, and a frozen joint.
   FamilyCheck trivial;
   trivial.family = Family::trivial;
@@ -353,37 +734,44 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 
 double family_distance(Family family, const LoopGeometry& geometry, GeometryVector* gradient) {
   validate_geometry(geometry);
-  const int n = geometry.joints();
-  Conditions c;
-  const detail::Representation* writing = nullptr;
   switch (family) {
-    case Family::bennett: {
-      if (n != 4) throw std::invalid_argument("family_distance: Bennett loops have 4 joints");
-      Best best = best_bennett(geometry, true);
-      c = std::move(best.conditions);
-      writing = best.writing;
+    case Family::bennett:
+      if (geometry.joints() != 4) throw std::invalid_argument("family_distance: Bennett loops have 4 joints");
+      return distance_over_writings<Family::bennett>(geometry, gradient);
+    case Family::planar: return distance_over_writings<Family::planar>(geometry, gradient);
+    case Family::spherical: return spherical_distance(geometry, gradient);
+    case Family::trivial: return distance_over_writings<Family::trivial>(geometry, gradient);
+    case Family::unclassified: break;
+  }
+  throw std::invalid_argument("family_distance: not a family");
+}
+
+FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, GeometryVector* gradient) {
+  validate_geometry(geometry);
+  const int n = geometry.joints();
+  Best best;
+  switch (family) {
+    case Family::bennett:
+      if (n != 4) throw std::invalid_argument("family_distance_report: Bennett loops have 4 joints");
+      best = best_over_writings<Family::bennett>(geometry, true);
       break;
-    }
-    case Family::planar: {
-      Best best = best_planar(geometry, true);
-      c = std::move(best.conditions);
-      writing = best.writing;
+    case Family::planar: best = best_over_writings<Family::planar>(geometry, true); break;
+    case Family::spherical:
+      spherical_conditions(geometry, false, best.conditions);
+      best.score = best.conditions.norm();
       break;
-    }
-    case Family::spherical: c = spherical_conditions(geometry, false); break;
-    case Family::trivial: {
-      Best best = best_trivial_geometric(geometry, true);
-      c = std::move(best.conditions);
-      writing = best.writing;
-      break;
-    }
-    case Family::unclassified: throw std::invalid_argument("family_distance: not a family");
+    case Family::trivial: best = best_over_writings<Family::trivial>(geometry, true); break;
+    case Family::unclassified: throw std::invalid_argument("family_distance_report: not a family");
   }
   if (gradient) {
-    const GeometryVector g = c.norm_gradient(3 * n);
-    *gradient = writing ? detail::pull_back(*writing, g) : g;
+    const GeometryVector g = best.conditions.norm_gradient(3 * n);
+    *gradient = best.writing ? detail::pull_back(*best.writing, g) : g;
   }
-  return c.norm();
+  FamilyCheck check = check_from(family, best);
+  if (family == Family::bennett) {
+    check.setup = best.setup_sign > 0 ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
+  }
+  return check;
 }
 
 }  // namespace loopfarm

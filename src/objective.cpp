@@ -212,7 +212,7 @@ void CycleObjective::residual_jacobian(Eigen::MatrixXd& jacobian) {
   if (!last_ok_) throw std::logic_error("CycleObjective::residual_jacobian: the last evaluation failed");
   const int n = geometry_.joints();
   // Into the buffers of the last call: with the same sizes nothing here
-  // allocates (but the steering's family distances may).
+  // allocates (nor do the steering's family distances).
   cycle_deformation_jacobian(*model_, *workspace_, cycle_, deformation_jacobian_,
                              settings_.nontrivial ? &angle_jacobian_ : nullptr);
   GeometryVector steering_gradient = GeometryVector::Zero(3 * n);

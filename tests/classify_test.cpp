@@ -1,11 +1,14 @@
 #include "loopfarm/classify.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "allocation_counter.hpp"
 #include "loopfarm/sample_loops.hpp"
 #include "test_support.hpp"
 
@@ -159,12 +162,142 @@ TEST(FamilyDistance, GradientAgreesWithCentralDifferences) {
   }
 }
 
+// Geometries for comparing the numeric and the reporting path of
+// family_distance: generic loops, twists far outside (-pi, pi], loops near
+// (and on) each family, and exact special values (zero and negative-zero
+// lengths and offsets, twists of 0, +-pi/2, +-pi) where many writings tie.
+LoopGeometry comparison_geometry(int n, std::uint64_t seed) {
+  constexpr double kPi = 3.14159265358979323846;
+  std::mt19937_64 rng(seed);
+  auto uniform = [&](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
+  auto pick = [&](int count) { return static_cast<int>(rng() % static_cast<std::uint64_t>(count)); };
+  LoopGeometry g = random_loop(n, seed);
+  switch (seed % 6) {
+    case 0: break;  // generic
+    case 1:         // twists written with extra turns and half turns
+      for (int k = 0; k < n; ++k) g.alpha[k] += (pick(7) - 3) * kPi;
+      break;
+    case 2:  // near planar: twists tiny, 0, pi or -pi
+      for (int k = 0; k < n; ++k) {
+        const double exact[] = {0.0, kPi, -kPi};
+        g.alpha[k] = exact[pick(3)] + (pick(2) ? 0.0 : uniform(-1.0, 1.0) * std::pow(10.0, -uniform(1, 12)));
+      }
+      break;
+    case 3: {  // near trivial: two adjacent axes (nearly) coincide, or (4R) axes 1 and 3
+      const int j = pick(n);
+      const double noise = pick(2) ? 0.0 : std::pow(10.0, -uniform(2, 12));
+      if (n == 4 && pick(2)) {
+        g = LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5}, std::vector<double>{40, 40, 70, 70},
+                                       std::vector<double>{0.3, 0.0, -0.3, 0.0});
+        g.d[j] += noise;
+      } else {
+        g.a[j] = noise;
+        g.alpha[j] = (pick(2) ? 0.0 : kPi) + noise;
+      }
+      break;
+    }
+    case 4:  // near Bennett (4R), else offsets all zero
+      if (n == 4) {
+        g = pick(2) ? bennett_loop(uniform(0.5, 3), uniform(0.1, 3), uniform(0.1, 3))
+                    : bennett_loop_line_symmetric(uniform(0.5, 3), uniform(0.1, 3), uniform(0.1, 3));
+        if (pick(2)) g.a[pick(4)] += std::pow(10.0, -uniform(2, 12));
+      } else {
+        g.d.setZero();
+      }
+      break;
+    case 5:  // exact special values
+      for (int k = 0; k < n; ++k) {
+        const double twists[] = {0.0, kPi / 2, -kPi / 2, kPi, -kPi};
+        const double lengths[] = {0.0, -0.0, 1.0, 2.0};
+        const double offsets[] = {0.0, -0.0, 0.5, -0.5};
+        g.alpha[k] = twists[pick(5)];
+        if (pick(2)) g.a[k] = lengths[pick(4)];
+        if (pick(2)) g.d[k] = offsets[pick(4)];
+      }
+      break;
+  }
+  return g;
+}
+
+// The numeric path (family_distance) picks the same writing as the reporting
+// path (family_distance_report, which writes every writing out and names its
+// conditions: the algorithm as it was) and returns the same distance and
+// gradient. Required to 1e-14 relative; by construction (the same formulas
+// on the same numbers, in the same order) they agree bit for bit.
+TEST(FamilyDistance, NumericPathEqualsTheReportingPath) {
+  const int geometries_per_n[] = {0, 0, 0, 0, 600, 120, 60, 30, 18};
+  long compared = 0, identical = 0;
+  for (int n = kMinJoints; n <= kMaxJoints; ++n) {
+    for (std::uint64_t seed = 0; seed < static_cast<std::uint64_t>(geometries_per_n[n]); ++seed) {
+      const LoopGeometry g = comparison_geometry(n, 1000 * static_cast<std::uint64_t>(n) + seed);
+      for (Family family : {Family::bennett, Family::planar, Family::spherical, Family::trivial}) {
+        if (family == Family::bennett && n != 4) continue;
+        GeometryVector reference_gradient, gradient;
+        const FamilyCheck reference = family_distance_report(family, g, &reference_gradient);
+        const double value = family_distance(family, g);
+        const double value_with_gradient = family_distance(family, g, &gradient);
+        const auto where = [&] {
+          return std::string(to_string(family)) + " n=" + std::to_string(n) + " seed=" + std::to_string(seed);
+        };
+        EXPECT_LE(std::abs(value - reference.residual), 1e-14 * std::abs(reference.residual)) << where();
+        EXPECT_EQ(value_with_gradient, value) << where();
+        ASSERT_EQ(gradient.size(), 3 * n) << where();
+        EXPECT_LE((gradient - reference_gradient).cwiseAbs().maxCoeff(),
+                  1e-14 * reference_gradient.cwiseAbs().maxCoeff())
+            << where() << "\n" << gradient.transpose() << "\n" << reference_gradient.transpose();
+        ++compared;
+        if (value == reference.residual && gradient == reference_gradient) ++identical;
+      }
+    }
+  }
+  EXPECT_EQ(identical, compared) << "the paths should agree bit for bit";
+}
+
+// The reporting path names the best writing's conditions.
+TEST(FamilyDistance, ReportListsTheBestWritingsConditions) {
+  LoopGeometry g = planar_four_bar(1.0, 3.0, 2.5, 3.5);
+  g.d << 0.3, 0.1, 0.0, 0.0;
+  const FamilyCheck planar = family_distance_report(Family::planar, g);
+  ASSERT_EQ(planar.conditions.size(), 5u);
+  EXPECT_EQ(planar.conditions[0].name, "sin(alpha1)");
+  EXPECT_EQ(planar.conditions[4].name, "signed sum of d / L");
+  EXPECT_NEAR(std::abs(planar.conditions[4].residual), 0.4 / length_scale(g), 1e-15);
+  EXPECT_EQ(planar.residual, family_distance(Family::planar, g));
+  const FamilyCheck bennett = family_distance_report(Family::bennett, bennett_loop_line_symmetric(2.0, 0.5, 1.2));
+  EXPECT_EQ(bennett.setup, BennettSetup::line_symmetric);
+  EXPECT_LT(bennett.residual, 1e-12);
+}
+
+// The steered search calls family_distance on every evaluation: after the
+// first call for a joint count (which builds its table of writings), a call
+// allocates nothing, with or without the gradient.
+TEST(FamilyDistance, RepeatedCallsDoNotAllocate) {
+  for (int n = kMinJoints; n <= kMaxJoints; ++n) {
+    const LoopGeometry g = random_loop(n, 21);
+    for (Family family : {Family::bennett, Family::planar, Family::spherical, Family::trivial}) {
+      if (family == Family::bennett && n != 4) continue;
+      GeometryVector gradient;
+      const double first = family_distance(family, g, &gradient);
+      const GeometryVector first_gradient = gradient;
+      const long before = testing::allocations();
+      const double again = family_distance(family, g, &gradient);
+      const double value = family_distance(family, g);
+      EXPECT_EQ(testing::allocations() - before, 0) << to_string(family) << " n=" << n;
+      EXPECT_EQ(again, first) << to_string(family) << " n=" << n;
+      EXPECT_EQ(value, first) << to_string(family) << " n=" << n;
+      EXPECT_TRUE(gradient == first_gradient) << to_string(family) << " n=" << n;
+    }
+  }
+}
+
 TEST(Classify, BadInputThrows) {
   const LoopGeometry g = paper_bennett_loop();
   EXPECT_THROW(classify(g, JointVector::Zero(3), kMoving), std::invalid_argument);
   EXPECT_THROW(classify(g, JointVector::Zero(4), std::vector<double>(3, 0.0)), std::invalid_argument);
   EXPECT_THROW(family_distance(Family::bennett, random_loop(5, 1)), std::invalid_argument);
   EXPECT_THROW(family_distance(Family::unclassified, g), std::invalid_argument);
+  EXPECT_THROW(family_distance_report(Family::bennett, random_loop(5, 1)), std::invalid_argument);
+  EXPECT_THROW(family_distance_report(Family::unclassified, g), std::invalid_argument);
 }
 
 }  // namespace

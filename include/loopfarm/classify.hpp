@@ -75,6 +75,18 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 //     decides: a_i = 0 and sin(alpha_i) = 0 for adjacent axes, and for n = 4
 //     the coaxial 1-3 (or 2-4) conditions a1 = a2, alpha1 = alpha2, a3 = a4,
 //     alpha3 = alpha4, d2 = d4 = 0, d1 = -d3.
+// The numeric path, called on every evaluation of a steered search: it builds
+// no names and, after the first call for a joint count (which builds that
+// count's table of writings), allocates nothing. Throws
+// std::invalid_argument for an invalid geometry, Bennett with n != 4, or
+// Family::unclassified.
 double family_distance(Family family, const LoopGeometry& geometry, GeometryVector* gradient = nullptr);
+
+// The same distance (and gradient) by the reporting path: every writing
+// written out and the best one's conditions listed by name, as classify()
+// lists them (`residual` is the distance; `setup` the best Bennett setup).
+// Equal to family_distance bit for bit; slow and allocating, for reports,
+// the documentation and tests.
+FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, GeometryVector* gradient = nullptr);
 
 }  // namespace loopfarm
