@@ -158,60 +158,73 @@ void print_table(const std::vector<TradeoffRow>& rows) {
   }
 }
 
-// Two panels, one labelled point per configuration: median seconds per start
-// against error rate (the Pareto front joined), and core-seconds per
-// verified zero against error rate (what a discovery costs).
+// Two panels with one marker per configuration, each named in the key:
+// median seconds per start against error rate (the Pareto front joined), and
+// core-seconds per verified zero against error rate (what a discovery costs).
+// The error axis is logarithmic, with error-free configurations drawn on its
+// floor, labelled 0: most configurations make no error, and a linear axis
+// would pile them up on one line.
+constexpr double kErrorFloor = 0.01;  // [%]
+
 void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_name, const std::filesystem::path& png) {
   const std::filesystem::path gnuplot = require_gnuplot("--plot");
   ScratchFile data(".dat");
   ScratchFile front(".dat");
   std::vector<const TradeoffRow*> on_front;
+  auto drawn_error = [](const TradeoffRow& r) { return std::max(100.0 * r.error_rate(), kErrorFloor); };
   for (const TradeoffRow& r : rows) {
-    // Labels without spaces or quotes: gnuplot reads them as one column. A
-    // configuration without a verified zero has no cost per zero (1/0 there).
+    // A configuration without a verified zero has no cost per zero: NaN,
+    // which gnuplot leaves out of the second panel.
     const double per_zero = r.seconds_per_verified_zero();
-    std::fprintf(data.stream(), "%.17g %.17g %s %d %s\n", 1e3 * r.median_seconds, 100.0 * r.error_rate(),
-                 name_of(r).c_str(), r.pareto ? 1 : 0, std::isfinite(per_zero) ? format_double(per_zero).c_str() : "NaN");
+    std::fprintf(data.stream(), "%.17g %.17g %s\n", 1e3 * r.median_seconds, drawn_error(r),
+                 std::isfinite(per_zero) ? format_double(per_zero).c_str() : "NaN");
     if (r.pareto) on_front.push_back(&r);
   }
   std::sort(on_front.begin(), on_front.end(),
             [](const TradeoffRow* a, const TradeoffRow* b) { return a->median_seconds < b->median_seconds; });
-  for (const TradeoffRow* r : on_front) {
-    std::fprintf(front.stream(), "%.17g %.17g\n", 1e3 * r->median_seconds, 100.0 * r->error_rate());
-  }
+  for (const TradeoffRow* r : on_front) std::fprintf(front.stream(), "%.17g %.17g\n", 1e3 * r->median_seconds, drawn_error(*r));
   data.close();
   front.close();
   const std::string d = data.path().string();
+
+  // One plot element per configuration (row i of the data), so that the key
+  // names each; point types and colours cycle, front members filled larger.
+  auto markers = [&](int x_column) {
+    std::string elements;
+    for (size_t i = 0; i < rows.size(); ++i) {
+      char element[512];
+      const int point_type = rows[i].pareto ? 7 : static_cast<int>(4 + 2 * (i % 5));  // 4,6,8,10,12: open shapes
+      std::snprintf(element, sizeof element,
+                    ", \\\n  '%s' every ::%zu::%zu using %d:2 with points pt %d ps %s lc %zu title '%s%s' noenhanced",
+                    d.c_str(), i, i, x_column, point_type, rows[i].pareto ? "2.0" : "1.5", i % 8 + 1,
+                    name_of(rows[i]).c_str(), rows[i].pareto ? " (front)" : "");
+      elements += element;
+    }
+    return elements;
+  };
   ScratchFile script(".gp");
   std::FILE* gp = script.stream();
   std::fputs(
       "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
-      "  set terminal pngcairo size 1500,650 enhanced\n"
+      "  set terminal pngcairo size 1600,760 enhanced font ',10'\n"
       "} else {\n"
-      "  set terminal png size 1500,650 enhanced\n"
+      "  set terminal png size 1600,760 enhanced\n"
       "}\n",
       gp);
   std::fprintf(gp, "set output '%s'\n", png.string().c_str());
-  std::fprintf(gp, "set multiplot layout 1,2 title 'Speed against accuracy: %s, one point per configuration' noenhanced\n",
+  std::fprintf(gp, "set multiplot layout 1,2 title 'Speed against accuracy: %s, one marker per configuration' noenhanced\n",
                job_name.c_str());
-  std::fputs(
-      "set ylabel 'error rate [%]: (false + missed zeros + rigid read as zero) / judged'\n"
-      "set logscale x\nset grid\nset key top right\nset yrange [-1:*]\n"
-      "set offsets graph 0.02, graph 0.25, graph 0.1, 0\n"
-      "set xlabel 'median seconds of local minimisation per start [ms]'\n",
-      gp);
   std::fprintf(gp,
-               "plot '%s' using 1:2 with lines lw 2 lc rgb '#c0392b' title 'Pareto front', \\\n"
-               "  '%s' using 1:($4 == 1 ? $2 : 1/0) with points pt 7 ps 1.4 lc rgb '#c0392b' notitle, \\\n"
-               "  '%s' using 1:($4 == 0 ? $2 : 1/0) with points pt 6 ps 1.2 lc rgb '#1f5fa8' title 'dominated', \\\n"
-               "  '%s' using 1:2:3 with labels offset 0.8,0.6 left font ',8' noenhanced notitle\n",
-               front.path().c_str(), d.c_str(), d.c_str(), d.c_str());
-  std::fputs("set xlabel 'core-seconds of search per verified zero [s]'\n", gp);
-  std::fprintf(gp,
-               "plot '%s' using 5:($4 == 1 ? $2 : 1/0) with points pt 7 ps 1.4 lc rgb '#c0392b' title 'on the front', \\\n"
-               "  '%s' using 5:($4 == 0 ? $2 : 1/0) with points pt 6 ps 1.2 lc rgb '#1f5fa8' title 'dominated', \\\n"
-               "  '%s' using 5:2:3 with labels offset 0.8,0.6 left font ',8' noenhanced notitle\n",
-               d.c_str(), d.c_str(), d.c_str());
+               "set ylabel 'error rate [%%] (false + missed zeros + rigid read as zero) / judged; 0 drawn at %g'\n"
+               "set logscale xy\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\n"
+               "set key outside bottom center horizontal maxrows 6 font ',9' samplen 1\n"
+               "set offsets graph 0.05, graph 0.05, 0, 0\n"
+               "set xlabel 'median seconds of local minimisation per start [ms]'\n",
+               kErrorFloor, kErrorFloor / 2.0, kErrorFloor);
+  std::fprintf(gp, "plot '%s' using 1:2 with lines lw 2 lc rgb '#c0392b' title 'Pareto front'%s\n", front.path().c_str(),
+               markers(1).c_str());
+  std::fputs("set xlabel 'core-seconds of search per verified zero [s]'\nset key off\n", gp);
+  std::fprintf(gp, "plot 1/0 notitle%s\n", markers(3).c_str());
   std::fputs("unset multiplot\nunset output\n", gp);
   script.close();
   render_gnuplot_script(gnuplot, script.path(), png, "--plot");
