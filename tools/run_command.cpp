@@ -72,7 +72,11 @@ struct RunArguments {
   std::string starts;
   std::string seed;
   std::string db;
-  std::string chunk = "4";
+  // 16 starts per request: a worker waits for its next chunk up to one
+  // 2 ms polling period of rank 0, which at 4 starts of the default job
+  // (about 6 ms each) cost 5 % of its time (parallel efficiency 0.947 from
+  // 1 to 2 ranks; 0.983 at 16).
+  std::string chunk = "16";
   std::string progress = "auto";
   bool new_run = false;
 };
@@ -81,7 +85,7 @@ struct RunArguments {
 // main prints it once.
 struct RunSettings {
   Job job;
-  int chunk = 4;
+  int chunk = 16;
   ProgressStyle progress = ProgressStyle::log;
   bool new_run = false;
 };
