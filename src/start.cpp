@@ -74,7 +74,10 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
 
   // The unsteered energy at the start, for the record (and for comparing
   // steered with unsteered runs on the same footing).
-  const ObjectiveSettings plain = ObjectiveSettings::from_loop(job.loop);
+  ObjectiveSettings plain = ObjectiveSettings::from_loop(job.loop);
+  // The analysis of a zero (its local dimension from the Jacobian of every
+  // sample's deformations) needs the whole cycle, whatever the search minimised.
+  plain.measure = CycleMeasure::mean;
   CycleObjective unsteered(job.space, plain, start.theta);
   const ObjectiveValue initial = unsteered.evaluate(start.x, nullptr);
   out.initial_E_mean = initial.ok ? initial.E_mean : std::numeric_limits<double>::quiet_NaN();
