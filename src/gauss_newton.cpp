@@ -51,6 +51,8 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
     summary.status = SearchStatus::evaluation_failed;
     summary.message = "the loop cannot be assembled at the start geometry";
     summary.value = current.value;
+    // No cycle was evaluated: no energy to report (not 0, which reads as a zero).
+    summary.E_mean = summary.E_max = std::numeric_limits<double>::quiet_NaN();
     summary.evaluations = evaluations();
     summary.seconds = seconds_since(start_time);
     return summary;

@@ -29,6 +29,7 @@ LocalSearchSummary local_minimize(CycleObjective& objective, const Eigen::Vector
     LocalSearchSummary summary;
     summary.x = x0;
     summary.value = std::numeric_limits<double>::quiet_NaN();
+    summary.E_mean = summary.E_max = std::numeric_limits<double>::quiet_NaN();
     summary.status = SearchStatus::evaluation_failed;
     summary.message = x0.size() != objective.space().free_count()
                           ? "the start has " + std::to_string(x0.size()) + " values for " +

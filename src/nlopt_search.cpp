@@ -138,6 +138,7 @@ LocalSearchSummary minimize_nlopt(CycleObjective& objective, const Eigen::Vector
     }
     summary.x = Eigen::Map<const Eigen::VectorXd>(x.data(), k);
     summary.value = std::numeric_limits<double>::infinity();
+    summary.E_mean = summary.E_max = std::numeric_limits<double>::quiet_NaN();
   } else {
     summary.x = context.best_x;
     summary.value = context.best.value;

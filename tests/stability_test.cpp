@@ -271,6 +271,9 @@ LocalSearchSummary search(const ParameterSpace& space, const LoopGeometry& g0, c
   }
   if (s.status == SearchStatus::evaluation_failed) {
     EXPECT_EQ(s.value, std::numeric_limits<double>::infinity()) << what;  // the documented sentinel
+    // No cycle was evaluated: no energy, rather than a 0 that reads as a zero.
+    EXPECT_TRUE(std::isnan(s.E_mean)) << what;
+    EXPECT_TRUE(std::isnan(s.E_max)) << what;
   } else {
     EXPECT_TRUE(std::isfinite(s.value)) << what;
     EXPECT_TRUE(std::isfinite(s.E_mean)) << what;
@@ -462,8 +465,9 @@ TEST(StabilityKnownLimit, UnreachableInputAngleGivesFailedSamplesThatReadNearZer
   EXPECT_FALSE(m.verification.assembled);
   EXPECT_FALSE(m.verification.verified);
 
-  // The search cannot evaluate the start: a status, and the summary's
-  // E_mean is its default 0 (not an energy), value +inf. (The initial
+  // The search cannot evaluate the start: a status, the summary's E_mean
+  // NaN (no energy; it was a 0 that read as a zero until the limit pinned
+  // here was fixed), value +inf. (The initial
   // angles 0, 0, 180, 0 deg: all zero would be the collinear stationary
   // point of CollinearInitialAnglesAreAStationaryPointThatIsNotAMinimum.)
   JointVector at0(4);
@@ -471,7 +475,7 @@ TEST(StabilityKnownLimit, UnreachableInputAngleGivesFailedSamplesThatReadNearZer
   for (const char* algorithm : kAlgorithms) {
     const LocalSearchSummary s = search(space_around(kite, at0, 0.1, 0.2), kite, algorithm);
     EXPECT_EQ(s.status, SearchStatus::evaluation_failed) << algorithm;
-    EXPECT_EQ(s.E_mean, 0.0) << algorithm;
+    EXPECT_TRUE(std::isnan(s.E_mean)) << algorithm;
     EXPECT_EQ(s.evaluations, 1) << algorithm;
   }
 

@@ -55,7 +55,7 @@ struct LocalSearchOptions {
 struct LocalSearchSummary {
   Eigen::VectorXd x;           // best point found (free parameters)
   double value = 0.0;          // objective there
-  double E_mean = 0.0;         // unsteered cycle energy there
+  double E_mean = 0.0;         // unsteered cycle energy there; NaN for evaluation_failed
   double E_max = 0.0;
   SearchStatus status = SearchStatus::failure;
   std::string message;         // what the algorithm said, for people
