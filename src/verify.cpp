@@ -35,13 +35,18 @@ double solve_closure(const LoopGeometry& g, int input, JointVector& theta, int m
     for (int k = 0, c = 0; k < n; ++k) {
       if (k != input) A.col(c++) = jac.theta.col(k);
     }
-    const Eigen::MatrixXd normal = A.transpose() * A;
-    const Eigen::VectorXd gradient = A.transpose() * r;
+    // Fixed-capacity types: a verification walks 720 poses and more, and
+    // dynamic-size temporaries made this loop allocate several times per
+    // iteration.
+    using PassiveMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxJoints>;
+    using PassiveVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxJoints, 1>;
+    const PassiveMatrix normal = A.transpose() * A;
+    const PassiveVector gradient = A.transpose() * r;
     bool improved = false;
     while (mu < 1e12) {
-      Eigen::MatrixXd damped = normal;
+      PassiveMatrix damped = normal;
       damped.diagonal().array() += mu * (1.0 + normal.diagonal().array());
-      const Eigen::VectorXd step = damped.ldlt().solve(-gradient);
+      const PassiveVector step = Eigen::LDLT<PassiveMatrix>(damped).solve(-gradient);
       JointVector trial = theta;
       for (int k = 0, c = 0; k < n; ++k) {
         if (k != input) trial[k] += step[c++];
