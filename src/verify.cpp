@@ -25,15 +25,17 @@ double max_abs(const Vector6& v) { return v.cwiseAbs().maxCoeff(); }
 // what is reported. Returns the final residual's max-norm.
 double solve_closure(const LoopGeometry& g, int input, JointVector& theta, int max_iterations) {
   const int n = g.joints();
-  ClosureJacobians jac;
+  ChainKinematics chain;
   Vector6 r = closure_residual(g, theta);
   double norm = r.squaredNorm();
   double mu = 1e-6;
   for (int it = 0; it < max_iterations && max_abs(r) > 1e-15; ++it) {
-    closure_jacobians(g, theta, jac);
+    // The passive angles' columns of the closure Jacobian only (what
+    // closure_jacobians gives for theta, without its a, alpha, d columns).
+    compute_chain(g, theta, chain);
     Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxJoints> A(6, n - 1);
     for (int k = 0, c = 0; k < n; ++k) {
-      if (k != input) A.col(c++) = jac.theta.col(k);
+      if (k != input) A.col(c++) = residual_derivative(chain, chain_index(k, ChainParameter::theta));
     }
     // Fixed-capacity types: a verification walks 720 poses and more, and
     // dynamic-size temporaries made this loop allocate several times per
