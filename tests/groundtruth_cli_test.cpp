@@ -2,9 +2,6 @@
 // library's generate_ground_truth, --out written whole or not at all, and
 // bad options refused with exit code 2 and one line naming the flag.
 // LOOPFARM_EXECUTABLE is the path of the built binary.
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -16,45 +13,24 @@
 
 #include <gtest/gtest.h>
 
+#include "command_test_support.hpp"
 #include "loopfarm/ground_truth.hpp"
 
 namespace loopfarm {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::read_file;
+using testing::split;
 
 const std::string kExecutable = LOOPFARM_EXECUTABLE;
 constexpr double kPi = 3.14159265358979323846;
-
-std::string shell_quote(const std::string& text) {
-  std::string out = "'";
-  for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 std::vector<std::string> lines_of(const std::string& text) {
   std::vector<std::string> lines;
   std::istringstream in(text);
   for (std::string line; std::getline(in, line);) lines.push_back(line);
   return lines;
-}
-
-std::vector<std::string> split(const std::string& text, char separator) {
-  std::vector<std::string> parts;
-  size_t start = 0;
-  while (true) {
-    const size_t end = text.find(separator, start);
-    parts.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
-    if (end == std::string::npos) return parts;
-    start = end + 1;
-  }
 }
 
 // The whole text as a double, or NaN if it is not exactly one number.
@@ -71,57 +47,13 @@ size_t count_of(const std::string& text, const std::string& needle) {
   return count;
 }
 
-struct Result {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
+using Result = testing::CommandResult;
 
-class GroundTruthCli : public ::testing::Test {
+class GroundTruthCli : public testing::CommandTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string(info->test_suite_name()) + "-" + info->name();
-    for (char& c : name) {
-      if (c == '/') c = '-';
-    }
-    dir_ = fs::temp_directory_path() / ("loopfarm-groundtruth-test-" + std::to_string(::getpid()) + "-" + name);
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
-  }
-
+  GroundTruthCli() : CommandTest("loopfarm-groundtruth-test") {}
   // Runs `loopfarm groundtruth` with `args` ("{dir}" replaced by the test's directory).
-  Result run(const std::vector<std::string>& args) {
-    std::string command = shell_quote(kExecutable) + " groundtruth";
-    for (std::string arg : args) {
-      for (size_t at; (at = arg.find("{dir}")) != std::string::npos;) arg.replace(at, 5, dir_.string());
-      command += ' ' + shell_quote(arg);
-    }
-    const fs::path out = dir_ / ".stdout";
-    const fs::path err = dir_ / ".stderr";
-    command += " >" + shell_quote(out.string()) + " 2>" + shell_quote(err.string());
-    const int status = std::system(command.c_str());
-    Result result;
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    result.out = read_file(out);
-    result.err = read_file(err);
-    fs::remove(out);
-    fs::remove(err);
-    return result;
-  }
-
-  std::vector<std::string> files() const {
-    std::vector<std::string> names;
-    for (const auto& entry : fs::directory_iterator(dir_)) names.push_back(entry.path().filename().string());
-    std::sort(names.begin(), names.end());
-    return names;
-  }
-
-  fs::path dir_;
+  Result run(const std::vector<std::string>& args) { return run_command(kExecutable, "groundtruth", args); }
 };
 
 GroundTruthOptions options_of_the_runs() {

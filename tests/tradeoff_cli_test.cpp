@@ -3,97 +3,35 @@
 // only when the whole run succeeded, and bad options refused with exit code 2
 // and one line naming the flag, leaving existing files untouched.
 // LOOPFARM_EXECUTABLE is the path of the built binary.
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "command_test_support.hpp"
+
 namespace loopfarm {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::read_file;
+using testing::split;
 
 const std::string kExecutable = LOOPFARM_EXECUTABLE;
 
-std::string shell_quote(const std::string& text) {
-  std::string out = "'";
-  for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-std::vector<std::string> split(const std::string& text, char separator) {
-  std::vector<std::string> parts;
-  size_t start = 0;
-  while (true) {
-    const size_t end = text.find(separator, start);
-    parts.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
-    if (end == std::string::npos) return parts;
-    start = end + 1;
-  }
-}
-
-struct Result {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-class TradeoffCli : public ::testing::Test {
+class TradeoffCli : public testing::CommandTest {
  protected:
+  TradeoffCli() : CommandTest("loopfarm-tradeoff-test") {}
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string(info->test_suite_name()) + "-" + info->name();
-    for (char& c : name) {
-      if (c == '/') c = '-';
-    }
-    dir_ = fs::temp_directory_path() / ("loopfarm-tradeoff-test-" + std::to_string(::getpid()) + "-" + name);
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    CommandTest::SetUp();
     // A small generic job: cheap starts.
     std::ofstream(dir_ / "job.toml") << "[loop]\nsamples = 8\n[optimizer]\nmax_evaluations = 20\n"
                                         "[search]\nstarts = 5\nzero_threshold = 1e-20\n";
   }
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
-  }
-
-  // Runs `loopfarm tradeoff` with `args` ("{dir}" replaced by the test's directory).
-  Result run(const std::vector<std::string>& args) {
-    std::string command = shell_quote(kExecutable) + " tradeoff";
-    for (std::string arg : args) {
-      for (size_t at; (at = arg.find("{dir}")) != std::string::npos;) arg.replace(at, 5, dir_.string());
-      command += ' ' + shell_quote(arg);
-    }
-    const fs::path out = dir_ / ".stdout";
-    const fs::path err = dir_ / ".stderr";
-    command += " >" + shell_quote(out.string()) + " 2>" + shell_quote(err.string());
-    const int status = std::system(command.c_str());
-    Result result;
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    result.out = read_file(out);
-    result.err = read_file(err);
-    fs::remove(out);
-    fs::remove(err);
-    return result;
-  }
-
-  fs::path dir_;
+  testing::CommandResult run(const std::vector<std::string>& args) { return run_command(kExecutable, "tradeoff", args); }
 };
 
 // The smallest sweep that has every axis: two starts, one loop per family.
@@ -105,7 +43,7 @@ const std::vector<std::string> kSmallSweep = {
 TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   std::vector<std::string> args = kSmallSweep;
   for (const char* extra : {"--csv", "{dir}/t.csv", "--plot", "{dir}/t.png"}) args.emplace_back(extra);
-  const Result r = run(args);
+  const testing::CommandResult r = run(args);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> rows = split(read_file(dir_ / "t.csv"), '\n');
   // Header, base, samples=16, closure_tolerance=1e-08, objective=max, algorithm=LD_LBFGS, ftol_rel=0.001,
@@ -155,7 +93,7 @@ TEST_F(TradeoffCli, BadOptionsExitWithCode2NamingTheFlagAndLeaveFilesAlone) {
     std::vector<std::string> with_output = args;
     with_output.insert(with_output.end(), {"--csv", "{dir}/keep.csv"});
     if (flag == "--csv") with_output = args;
-    const Result r = run(with_output);
+    const testing::CommandResult r = run(with_output);
     EXPECT_EQ(r.exit_code, 2) << flag << ": " << r.err;
     EXPECT_EQ(split(r.err, '\n').size(), 2u) << "not one line: " << r.err;
     EXPECT_NE(r.err.find(flag), std::string::npos) << r.err;
