@@ -22,18 +22,6 @@ namespace {
 
 constexpr double kDegreesPerRadian = 180.0 / 3.14159265358979323846;
 
-// A string literal for a gnuplot script: single quotes, in which only the
-// quote itself needs escaping (by doubling) and backslashes stay literal.
-std::string gnuplot_string(std::string_view text) {
-  std::string out = "'";
-  for (const char c : text) {
-    if (c == '\'') out += '\'';
-    out += c;
-  }
-  out += '\'';
-  return out;
-}
-
 // The first non-empty line of a file (gnuplot's error message), trimmed.
 std::string first_line(const std::filesystem::path& file) {
   std::ifstream in(file);
@@ -79,6 +67,16 @@ int run_program(const std::filesystem::path& program, const std::filesystem::pat
 }
 
 }  // namespace
+
+std::string gnuplot_string(std::string_view text) {
+  std::string out = "'";
+  for (const char c : text) {
+    if (c == '\'') out += '\'';
+    out += c;
+  }
+  out += '\'';
+  return out;
+}
 
 std::filesystem::path find_program(std::string_view name) {
   const char* path = std::getenv("PATH");

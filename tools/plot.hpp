@@ -10,6 +10,10 @@
 
 namespace loopfarm::cli {
 
+// A string literal for a gnuplot script: single quotes, in which only the
+// quote itself needs escaping (by doubling) and backslashes stay literal.
+std::string gnuplot_string(std::string_view text);
+
 // The first executable called `name` on PATH, or an empty path.
 std::filesystem::path find_program(std::string_view name);
 

@@ -192,13 +192,11 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
   auto markers = [&](int x_column) {
     std::string elements;
     for (size_t i = 0; i < rows.size(); ++i) {
-      char element[512];
       const int point_type = rows[i].pareto ? 7 : static_cast<int>(4 + 2 * (i % 5));  // 4,6,8,10,12: open shapes
-      std::snprintf(element, sizeof element,
-                    ", \\\n  '%s' every ::%zu::%zu using %d:2 with points pt %d ps %s lc %zu title '%s%s' noenhanced",
-                    d.c_str(), i, i, x_column, point_type, rows[i].pareto ? "2.0" : "1.5", i % 8 + 1,
-                    name_of(rows[i]).c_str(), rows[i].pareto ? " (front)" : "");
-      elements += element;
+      elements += ", \\\n  " + gnuplot_string(d) + " every ::" + std::to_string(i) + "::" + std::to_string(i) +
+                  " using " + std::to_string(x_column) + ":2 with points pt " + std::to_string(point_type) +
+                  " ps " + (rows[i].pareto ? "2.0" : "1.5") + " lc " + std::to_string(i % 8 + 1) + " title " +
+                  gnuplot_string(name_of(rows[i]) + (rows[i].pareto ? " (front)" : "")) + " noenhanced";
     }
     return elements;
   };
@@ -211,9 +209,9 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
       "  set terminal png size 1600,760 enhanced\n"
       "}\n",
       gp);
-  std::fprintf(gp, "set output '%s'\n", png.string().c_str());
-  std::fprintf(gp, "set multiplot layout 1,2 title 'Speed against accuracy: %s, one marker per configuration' noenhanced\n",
-               job_name.c_str());
+  std::fprintf(gp, "set output %s\n", gnuplot_string(png.string()).c_str());
+  std::fprintf(gp, "set multiplot layout 1,2 title %s noenhanced\n",
+               gnuplot_string("Speed against accuracy: " + job_name + ", one marker per configuration").c_str());
   std::fprintf(gp,
                "set ylabel 'error rate [%%] (false + missed zeros + rigid read as zero) / judged; 0 drawn at %g'\n"
                "set logscale xy\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\n"
@@ -221,8 +219,8 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
                "set offsets graph 0.05, graph 0.05, 0, 0\n"
                "set xlabel 'median seconds of local minimisation per start [ms]'\n",
                kErrorFloor, kErrorFloor / 2.0, kErrorFloor);
-  std::fprintf(gp, "plot '%s' using 1:2 with lines lw 2 lc rgb '#c0392b' title 'Pareto front'%s\n", front.path().c_str(),
-               markers(1).c_str());
+  std::fprintf(gp, "plot %s using 1:2 with lines lw 2 lc rgb '#c0392b' title 'Pareto front'%s\n",
+               gnuplot_string(front.path().string()).c_str(), markers(1).c_str());
   std::fputs("set xlabel 'core-seconds of search per verified zero [s]'\nset key off\n", gp);
   std::fprintf(gp, "plot 1/0 notitle%s\n", markers(3).c_str());
   std::fputs("unset multiplot\nunset output\n", gp);
