@@ -55,7 +55,23 @@ double ground_truth_energy(const GroundTruthCase& c, const LoopSettings& loop) {
   return summary.E_mean;
 }
 
+// Whether two loop settings give every ground-truth loop the same cycle
+// energy (the search objective E_mean/E_max does not enter the reading).
+bool same_reading(const LoopSettings& a, const LoopSettings& b) {
+  return a.joints == b.joints && a.compliance == b.compliance && a.stiffness_ratio == b.stiffness_ratio &&
+         a.samples == b.samples && a.range == b.range && a.closure_tolerance == b.closure_tolerance &&
+         a.stationarity_tolerance == b.stationarity_tolerance;
+}
+
 }  // namespace
+
+std::vector<double> ground_truth_energies(const std::vector<GroundTruthCase>& ground_truth,
+                                          const LoopSettings& loop) {
+  std::vector<double> energies;
+  energies.reserve(ground_truth.size());
+  for (const GroundTruthCase& c : ground_truth) energies.push_back(ground_truth_energy(c, loop));
+  return energies;
+}
 
 void TradeoffOptions::validate() const {
   if (starts < 1) fail("starts: must be >= 1, got " + std::to_string(starts));
@@ -139,6 +155,20 @@ std::vector<TradeoffConfiguration> tradeoff_configurations(const Job& base, cons
 TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
                                   const std::vector<GroundTruthCase>& ground_truth, const TradeoffOptions& options) {
   const auto begin = std::chrono::steady_clock::now();
+  const std::vector<double> energies = ground_truth_energies(ground_truth, configuration.job.loop);
+  TradeoffRow row = measure_configuration(configuration, ground_truth, energies, options);
+  row.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+  return row;
+}
+
+TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
+                                  const std::vector<GroundTruthCase>& ground_truth,
+                                  const std::vector<double>& energies, const TradeoffOptions& options) {
+  if (energies.size() != ground_truth.size()) {
+    throw std::invalid_argument("measure_configuration: " + std::to_string(energies.size()) + " energies for " +
+                                std::to_string(ground_truth.size()) + " ground-truth loops");
+  }
+  const auto begin = std::chrono::steady_clock::now();
   const Job& job = configuration.job;
   TradeoffRow row;
   row.axis = configuration.axis;
@@ -168,9 +198,9 @@ TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
   // threshold. Perturbed cases are grouped by size for the smallest
   // perturbation told apart.
   std::map<double, bool> every_told_apart;  // relative size -> all of that size read non-zero
-  for (const GroundTruthCase& c : ground_truth) {
-    const double energy = ground_truth_energy(c, job.loop);
-    const bool reads_zero = energy <= job.search.zero_threshold;  // false for NaN
+  for (size_t i = 0; i < ground_truth.size(); ++i) {
+    const GroundTruthCase& c = ground_truth[i];
+    const bool reads_zero = energies[i] <= job.search.zero_threshold;  // false for NaN
     if (c.movable) {
       ++row.movable_cases;
       row.missed_zeros += !reads_zero;
@@ -206,10 +236,20 @@ std::vector<TradeoffRow> run_tradeoff(const Job& base, const TradeoffOptions& op
   options.validate();
   const std::vector<GroundTruthCase> truth = generate_ground_truth(options.ground_truth);
   const std::vector<TradeoffConfiguration> configurations = tradeoff_configurations(base, options);
+  // The ground truth's energies depend on the loop settings alone: the
+  // configurations of the other axes (algorithm, ftol_rel, zero threshold,
+  // objective) read those of an earlier configuration.
+  std::vector<std::pair<LoopSettings, std::vector<double>>> readings;
   std::vector<TradeoffRow> rows;
   rows.reserve(configurations.size());
   for (size_t k = 0; k < configurations.size(); ++k) {
-    rows.push_back(measure_configuration(configurations[k], truth, options));
+    const auto begin = std::chrono::steady_clock::now();
+    const LoopSettings& loop = configurations[k].job.loop;
+    auto known = std::find_if(readings.begin(), readings.end(),
+                              [&loop](const auto& reading) { return same_reading(reading.first, loop); });
+    if (known == readings.end()) known = readings.insert(readings.end(), {loop, ground_truth_energies(truth, loop)});
+    rows.push_back(measure_configuration(configurations[k], truth, known->second, options));
+    rows.back().total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
     if (options.progress) {
       options.progress(static_cast<int>(k + 1), static_cast<int>(configurations.size()), configurations[k].name());
     }

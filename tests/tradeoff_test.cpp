@@ -123,6 +123,27 @@ TEST(Tradeoff, ALooseZeroThresholdReadsPerturbedLoopsAsZero) {
   EXPECT_GT(row.error_rate(), 0.0);
 }
 
+TEST(Tradeoff, GroundTruthEnergiesOfTheSameLoopSettingsServeEveryAxisThatKeepsThem) {
+  // What run_tradeoff does for the algorithm, ftol_rel, objective and
+  // zero-threshold axes: the base's energies, read with another threshold,
+  // give what evaluating them afresh gives.
+  const Job base = parse_job(kJob, "job.toml");
+  TradeoffOptions o = small_options();
+  o.starts = 1;
+  const auto truth = generate_ground_truth(o.ground_truth);
+  const std::vector<double> energies = ground_truth_energies(truth, base.loop);
+  ASSERT_EQ(energies.size(), truth.size());
+  TradeoffConfiguration loose{"zero_threshold", "1e-2", base};
+  loose.job.search.zero_threshold = 1e-2;
+  const TradeoffRow fresh = measure_configuration(loose, truth, o);
+  const TradeoffRow reused = measure_configuration(loose, truth, energies, o);
+  EXPECT_EQ(reused.missed_zeros, fresh.missed_zeros);
+  EXPECT_EQ(reused.rigid_read_as_zero, fresh.rigid_read_as_zero);
+  EXPECT_GT(reused.rigid_read_as_zero, 0);
+  EXPECT_EQ(reused.smallest_told_apart, fresh.smallest_told_apart);
+  EXPECT_THROW(measure_configuration(loose, truth, std::vector<double>(1), o), std::invalid_argument);
+}
+
 TEST(Tradeoff, InvalidOptionsAreRejectedByName) {
   auto message = [](const TradeoffOptions& o) -> std::string {
     try {

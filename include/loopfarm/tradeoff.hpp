@@ -71,7 +71,10 @@ struct TradeoffRow {
   double median_seconds = 0.0;
   double p90_seconds = 0.0;
   double search_seconds = 0.0; // the sum over the starts: core-seconds of local minimisation
-  double total_seconds = 0.0;  // the configuration's whole measurement, ground truth included
+  // The configuration's whole measurement: its starts, and the ground truth's
+  // cycles where they were evaluated for it (run_tradeoff evaluates them once
+  // per distinct loop settings).
+  double total_seconds = 0.0;
   // Search starts.
   long starts = 0;
   long zeros = 0;
@@ -95,10 +98,21 @@ struct TradeoffRow {
   double error_rate() const;
 };
 
+// Each ground-truth loop's cycle energy with these loop settings, assembled
+// at its pose (what a start on it reads): NaN where it cannot be assembled
+// there, +inf where a sample fails (not an energy).
+std::vector<double> ground_truth_energies(const std::vector<GroundTruthCase>& ground_truth,
+                                          const LoopSettings& loop);
+
 // Measures one configuration on the job's first `starts` starts and on the
-// ground-truth set.
+// ground-truth set, whose energies under the configuration's loop settings
+// are given (`energies[i]` for `ground_truth[i]`, from ground_truth_energies)
+// or, in the first form, evaluated here.
 TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
                                   const std::vector<GroundTruthCase>& ground_truth, const TradeoffOptions& options);
+TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
+                                  const std::vector<GroundTruthCase>& ground_truth,
+                                  const std::vector<double>& energies, const TradeoffOptions& options);
 
 // Sets `pareto` on the rows no other row beats in both median seconds and
 // error rate (ties in both count as not beaten).
