@@ -20,6 +20,8 @@ packages=(
   libtomlplusplus-dev  # geometry and job files
   librandom123-dev     # counter-based random streams, one per start
   gnuplot-nox          # plots (loopfarm energy --plot, reports)
+  clang                # libFuzzer targets (tools/fuzz.sh)
+  libclang-rt-14-dev   # libFuzzer's and the sanitizers' runtimes for clang
 )
 
 missing=()

@@ -1,0 +1,1 @@
+# The bad-input corpus tests/bad-inputs/ (see tests/CMakeLists.txt).

@@ -1,0 +1,1 @@
+# Fault and concurrent-reading tests (see tests/CMakeLists.txt).
