@@ -1,1 +1,14 @@
-# Fault and concurrent-reading tests (see tests/CMakeLists.txt).
+# Fault and concurrent-reading tests (see tests/CMakeLists.txt): the farm
+# killed (SIGKILL) and stopped (SIGTERM) at random moments and resumed,
+# damaged database files refused untouched, and reading while a run writes.
+# tests/fault_test.sh describes each case. Each runs 2-rank jobs of about
+# 15 s (a few times over for kill and term) on the 2 cores CI has.
+foreach(fault_case kill term damage concurrent)
+  add_test(NAME fault_${fault_case}
+           COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/fault_test.sh $<TARGET_FILE:loopfarm_cli> ${fault_case}
+                   ${MPIEXEC_EXECUTABLE})
+  set_tests_properties(fault_${fault_case} PROPERTIES
+    PROCESSORS 2
+    TIMEOUT 240
+    ENVIRONMENT "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+endforeach()

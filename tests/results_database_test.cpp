@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -295,7 +296,8 @@ TEST_F(ResultsDatabaseTest, AnotherJobIsRefusedAndTheFileUntouched) {
     EXPECT_NE(seed.find("differs in its seed"), std::string::npos) << seed;
   }
   EXPECT_EQ(file_bytes(path), before);
-  EXPECT_FALSE(fs::exists(path + "-wal"));
+  // The file alone holds everything: no commit is left in the WAL.
+  EXPECT_FALSE(fs::exists(path + "-wal") && fs::file_size(path + "-wal") > 0);
 }
 
 TEST_F(ResultsDatabaseTest, NewRunAddsARunAndBecomesTheOneResumed) {
@@ -474,10 +476,22 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
     for (std::uint64_t i = 0; i < 300; ++i) records.push_back(plain_start(i, 1e-9));
     db.commit(run, records);
   }
+  const std::uintmax_t size = fs::file_size(damaged);
+  ASSERT_GE(size, 8u * 4096u);
+  // Copies of the sound file, each damaged one way.
+  const std::string truncated = file("truncated.sqlite");  // cut short (a full disk, a partial copy)
+  fs::copy_file(damaged, truncated);
+  fs::resize_file(truncated, size / 2);
+  const std::string header = file("header.sqlite");  // the 100-byte header overwritten
+  fs::copy_file(damaged, header);
+  {
+    std::fstream out(header, std::ios::binary | std::ios::in | std::ios::out);
+    for (int i = 0; i < 100; ++i) out.put('x');
+  }
   {
     // Scribble over the middle of the file: the header (page 1) stays intact.
     std::fstream out(damaged, std::ios::binary | std::ios::in | std::ios::out);
-    out.seekp(static_cast<std::streamoff>(fs::file_size(damaged) / 2));
+    out.seekp(static_cast<std::streamoff>(size / 2));
     for (int i = 0; i < 4096; ++i) out.put(static_cast<char>(0xA5));
   }
 
@@ -487,17 +501,25 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
   };
   for (const Case& c : {Case{foreign, "not a loopfarm results database (PRAGMA application_id is 0x00000000"},
                         Case{garbage, "not an SQLite database"}, Case{newer, "schema version 2 is newer"},
-                        Case{damaged, "damaged"}}) {
+                        Case{damaged, "damaged (PRAGMA quick_check: "}, Case{truncated, "damaged ("},
+                        Case{header, "not an SQLite database"}}) {
     SCOPED_TRACE(c.path);
     const std::string before = file_bytes(c.path);
-    const std::string text = error_of([&] { ResultsDatabase::open(c.path, DatabaseMode::write); });
-    EXPECT_NE(text.find(c.path), std::string::npos) << text;
-    EXPECT_NE(text.find(c.why), std::string::npos) << text;
-    EXPECT_EQ(text.find('\n'), std::string::npos) << text;
-    if (c.path != damaged) {  // read mode checks identity and version only
-      EXPECT_NE(error_of([&] { ResultsDatabase::open(c.path, DatabaseMode::read); }).find(c.why), std::string::npos);
+    // Both modes: a reader must not list what a damaged file happens to hold.
+    for (const DatabaseMode mode : {DatabaseMode::write, DatabaseMode::read}) {
+      const std::string text = error_of([&] { ResultsDatabase::open(c.path, mode); });
+      EXPECT_NE(text.find(c.path), std::string::npos) << text;
+      EXPECT_NE(text.find(c.why), std::string::npos) << text;
+      EXPECT_EQ(text.find('\n'), std::string::npos) << text;
+      EXPECT_EQ(file_bytes(c.path), before);
+      // SQLite may leave an empty WAL companion; nothing is written to it.
+      EXPECT_FALSE(fs::exists(c.path + "-wal") && fs::file_size(c.path + "-wal") > 0);
+      // A file refused for what its first page says gets no companions at
+      // all (only the quick_check of the middle damage needs SQLite's WAL).
+      if (c.path != damaged) {
+        EXPECT_FALSE(fs::exists(c.path + "-wal") || fs::exists(c.path + "-shm"));
+      }
     }
-    EXPECT_EQ(file_bytes(c.path), before);
   }
   EXPECT_NE(error_of([&] { ResultsDatabase::open(file("missing.sqlite"), DatabaseMode::read); }).find("no such file"),
             std::string::npos);
@@ -505,6 +527,17 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
   EXPECT_NE(error_of([&] { ResultsDatabase::open(file("no/such/dir/r.sqlite"), DatabaseMode::write); })
                 .find("cannot open"),
             std::string::npos);
+  fs::create_directories(file("dir.sqlite"));
+  for (const DatabaseMode mode : {DatabaseMode::write, DatabaseMode::read}) {
+    const std::string text = error_of([&] { ResultsDatabase::open(file("dir.sqlite"), mode); });
+    EXPECT_NE(text.find(file("dir.sqlite") + ": a directory"), std::string::npos) << text;
+  }
+  // A path with the characters an SQLite URI escapes is opened as itself.
+  const std::string odd = file("odd %41?#.sqlite");
+  { ResultsDatabase db = ResultsDatabase::open(odd, DatabaseMode::write); }
+  EXPECT_TRUE(fs::exists(odd));
+  EXPECT_NO_THROW(ResultsDatabase::open(odd, DatabaseMode::read));
+  EXPECT_FALSE(fs::exists(file("odd A")));
 }
 
 TEST_F(ResultsDatabaseTest, EmptyFileIsInitialised) {
@@ -514,6 +547,33 @@ TEST_F(ResultsDatabaseTest, EmptyFileIsInitialised) {
   EXPECT_NE(error_of([&] { ResultsDatabase::open(path, DatabaseMode::read); }).find("empty"), std::string::npos);
   ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
   EXPECT_EQ(value(db.handle(), "PRAGMA user_version"), "1");
+}
+
+// The writer checkpoints before it closes, so that the file alone holds every
+// commit (a copy of just the file is whole) and the checkpoint on close, which
+// holds an EXCLUSIVE lock that makes readers without a busy timeout fail,
+// finds nothing left to copy; it also survives a reader on an old snapshot.
+TEST_F(ResultsDatabaseTest, TheWriterLeavesEverythingInTheFile) {
+  const std::string path = file("r.sqlite");
+  const std::string copy = file("copy.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::int64_t run = db.open_run(identity()).run_id;
+    std::vector<StartRecord> records;
+    for (std::uint64_t i = 0; i < 200; ++i) records.push_back(plain_start(i, 1e-9));
+    db.commit(run, records);
+    ASSERT_GT(fs::file_size(path + "-wal"), 0u);  // the commits are in the WAL while it is open
+    // Another connection stays open: the close cannot checkpoint, ~Impl does.
+    RawConnection other(path, SQLITE_OPEN_READONLY);
+    EXPECT_EQ(count(other.db, "starts"), 200);
+    {
+      ResultsDatabase moved = std::move(db);
+    }
+    fs::copy_file(path, copy);
+  }
+  RawConnection raw(copy, SQLITE_OPEN_READONLY);
+  EXPECT_EQ(count(raw.db, "starts"), 200);
+  EXPECT_EQ(value(raw.db, "PRAGMA integrity_check"), "ok");
 }
 
 TEST_F(ResultsDatabaseTest, ReadModeWorksWhileAWriterHoldsATransaction) {

@@ -596,7 +596,7 @@ Subcommand add_run_command(CLI::App& parent) {
       "Stop with SIGINT, SIGTERM or SIGUSR1 (under mpirun: SIGUSR1): the starts in hand finish and are committed;\n"
       "running the same command again resumes.\n"
       "Exit codes: 0 all starts committed, 1 failure, 2 bad input (job file, options, a database holding another\n"
-      "job), 3 stopped by a signal (resumable).\n");
+      "job, not a loopfarm database or damaged: left untouched), 3 stopped by a signal (resumable).\n");
   app->add_option("JOB", args->job, "job file (TOML, see docs/job-file.md)")->required()->type_name("JOB.toml");
   app->add_option("--starts", args->starts, "override [search] starts")->type_name("N");
   app->add_option("--seed", args->seed, "override [search] seed")->type_name("S");

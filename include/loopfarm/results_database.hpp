@@ -96,8 +96,10 @@ std::string job_hash(std::string_view text);
 class ResultsDatabase {
  public:
   // Throws DatabaseError when the file cannot be opened or is refused: not
-  // SQLite, another application_id, an unknown schema version, a failed
-  // PRAGMA quick_check (write mode), a missing file (read mode).
+  // SQLite, another application_id, an unknown schema version, damage (SQLite
+  // says so, or PRAGMA quick_check fails: both modes, before anything is
+  // written), a missing file (read mode). The message says "damaged" for
+  // damage and "not an SQLite database" for a file that is not one.
   static ResultsDatabase open(const std::string& path, DatabaseMode mode);
 
   ResultsDatabase(const ResultsDatabase&) = delete;
