@@ -207,6 +207,7 @@ TEST_P(JobRejects, WithFileLineAndKey) {
     EXPECT_EQ(what.rfind("bad.toml:" + std::to_string(bad.line) + ": " + bad.key + ": ", 0), 0u) << what;
     EXPECT_NE(what.find(bad.words), std::string::npos) << what;
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_EQ(what.find('\r'), std::string::npos) << what;
   }
 }
 
@@ -258,8 +259,77 @@ INSTANTIATE_TEST_SUITE_P(
                "steering.deflate", "joints = 4"},
         BadJob{"algorithm_auglag", "[optimizer]\nalgorithm = \"LD_AUGLAG\"\n", 2, "optimizer.algorithm", "unknown"},
         BadJob{"report_threshold", "[output]\nreport_threshold = -1\n", 2, "output.report_threshold", "> 0"},
-        BadJob{"table_is_value", "loop = 4\n", 1, "loop", "expected a table"}),
+        BadJob{"table_is_value", "loop = 4\n", 1, "loop", "expected a table"},
+        // Lengths whose squares overflow the length scale L (energies NaN, a
+        // 1e200 link reported as a zero); found while building tests/bad-inputs.
+        BadJob{"huge_length", "[space]\na1 = 1e200\n", 2, "space.a1", "[-1e150, 1e150]"},
+        BadJob{"huge_range_width", "[space]\nd = [-1e308, 1e308]\n", 2, "space.d", "overflow the length scale"},
+        // Found by fuzz/job_file_fuzzer: a value's control character ("\r")
+        // printed raw broke the one-line message.
+        BadJob{"control_character", "[steering]\ndeflate = [\"plan\\r\"]\n", 2, "steering.deflate", "\"plan\\x0d\""},
+        // Found by the fuzzers: text that sends toml++ 3.3 into undefined
+        // behaviour or a failed precondition, refused before it is parsed
+        // (find_toml_hazard).
+        BadJob{"hazard_header_brace", "[{earc_]\nstarts = 0\n", 1, "(syntax)", "must begin with a name, not '{'"},
+        BadJob{"hazard_header_brackets", "[search]\n[[[loop]]]\n", 2, "(syntax)", "must begin with a name, not '['"},
+        BadJob{"hazard_header_newline", "[\nloop]\n", 1, "(syntax)", "not byte 0x0A"},
+        BadJob{"hazard_non_ascii_value", "[space]\nalpha1_deg = 30\xc2\xb0\n", 2, "(syntax)", "U+00B0 outside a string"},
+        BadJob{"hazard_escape", "[optimizer]\nalgorithm = \"\"\"\\\xc2\xa7\"\"\"\n", 2, "(syntax)",
+               "U+00A7 right after a backslash"},
+        BadJob{"hazard_line_ending_backslash", "[optimizer]\nalgorithm = \"\"\"\\\n\xc2\xa7\"\"\"\n", 3, "(syntax)",
+               "U+00A7 right after a line-ending backslash"},
+        BadJob{"hazard_array_newline", "[space]\na = [1,\n0a='\xc3\xa9']\n", 3, "(syntax)", "U+00E9 outside a string"},
+        BadJob{"hazard_quote_in_value", "[search]\nseed = 0'''\xc8\x86\n", 2, "(syntax)", "U+0206 outside a string"}),
     [](const ::testing::TestParamInfo<BadJob>& info) { return std::string(info.param.name); });
+
+// find_toml_hazard must not refuse valid TOML: non-ASCII text is fine in
+// comments and in every kind of string, after a byte order mark, and a
+// line-ending backslash followed by ASCII is fine too.
+TEST(Job, NonAsciiInCommentsAndStringsIsAccepted) {
+  const std::string text =
+      "\xEF\xBB\xBF# r\xC3\xA9sum\xC3\xA9: a 30\xC2\xB0 twist\n"
+      "[loop]  # \xC2\xB0 here too\n"
+      "compliance = \"full\"  # \"\xC3\xA9\n"
+      "[optimizer]\n"
+      "algorithm = \"\"\"\\\n   gauss-newton\"\"\"\n"
+      "[steering]\n"
+      "deflate = [\n  # \xC2\xA7 a comment in an array\n  'planar',\n]\n"
+      "[output]\n"
+      "database = \"r\xC3\xA9sultats-\xC2\xA7.sqlite\"\n";
+  EXPECT_FALSE(find_toml_hazard(text).has_value());
+  const Job job = parse_job(text, "dir/job.toml");
+  EXPECT_EQ(job.loop.compliance, Compliance::full);
+  EXPECT_EQ(job.optimizer.algorithm, "gauss-newton");
+  EXPECT_EQ(job.steering.deflate, std::vector<std::string>{"planar"});
+  EXPECT_EQ(job.output.database, "dir/r\xC3\xA9sultats-\xC2\xA7.sqlite");
+  EXPECT_FALSE(find_toml_hazard("s = '''\n\xC2\xA7'''\nt = \"\"\"\xC2\xA7\\n\"\"\"\nu = \"\xC2\xA7\\\"\"\n").has_value());
+}
+
+// Found by fuzz/job_file_fuzzer: a quoted key with a newline made the message two lines.
+TEST(Job, ControlCharactersInKeysStayOnOneLine) {
+  try {
+    parse_job("[loop]\n\"jo\\nints\" = 4\n", "bad.toml");
+    FAIL() << "accepted";
+  } catch (const JobError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_NE(what.find("loop.jo\\x0aints: unknown key"), std::string::npos) << what;
+  }
+}
+
+TEST(Job, LengthsUpToTheLimitAreAccepted) {
+  const Job job = parse_job("[space]\na = [0, 1e150]\nd = -1e150\n", "job.toml");
+  EXPECT_EQ(job.space.specs[static_cast<size_t>(job.space.index(ParameterKind::a, 0))].hi, 1e150);
+}
+
+// Found by the fuzzers: a form feed where a value begins made the hazard
+// scan stop advancing (a hang). Any answer will do, as long as there is one.
+TEST(Job, HazardScanEndsOnControlCharacters) {
+  for (const char* text : {"a = [0,\f+\x04]\n", "a =\v1\n", "[space]\na1 = [0,\f1]\n"}) {
+    (void)find_toml_hazard(text);
+    EXPECT_THROW(parse_job(text, "bad.toml"), JobError) << text;
+  }
+}
 
 TEST(Job, MissingFileIsAJobErrorNamingIt) {
   try {

@@ -11,6 +11,7 @@
 #include <toml++/toml.h>
 
 #include "cli_support.hpp"
+#include "loopfarm/job.hpp"
 #include "loopfarm/types.hpp"
 
 namespace loopfarm::cli {
@@ -64,6 +65,15 @@ SourcedList read_number_array(const std::string& file, std::string_view key, con
   return list;
 }
 
+// The value of largest magnitude, for the message about lengths too large.
+double culprit_max(const std::vector<double>& values) {
+  double largest = 0.0;
+  for (const double v : values) {
+    if (std::abs(v) > std::abs(largest)) largest = v;
+  }
+  return largest;
+}
+
 void check_count(const SourcedList& list, size_t joints, const std::string& reference_source) {
   if (list.values.size() != joints) {
     throw UsageError(list.source, std::to_string(list.values.size()) + " values (" + format_list(list.values) +
@@ -105,7 +115,15 @@ GeometryInput geometry_from_toml(const std::filesystem::path& file) {
   }
   const std::string text{std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
   if (stream.bad()) throw UsageError("--geometry", "cannot read " + quote_text(name) + ": read error");
+  return geometry_from_toml_text(text, name);
+}
 
+GeometryInput geometry_from_toml_text(std::string_view text, const std::string& name) {
+  // Text that would send toml++ 3.3 into undefined behaviour (job.hpp).
+  if (const std::optional<TomlHazard> hazard = find_toml_hazard(text)) {
+    throw UsageError(name + ":" + std::to_string(hazard->line) + ":" + std::to_string(hazard->column),
+                     "invalid TOML: " + hazard->message);
+  }
   toml::table table;
   try {
     table = toml::parse(text, name);
@@ -157,6 +175,16 @@ LoopGeometry make_geometry(const GeometryInput& input) {
   const std::vector<double> zeros(n, 0.0);
   const std::vector<double>& d = input.d ? input.d->values : zeros;
   LoopGeometry geometry = LoopGeometry::from_degrees(input.a.values, input.alpha_deg.values, d);
+  // Finite lengths can still be too large to square (1e200): L, and with it
+  // every dimensionless energy, would be inf or NaN.
+  if (!std::isfinite(length_scale(geometry))) {
+    // Name the list that overflows: a, unless a alone is fine (then d).
+    const bool a_overflows = !std::isfinite(geometry.a.squaredNorm());
+    const SourcedList& culprit = a_overflows || !input.d ? input.a : *input.d;
+    throw UsageError(culprit.source, "values such as " + format_list({culprit_max(culprit.values)}) +
+                                         " are too large to compute with (the length scale L = sqrt(mean(a^2 + d^2)) "
+                                         "overflows); scale the loop down");
+  }
   // The library's own check, as a backstop: it throws std::invalid_argument,
   // which the caller reports as bad input too.
   validate_geometry(geometry);

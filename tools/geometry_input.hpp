@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "loopfarm/loop.hpp"
@@ -35,9 +36,14 @@ GeometryInput geometry_from_flags(const std::string& a_text, const std::string& 
 // the wrong type.
 GeometryInput geometry_from_toml(const std::filesystem::path& file);
 
+// The same from the file's text; `name` stands for the file in messages.
+// Separate so that the parser can be tested and fuzzed without a file.
+GeometryInput geometry_from_toml_text(std::string_view text, const std::string& name);
+
 // Checks what the library's validate_geometry checks, but names the input's
 // sources: 4 to 8 joints, the same count in every list, lengths >= 0. Values
-// are already known to be finite.
+// are already known to be finite. Also rejects lengths so large that the
+// length scale L overflows (every energy would be NaN).
 LoopGeometry make_geometry(const GeometryInput& input);
 
 // "2, 4, 2, 4": a list for messages and summaries (%g).

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -100,10 +101,15 @@ int run_start_command(const StartArguments& args) {
                                     std::to_string(job.search.starts) + ")");
   }
   const long long count = parse_integer(args.count, "--count");
-  if (count < 1 || index + count > job.search.starts) {
-    throw UsageError("--count", "got " + std::to_string(count) + "; starts " + std::to_string(index) + " to " +
-                                    std::to_string(index + count - 1) + " must lie in 0 to " +
-                                    std::to_string(job.search.starts - 1));
+  if (count < 1) throw UsageError("--count", "got " + std::to_string(count) + "; must be >= 1");
+  // Compared as count > starts - index: index + count can overflow
+  // (--count 9223372036854775807), and so can the last index in the message.
+  if (count > job.search.starts - index) {
+    const std::string last = count - 1 <= std::numeric_limits<long long>::max() - index
+                                 ? std::to_string(index + (count - 1))
+                                 : "beyond " + std::to_string(std::numeric_limits<long long>::max());
+    throw UsageError("--count", "got " + std::to_string(count) + "; starts " + std::to_string(index) + " to " + last +
+                                    " must lie in 0 to " + std::to_string(job.search.starts - 1));
   }
   if (count > 1 && !args.json) throw UsageError("--count", "more than one start needs --json (one line per start)");
   StartOptions options;

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -157,6 +158,25 @@ struct Job {
 Job read_job_file(const std::string& path);
 // The same from text; `source_name` stands for the file in messages.
 Job parse_job(std::string_view text, const std::string& source_name);
+
+// Where TOML text would drive the toml++ 3.3 parser (Debian 12's) into
+// undefined behaviour instead of a parse error; both found by fuzz/ and both
+// reported upstream (marzer/tomlplusplus issues 190 and 295, pull 301):
+//   - a non-ASCII character where the parser tests for whitespace, i.e.
+//     outside strings and comments, or first on the line after a line-ending
+//     backslash in a multi-line basic string (is_non_ascii_horizontal_whitespace
+//     reaches TOML_UNREACHABLE for U+00A1..U+0499 and U+2C0E..U+3007);
+//   - a table header whose name starts with neither a bare-key character nor a
+//     quote ("[{a]", "[[[a]]]": parse_key's precondition).
+// Valid TOML 1.0 has neither (non-ASCII text is allowed only in strings and
+// comments), so rejecting them costs nothing. parse_job and the geometry
+// reader call this before toml::parse.
+struct TomlHazard {
+  int line = 0;    // 1-based
+  int column = 0;  // 1-based, in bytes
+  std::string message;
+};
+std::optional<TomlHazard> find_toml_hazard(std::string_view text);
 
 // Whether `name` is an algorithm the job may ask for: "gauss-newton" or an
 // NLopt algorithm name this NLopt build provides (LD_LBFGS, LN_BOBYQA, ...).
