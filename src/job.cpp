@@ -410,7 +410,8 @@ Job parse_table(const toml::table& root, const std::string& file) {
 
   if (const toml::table* t = section("optimizer")) {
     for_each_key(r, *t, "optimizer",
-                 {"algorithm", "xtol_rel", "ftol_rel", "ftol_abs", "stopval", "max_evaluations", "time_limit_s"},
+                 {"algorithm", "xtol_rel", "ftol_rel", "ftol_abs", "stopval", "max_evaluations", "time_limit_s",
+                  "reuse_nearby_cycle"},
                  [&](const std::string& k, const std::string& full, const toml::node& node) {
                    if (k == "algorithm") {
                      job.optimizer.algorithm = r.string(node, full);
@@ -436,6 +437,8 @@ Job parse_table(const toml::table& root, const std::string& file) {
                      job.optimizer.max_evaluations = static_cast<int>(n);
                    } else if (k == "time_limit_s") {
                      job.optimizer.time_limit = r.positive(node, full, false);
+                   } else if (k == "reuse_nearby_cycle") {
+                     job.optimizer.reuse_nearby_cycle = r.boolean(node, full);
                    }
                  });
   }

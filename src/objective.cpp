@@ -67,7 +67,15 @@ bool CycleObjective::run_cycle(const Eigen::VectorXd& x) {
 bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
   ++evaluations_;
   last_x_ = x;
-  cycle_ = CycleSummary();
+  // The last successful cycle is the nearby cycle of this one (after a
+  // failed evaluation, the one before it still is).
+  if (last_ok_) {
+    std::swap(nearby_, cycle_);
+    nearby_start_ = start_;
+    have_nearby_ = true;
+  }
+  last_ok_ = false;
+  cycle_.samples.clear();
   geometry_ = space_.geometry(x);
   if (!x.allFinite()) return false;
   try {
@@ -77,6 +85,20 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
   }
   model_ = std::make_unique<LoopModel>(geometry_, settings_.equilibrium);
   workspace_ = std::make_unique<EquilibriumWorkspace>(*model_);
+  if (have_nearby_ && settings_.reuse_nearby_cycle &&
+      cycle_energy_from_nearby(*model_, *workspace_, nearby_, settings_.cycle, cycle_)) {
+    // The start state is the sample at theta0 (the first one of a full turn).
+    if (cycle_.samples.front().theta_in == initial_angles_[0]) {
+      start_ = cycle_.samples.front().state;
+      return std::isfinite(cycle_.E_mean);
+    }
+    const EquilibriumSummary anchor = solve_equilibrium(*model_, *workspace_, initial_angles_[0], nearby_start_,
+                                                        settings_.cycle.max_iterations_per_step);
+    if (anchor.status == SolveStatus::converged) {
+      start_ = anchor.state;
+      return std::isfinite(cycle_.E_mean);
+    }
+  }
   // The start's angles first; where they do not lead to an assembly (the
   // geometry moved too far from where they fit), the deterministic guesses.
   EquilibriumSummary start = assemble_from_angles(*model_, *workspace_, initial_angles_);
@@ -85,6 +107,14 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
   start_ = start.state;
   cycle_energy(*model_, *workspace_, initial_angles_[0], start_, settings_.cycle, cycle_);
   return std::isfinite(cycle_.E_mean);
+}
+
+void CycleObjective::continue_from(const CycleObjective& other) {
+  if (!other.last_ok_ || other.cycle_.samples.empty()) return;
+  nearby_ = other.cycle_;
+  nearby_start_ = other.start_;
+  have_nearby_ = true;
+  last_ok_ = false;  // so that the next evaluation keeps this nearby cycle
 }
 
 double CycleObjective::steering(const Eigen::MatrixXd* angle_jacobian, GeometryVector* gradient) const {

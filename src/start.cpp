@@ -33,6 +33,7 @@ ObjectiveSettings objective_settings(const Job& job) {
   s.deflation_shift = job.steering.deflation_shift;
   s.nontrivial = job.steering.nontrivial;
   s.min_travel = job.steering.min_travel;
+  s.reuse_nearby_cycle = job.optimizer.reuse_nearby_cycle;
   return s;
 }
 
@@ -78,11 +79,15 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   // The analysis of a zero (its local dimension from the Jacobian of every
   // sample's deformations) needs the whole cycle, whatever the search minimised.
   plain.measure = CycleMeasure::mean;
+  plain.reuse_nearby_cycle = job.optimizer.reuse_nearby_cycle;
   CycleObjective unsteered(job.space, plain, start.theta);
   const ObjectiveValue initial = unsteered.evaluate(start.x, nullptr);
   out.initial_E_mean = initial.ok ? initial.E_mean : std::numeric_limits<double>::quiet_NaN();
 
   CycleObjective objective(job.space, objective_settings(job), start.theta);
+  // The search's first evaluation is at the start itself, whose cycle the
+  // record above has just walked (steering does not change the cycle).
+  objective.continue_from(unsteered);
   LocalSearchOptions search;
   search.settings = job.optimizer;
   // NLopt's stochastic algorithms: a seed of their own per start.
@@ -101,7 +106,10 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
     return out;
   }
 
-  // The final point without steering: its true energy and pose.
+  // The final point without steering: its true energy and pose, on the
+  // branch the search followed to it (which an assembly from the start's
+  // angles at the final geometry may miss).
+  unsteered.continue_from(objective);
   const ObjectiveValue final_value = unsteered.evaluate(result.x, nullptr);
   if (!final_value.ok) {
     out.E_mean = std::numeric_limits<double>::quiet_NaN();

@@ -145,6 +145,10 @@ std::vector<TradeoffConfiguration> tradeoff_configurations(const Job& base, cons
     if (f == base.optimizer.ftol_rel) continue;
     add("ftol_rel", format_number(f), [f](Job& job) { job.optimizer.ftol_rel = f; });
   }
+  for (bool r : options.reuse_nearby_cycles) {
+    if (r == base.optimizer.reuse_nearby_cycle) continue;
+    add("reuse_nearby_cycle", r ? "true" : "false", [r](Job& job) { job.optimizer.reuse_nearby_cycle = r; });
+  }
   for (double z : options.zero_thresholds) {
     if (z == base.search.zero_threshold) continue;
     add("zero_threshold", format_number(z), [z](Job& job) { job.search.zero_threshold = z; });

@@ -44,6 +44,7 @@ ftol_abs = 1e-20
 stopval = 1e-24
 max_evaluations = 250
 time_limit_s = 12.5
+reuse_nearby_cycle = false
 
 [search]
 starts = 1000
@@ -117,6 +118,7 @@ TEST(Job, ParsesEveryTableInTheDocumentedUnits) {
   EXPECT_EQ(job.optimizer.stopval, 1e-24);
   EXPECT_EQ(job.optimizer.max_evaluations, 250);
   EXPECT_EQ(job.optimizer.time_limit, 12.5);
+  EXPECT_FALSE(job.optimizer.reuse_nearby_cycle);
   EXPECT_EQ(job.search.starts, 1000);
   EXPECT_EQ(job.search.seed, 42u);
   EXPECT_EQ(job.search.zero_threshold, 1e-11);
@@ -142,6 +144,7 @@ TEST(Job, EmptyFileGivesTheDocumentedDefaults) {
   EXPECT_NEAR(job.space.upper_bounds()[4], rad(180), 1e-15);
   EXPECT_EQ(job.space.lower_bounds()[8], -1.0);
   EXPECT_EQ(job.optimizer.algorithm, "gauss-newton");
+  EXPECT_TRUE(job.optimizer.reuse_nearby_cycle);
   EXPECT_EQ(job.search.starts, 100);
   EXPECT_FALSE(job.steering.nontrivial);
   EXPECT_TRUE(job.steering.deflate.empty());
@@ -248,6 +251,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadJob{"stogo", "[optimizer]\nalgorithm = \"GD_STOGO\"\n", 2, "optimizer.algorithm", "Debian"},
         BadJob{"max_eval", "[optimizer]\nmax_evaluations = 0\n", 2, "optimizer.max_evaluations", "[1, 1e8]"},
         BadJob{"time_negative", "[optimizer]\ntime_limit_s = -1\n", 2, "optimizer.time_limit_s", ">= 0"},
+        BadJob{"reuse_nearby_cycle", "[optimizer]\nreuse_nearby_cycle = \"yes\"\n", 2, "optimizer.reuse_nearby_cycle",
+               "true or false"},
         BadJob{"starts_zero", "[search]\nstarts = 0\n", 2, "search.starts", "> 0"},
         BadJob{"seed_negative", "[search]\nseed = -3\n", 2, "search.seed", ">= 0"},
         BadJob{"threshold", "[search]\nzero_threshold = 0\n", 2, "search.zero_threshold", "> 0"},

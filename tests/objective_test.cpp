@@ -119,6 +119,10 @@ TEST(Objective, SteeredGradientAndJacobianAgreeWithCentralDifferences) {
   settings.deflation_shift = 0.5;
   settings.nontrivial = true;
   settings.min_travel = rad(60);  // large, so that the travel term is far from 1
+  // Every evaluation from the assembly, so that the value and the residuals
+  // at x0 come from the same cycle to the last bit (a cycle reused from the
+  // differences' neighbours agrees to the solve's tolerance only).
+  settings.reuse_nearby_cycle = false;
   CycleObjective objective(f.job.space, settings, f.theta);
   Eigen::VectorXd gradient, r;
   Eigen::MatrixXd J;
@@ -141,6 +145,7 @@ TEST(Objective, MaxMeasureHasTheWorstSamplesGradientAndResiduals) {
   for (bool steered : {false, true}) {
     ObjectiveSettings settings = ObjectiveSettings::from_loop(f.job.loop);
     settings.measure = CycleMeasure::max;
+    settings.reuse_nearby_cycle = false;  // bit-identical cycles at x0, as above
     if (steered) {
       settings.deflation.push_back({"twist gap", twist_gap});
       settings.nontrivial = true;
@@ -160,6 +165,53 @@ TEST(Objective, MaxMeasureHasTheWorstSamplesGradientAndResiduals) {
     EXPECT_NEAR(0.5 * r.squaredNorm(), v.value, 1e-13 * v.value);
     EXPECT_LT(relative_error(J.transpose() * r, gradient), 1e-9);
   }
+}
+
+// The nearby cycle's reuse is a cheaper way to the same number: along a path
+// of small steps its values agree with evaluations from the assembly to the
+// solve's tolerance, at a fraction of the Newton iterations.
+TEST(Objective, ReusedNearbyCyclesAgreeWithFreshOnesAndCostFewerIterations) {
+  TiedFixture f;
+  ObjectiveSettings fresh_settings = ObjectiveSettings::from_loop(f.job.loop);
+  fresh_settings.reuse_nearby_cycle = false;
+  CycleObjective fresh(f.job.space, fresh_settings, f.theta);
+  CycleObjective reused(f.job.space, ObjectiveSettings::from_loop(f.job.loop), f.theta);
+  Eigen::VectorXd direction(f.job.space.free_count());
+  direction << 0.3, -0.2, 0.1, rad(2), rad(-1), rad(1.5), 0.05, 0.02;
+  long long fresh_iterations = 0, reused_iterations = 0;
+  for (int k = 0; k <= 10; ++k) {
+    const Eigen::VectorXd x = f.x0() + (0.005 * k) * direction;
+    const ObjectiveValue a = fresh.evaluate(x, nullptr);
+    const ObjectiveValue b = reused.evaluate(x, nullptr);
+    ASSERT_TRUE(a.ok && b.ok) << k;
+    ASSERT_EQ(a.failed_samples + a.branch_jumps, 0) << k;
+    EXPECT_NEAR(b.E_mean, a.E_mean, 1e-10 * a.E_mean) << k;
+    EXPECT_NEAR(b.E_max, a.E_max, 1e-10 * a.E_max) << k;
+    EXPECT_LT((reused.start_state().theta - fresh.start_state().theta).cwiseAbs().maxCoeff(), 1e-8) << k;
+    fresh_iterations += fresh.cycle().total_iterations;
+    if (k > 0) reused_iterations += reused.cycle().total_iterations;
+  }
+  // 10 steps: the reused cycles cost a few iterations a sample.
+  EXPECT_LT(reused_iterations, fresh_iterations / 3) << reused_iterations << " vs " << fresh_iterations;
+}
+
+// A step too large to vouch for falls back to the walk from the assembly,
+// and gives the fresh value exactly.
+TEST(Objective, AFarStepFallsBackToTheFreshCycle) {
+  TiedFixture f;
+  ObjectiveSettings fresh_settings = ObjectiveSettings::from_loop(f.job.loop);
+  fresh_settings.reuse_nearby_cycle = false;
+  CycleObjective fresh(f.job.space, fresh_settings, f.theta);
+  CycleObjective reused(f.job.space, ObjectiveSettings::from_loop(f.job.loop), f.theta);
+  Eigen::VectorXd far = f.x0();
+  far[0] = 4.5;  // a1 from 2.1
+  far[4] = rad(120);  // alpha3 from 25 deg
+  ASSERT_TRUE(reused.evaluate(f.x0(), nullptr).ok);
+  const ObjectiveValue b = reused.evaluate(far, nullptr);
+  const ObjectiveValue a = fresh.evaluate(far, nullptr);
+  ASSERT_TRUE(a.ok && b.ok);
+  EXPECT_EQ(b.E_mean, a.E_mean);
+  EXPECT_EQ(reused.cycle().total_iterations, fresh.cycle().total_iterations);
 }
 
 TEST(Objective, DeflationLiftsTheZerosOfTheDeflatedFamilyOnly) {

@@ -237,13 +237,15 @@ constexpr int kMaxEvaluations = 60;  // per local search: short, and the hang bo
 // 16 cycle samples, as the paper's Table 1 job; checked for what must hold.
 // `final_cycle`, when given, receives the objective's cycle at the returned point.
 LocalSearchSummary search(const ParameterSpace& space, const LoopGeometry& g0, const std::string& algorithm,
-                          const EquilibriumOptions& eo = {}, CycleSummary* final_cycle = nullptr) {
+                          const EquilibriumOptions& eo = {}, CycleSummary* final_cycle = nullptr,
+                          bool reuse_nearby_cycle = true) {
   const std::string what = "search " + algorithm;
   LocalSearchSummary s;
   try {
     ObjectiveSettings settings;
     settings.equilibrium = eo;
     settings.cycle.samples = 16;
+    settings.reuse_nearby_cycle = reuse_nearby_cycle;
     CycleObjective objective(space, settings, space.initial_angles(Eigen::VectorXd()));
     LocalSearchOptions options;
     options.settings.algorithm = algorithm;
@@ -791,9 +793,13 @@ TEST(Stability, AnglesFarFromClosureAssembleOnTheZeroBranch) {
 // elastic equilibrium, E = 0.64 with status converged (a KKT point off the
 // closure curve); the cycle follows it until it jumps to the zero branch
 // (two jumps, flagged): E_mean 0.12 for a movable loop, a missed zero. The
-// rigid walk from that pose still closes and verifies. A search with these
-// initial angles misses the Bennett loop a1 = 2, and ends where its cycle
-// lies on the spurious branch throughout: no jump is left to flag it.
+// rigid walk from that pose still closes and verifies. A search whose every
+// evaluation assembles afresh from these angles (reuse_nearby_cycle off)
+// misses the Bennett loop a1 = 2: its objective jumps between the spurious
+// branch and the other, and it ends where its cycle lies on the spurious
+// branch throughout, with no jump left to flag it. Reusing the nearby cycle
+// (the default) keeps the objective on one branch along the search's path,
+// and that path leads to the Bennett loop.
 TEST(StabilityKnownLimit, RandomAnglesCanAssembleAMovableLoopOnASpuriousEquilibrium) {
   const JointVector start = random_angles(4, 4);
   const Methods m = run_methods({"Bennett from random angles 4", paper_bennett_loop(), start});
@@ -811,10 +817,14 @@ TEST(StabilityKnownLimit, RandomAnglesCanAssembleAMovableLoopOnASpuriousEquilibr
   const ParameterSpace space = a1_free(rigid_paper_loop(), start, 1.9, 2.1);
   for (const char* algorithm : kAlgorithms) {
     CycleSummary final_cycle;
-    const LocalSearchSummary s = search(space, rigid_paper_loop(), algorithm, {}, &final_cycle);
+    const LocalSearchSummary s = search(space, rigid_paper_loop(), algorithm, {}, &final_cycle, false);
     EXPECT_GT(s.E_mean, 1e-6) << algorithm << " " << to_string(s.status);  // 5.9e-5 (GN), 7.8e-5 (LBFGS)
     EXPECT_GT(std::abs(s.x[0] - 2.0), 0.01) << algorithm;                    // 1.948, 1.940
     EXPECT_EQ(final_cycle.branch_jumps + final_cycle.failed_samples, 0) << algorithm;
+
+    const LocalSearchSummary reused = search(space, rigid_paper_loop(), algorithm, {}, &final_cycle, true);
+    EXPECT_LE(reused.E_mean, kBuiltInZeroThreshold) << algorithm << " " << to_string(reused.status);
+    EXPECT_NEAR(reused.x[0], 2.0, 1e-6) << algorithm;  // 2 - 2e-16 (GN), 2 - 2e-9 (LBFGS)
   }
 }
 

@@ -38,7 +38,8 @@ class TradeoffCli : public testing::CommandTest {
 const std::vector<std::string> kSmallSweep = {
     "{dir}/job.toml",   "--starts", "2", "--per-family", "1", "--generic", "1", "--perturbations", "1e-2",
     "--samples",        "8,16",     "--closure-tolerances", "1e-8", "--compliances", "paper", "--objectives", "mean,max", "--algorithms",
-    "gauss-newton,LD_LBFGS", "--zero-thresholds", "1e-20", "--ftol-rels", "0,1e-3"};
+    "gauss-newton,LD_LBFGS", "--zero-thresholds", "1e-20", "--ftol-rels", "0,1e-3",
+    "--reuse-nearby-cycles", "true,false"};
 
 TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   std::vector<std::string> args = kSmallSweep;
@@ -47,8 +48,8 @@ TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> rows = split(read_file(dir_ / "t.csv"), '\n');
   // Header, base, samples=16, closure_tolerance=1e-08, objective=max, algorithm=LD_LBFGS, ftol_rel=0.001,
-  // then "" after the last newline.
-  ASSERT_EQ(rows.size(), 8u) << read_file(dir_ / "t.csv");
+  // reuse_nearby_cycle=false, then "" after the last newline.
+  ASSERT_EQ(rows.size(), 9u) << read_file(dir_ / "t.csv");
   const std::vector<std::string> header = split(rows[0], ',');
   EXPECT_EQ(header.front(), "axis");
   EXPECT_EQ(header.back(), "pareto");
@@ -84,6 +85,8 @@ TEST_F(TradeoffCli, BadOptionsExitWithCode2NamingTheFlagAndLeaveFilesAlone) {
       {{"{dir}/job.toml", "--objectives", "mean,median"}, "--objectives"},
       {{"{dir}/job.toml", "--zero-thresholds", "nan"}, "--zero-thresholds"},
       {{"{dir}/job.toml", "--ftol-rels", "0,0"}, "--ftol-rels"},
+      {{"{dir}/job.toml", "--reuse-nearby-cycles", "true,yes"}, "--reuse-nearby-cycles"},
+      {{"{dir}/job.toml", "--reuse-nearby-cycles", "false,false"}, "--reuse-nearby-cycles"},
       {{"{dir}/job.toml", "--closure-tolerances", "0.1"}, "--closure-tolerances"},
       {{"{dir}/job.toml", "--perturbations", "2"}, "--perturbations"},
       {{"{dir}/missing.toml"}, "missing.toml"},

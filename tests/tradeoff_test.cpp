@@ -47,8 +47,10 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
   o.algorithms = {"gauss-newton", "LD_LBFGS"};
   o.zero_thresholds = {1e-12, 1e-20};
   o.ftol_rels = {0.0, 1e-3};          // 0 is the base's
+  o.reuse_nearby_cycles = {true, false};  // true is the base's
   const auto configurations = tradeoff_configurations(base, o);
-  ASSERT_EQ(configurations.size(), 8u);  // base, samples 8 and 32, tolerance, full, LBFGS, ftol 1e-3, 1e-20
+  // base, samples 8 and 32, tolerance, full, LBFGS, ftol 1e-3, no reuse, 1e-20
+  ASSERT_EQ(configurations.size(), 9u);
   EXPECT_EQ(configurations[0].name(), "base");
   int changed_samples = 0;
   for (const TradeoffConfiguration& c : configurations) {
@@ -58,6 +60,9 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
     EXPECT_EQ(c.job.loop.compliance != base.loop.compliance, c.axis == "compliance") << c.name();
     EXPECT_EQ(c.job.search.zero_threshold != base.search.zero_threshold, c.axis == "zero_threshold") << c.name();
     EXPECT_EQ(c.job.optimizer.ftol_rel != base.optimizer.ftol_rel, c.axis == "ftol_rel") << c.name();
+    EXPECT_EQ(c.job.optimizer.reuse_nearby_cycle != base.optimizer.reuse_nearby_cycle,
+              c.axis == "reuse_nearby_cycle")
+        << c.name();
     EXPECT_EQ(c.job.loop.objective, "mean") << c.name();
     EXPECT_EQ(c.job.loop.closure_tolerance != base.loop.closure_tolerance, c.axis == "closure_tolerance")
         << c.name();

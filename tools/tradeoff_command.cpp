@@ -30,6 +30,7 @@ struct TradeoffArguments {
   std::string algorithms = "gauss-newton,LD_LBFGS,LD_SLSQP,LD_MMA,LN_BOBYQA";
   std::string zero_thresholds = "1e-8,1e-12,1e-16,1e-20,1e-24";
   std::string ftol_rels = "0,1e-4,1e-3,1e-2";
+  std::string reuse_nearby_cycles = "true,false";
   std::string csv;
   std::string plot;
   bool quiet = false;
@@ -118,6 +119,17 @@ TradeoffOptions read_options(const TradeoffArguments& args) {
       args.zero_thresholds, "--zero-thresholds", [](double v) { return v > 0.0 && v < 1.0; }, "in (0, 1)");
   o.ftol_rels = checked_numbers(
       args.ftol_rels, "--ftol-rels", [](double v) { return v >= 0.0 && v < 1.0; }, "in [0, 1)");
+  o.reuse_nearby_cycles.clear();
+  for (const std::string& r : parse_word_list(args.reuse_nearby_cycles, "--reuse-nearby-cycles")) {
+    if (r != "true" && r != "false") {
+      throw UsageError("--reuse-nearby-cycles", quote_text(r) + " is not true or false");
+    }
+    if (std::find(o.reuse_nearby_cycles.begin(), o.reuse_nearby_cycles.end(), r == "true") !=
+        o.reuse_nearby_cycles.end()) {
+      throw UsageError("--reuse-nearby-cycles", quote_text(r) + " is given twice");
+    }
+    o.reuse_nearby_cycles.push_back(r == "true");
+  }
   o.validate();
   return o;
 }
@@ -270,7 +282,7 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand(
       "tradeoff",
       "Measure a job under many configurations, one choice changed at a time (cycle samples, equilibrium tolerance, "
-      "compliance, objective, algorithm, its relative-decrease stop, zero threshold): seconds per start against accuracy on the job's starts and on the "
+      "compliance, objective, algorithm, its relative-decrease stop, reuse of the nearby cycle, zero threshold): seconds per start against accuracy on the job's starts and on the "
       "ground-truth set. docs/tradeoff.md explains the measures and the chart.");
   app->footer(
       "Examples:\n"
@@ -303,6 +315,10 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
       ->type_name("LIST")
       ->capture_default_str();
   app->add_option("--ftol-rels", args->ftol_rels, "relative-decrease stops of the local search tried (0: off)")
+      ->type_name("LIST")
+      ->capture_default_str();
+  app->add_option("--reuse-nearby-cycles", args->reuse_nearby_cycles,
+                  "whether each evaluation's cycle starts from the last one's samples, tried")
       ->type_name("LIST")
       ->capture_default_str();
   app->add_option("--csv", args->csv, "write every measure of every configuration as CSV")->type_name("FILE");

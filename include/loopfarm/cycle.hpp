@@ -86,6 +86,21 @@ void cycle_energy(const LoopModel& model, EquilibriumWorkspace& workspace, doubl
                   const EquilibriumState& start, const CycleOptions& options,
                   CycleSummary& summary);
 
+// The cycle of a geometry near the one `nearby` was computed for (same
+// theta0, options and model layout), from nearby's samples: each sample is
+// solved from nearby's state at its input angle, without walking between
+// samples, which for a small change of geometry costs a few Newton
+// iterations a sample instead of a walk. Returns false when it cannot vouch
+// for the result (nearby had failed samples, a sample did not
+// converge within max_iterations_per_step, or a passive angle or a
+// deformation moved by more than max_passive_step, the walk's own limit for
+// one step, so far that it may have changed branch);
+// `summary` is then unspecified and the caller walks with cycle_energy.
+// A sample nearby reached by a branch jump keeps that status (and count):
+// its branch is followed, but it is still not joined to its predecessor.
+bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& workspace, const CycleSummary& nearby,
+                              const CycleOptions& options, CycleSummary& summary);
+
 // dE_mean / d(a, alpha, d) in GeometryVector order, in the geometry's own units
 // (per unit length, per radian), from each sample's multipliers; with
 // `sample` >= 0, the derivative of that one sample's energy instead (of E_max

@@ -118,6 +118,9 @@ struct OptimizerSettings {
   double stopval = 1e-26;
   int max_evaluations = 500;           // cycle evaluations per start
   double time_limit = 30.0;            // seconds per start; 0: none
+  // Start each evaluation's cycle from the last one's samples instead of
+  // walking it from the assembly (ObjectiveSettings::reuse_nearby_cycle).
+  bool reuse_nearby_cycle = true;
 };
 
 struct SearchSettings {

@@ -57,6 +57,10 @@ struct ObjectiveSettings {
   double deflation_shift = 1.0;
   bool nontrivial = false;
   double min_travel = 0.0872664625997164788;  // t0 [rad]
+  // Start each evaluation's cycle from the last successful evaluation's
+  // samples (cycle_energy_from_nearby) instead of walking it from the
+  // assembly, falling back to the walk when that cannot be vouched for.
+  bool reuse_nearby_cycle = true;
 
   // The loop settings of a job (compliance, stiffness ratio, samples, range);
   // steering is added by the caller, which knows the family distances.
@@ -87,6 +91,13 @@ class CycleObjective {
   // dr/dx at the last evaluation (which must have succeeded): one implicit
   // differentiation of its cycle, no new cycle.
   void residual_jacobian(Eigen::MatrixXd& jacobian);
+
+  // Makes `other`'s last cycle (same space and loop settings) the nearby
+  // cycle of this objective's next evaluation, as if this objective had
+  // evaluated it: the unsteered energy at a steered search's result follows
+  // the branch the search followed. Nothing when `other`'s last evaluation
+  // failed.
+  void continue_from(const CycleObjective& other);
 
   int evaluations() const { return evaluations_; }
   // The last evaluation's x, and whether it succeeded.
@@ -131,6 +142,11 @@ class CycleObjective {
   std::unique_ptr<EquilibriumWorkspace> workspace_;
   EquilibriumState start_;
   CycleSummary cycle_;
+  // The cycle of the last successful evaluation before the current one,
+  // and its start state: where the next evaluation starts from.
+  CycleSummary nearby_;
+  EquilibriumState nearby_start_;
+  bool have_nearby_ = false;
   // Buffers of the Jacobians, kept so that repeated evaluations reuse them.
   Eigen::VectorXd weighted_deformations_;
   Eigen::MatrixXd deformation_jacobian_;  // dr/d(a, alpha, d)

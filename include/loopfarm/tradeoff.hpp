@@ -44,6 +44,9 @@ struct TradeoffOptions {
   // The local search's relative-decrease stop ([optimizer] ftol_rel; 0: off):
   // ends starts that creep towards a non-zero minimum.
   std::vector<double> ftol_rels = {0.0, 1e-4, 1e-3, 1e-2};
+  // Whether each evaluation's cycle starts from the last one's samples
+  // ([optimizer] reuse_nearby_cycle).
+  std::vector<bool> reuse_nearby_cycles = {true, false};
   // Called after each configuration with its index and the total, for progress.
   std::function<void(int done, int total, const std::string& name)> progress;
 
@@ -54,7 +57,7 @@ struct TradeoffOptions {
 // One configuration: the base job with at most one choice changed.
 struct TradeoffConfiguration {
   // "base", "samples", "closure_tolerance", "compliance", "objective", "algorithm", "ftol_rel",
-  // "zero_threshold"
+  // "reuse_nearby_cycle", "zero_threshold"
   std::string axis;
   std::string value;  // the value on that axis, as text ("16", "1e-08", "LD_LBFGS")
   Job job;
