@@ -8,6 +8,11 @@
 // pass unseen. A malloc defined in the executable takes the place of libc's
 // for the whole process (ELF symbol interposition), libstdc++'s operator new
 // included; it forwards to glibc's own allocator.
+//
+// AddressSanitizer replaces malloc and operator new itself and calls malloc
+// before its shadow memory exists, where the counter's instrumented increment
+// would crash: under it nothing is replaced, kCountsAllocations is false, and
+// the tests that count skip (tools/test.sh --sanitize).
 #pragma once
 
 #include <atomic>
@@ -17,8 +22,14 @@
 namespace loopfarm::testing {
 inline std::atomic<long> g_allocations{0};
 inline long allocations() { return g_allocations.load(); }
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kCountsAllocations = false;
+#else
+inline constexpr bool kCountsAllocations = true;
+#endif
 }  // namespace loopfarm::testing
 
+#if !defined(__SANITIZE_ADDRESS__)
 #if defined(__GLIBC__)
 extern "C" {
 void* __libc_malloc(std::size_t size);  // glibc's allocator, under its own name
@@ -38,3 +49,4 @@ void* operator new(std::size_t size) {
 // at the call site and warn (-Wmismatched-new-delete), although the pair matches.
 [[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
 [[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#endif  // !__SANITIZE_ADDRESS__

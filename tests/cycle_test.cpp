@@ -393,6 +393,7 @@ TEST(Cycle, CycleFromANearbyGeometryAgreesWithTheWalk) {
 }
 
 TEST(Cycle, RepeatedCycleWithTheSameSampleCountDoesNotAllocate) {
+  if (!testing::kCountsAllocations) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
   const LoopGeometry g = long_link_loop();
   const LoopModel model(g);
   EquilibriumWorkspace ws(model);
@@ -407,6 +408,7 @@ TEST(Cycle, RepeatedCycleWithTheSameSampleCountDoesNotAllocate) {
 
 // The Gauss-Newton hot path: every accepted step differentiates its cycle.
 TEST(Cycle, RepeatedDeformationJacobianIntoTheSameOutputDoesNotAllocate) {
+  if (!testing::kCountsAllocations) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
   for (const GradientCase& c : gradient_cases()) {
     SolvedCycle s(c, 32);
     Eigen::MatrixXd jacobian, angles;
