@@ -596,7 +596,10 @@ bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& ws, 
   summary.max_closure_residual = 0.0;
   for (int j = 0; j < N; ++j) {
     const CycleSample& from = nearby.samples[static_cast<size_t>(j)];
-    if (from.state.theta.size() != model.joints()) return false;
+    if (from.state.theta.size() != model.joints() ||
+        from.state.deformations.size() != model.deformation_count()) {
+      return false;  // another model's cycle
+    }
     const EquilibriumSummary solve =
         solve_equilibrium(model, ws, from.theta_in, from.state, options.max_iterations_per_step);
     summary.total_iterations += solve.iterations;
@@ -606,9 +609,10 @@ bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& ws, 
     // passive angle may move by more than max_passive_step. The deformations
     // count too: where they are cheap (a tiny torsion ratio), a solve can
     // keep its angles and slide into another local minimum by a large twist
-    // deformation. Default jobs, 400 generic 4R starts: a limit of a
-    // quarter, a half and all of max_passive_step gave 1.10, 1.02 and
-    // 0.92 ms median per local minimisation, and 252, 255, 257 verified zeros.
+    // deformation. 400 generic 4R starts at the default settings (before
+    // jumped samples were followed too): a limit of a quarter, a half and
+    // all of max_passive_step gave 1.10, 1.02 and 0.92 ms median per local
+    // minimisation, and 252, 255, 257 verified zeros.
     const double limit = options.max_passive_step;
     if (solve.status != SolveStatus::converged || passive_change(model, from.state, solve.state) > limit ||
         (solve.state.deformations - from.state.deformations).lpNorm<Eigen::Infinity>() > limit) {

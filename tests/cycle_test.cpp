@@ -385,6 +385,12 @@ TEST(Cycle, CycleFromANearbyGeometryAgreesWithTheWalk) {
     failed.samples[1].status = SampleStatus::failed;
     failed.failed_samples = 1;
     EXPECT_FALSE(cycle_energy_from_nearby(model, ws, failed, options, reused));
+    // Nor one of another model layout (the offsets springy too).
+    EquilibriumOptions full;
+    full.compliance = Compliance::full;
+    const LoopModel full_model(g, full);
+    EquilibriumWorkspace full_ws(full_model);
+    EXPECT_FALSE(cycle_energy_from_nearby(full_model, full_ws, nearby, options, reused));
     // Nor one of another sample count.
     CycleOptions other = options;
     other.samples = N + 1;
