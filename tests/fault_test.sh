@@ -286,7 +286,11 @@ kill | term)
   # Campaigns on fresh databases until at least 2 early faults and 5 later
   # ones have been delivered: how many fit in one run depends on the speed
   # of the machine (a commit every 2 s), the count of faults must not.
-  for ((campaign = 1; campaign <= 4 && (early < 2 || later < 5); ++campaign)); do
+  # At most 12 campaigns: on a fast machine a campaign's run may complete
+  # after one later fault (since the search reuses the nearby cycle, the 600
+  # starts take a few seconds), so the count of campaigns, not the verdict,
+  # depends on the machine's speed.
+  for ((campaign = 1; campaign <= 12 && (early < 2 || later < 5); ++campaign)); do
     db="$tmp/faulted$campaign.sqlite"
     in_campaign=0
     # Two early moments, then six at numbers of committed starts, the
@@ -358,7 +362,7 @@ kill | term)
       same "$tmp/straight.txt" "$tmp/faulted.txt" "campaign $campaign: candidate ids differ after SIGKILL and resume"
     fi
   done
-  ((early >= 2 && later >= 5)) || fail "only $early early and $later later faults delivered in 4 campaigns"
+  ((early >= 2 && later >= 5)) || fail "only $early early and $later later faults delivered in 12 campaigns"
   say "$faults faults, $early early and $later later ones delivered, in $((campaign - 1)) campaigns: every resumed run" \
     "equals the uninterrupted one"
   ;;
