@@ -456,6 +456,23 @@ void differentiate_cycle(const LoopModel& model, EquilibriumWorkspace& ws, const
   }
 }
 
+// The summary's energies and counts from its samples.
+void summarize_samples(CycleSummary& summary) {
+  const double N = static_cast<double>(summary.samples.size());
+  summary.E_mean = 0.0;
+  summary.E_max = 0.0;
+  summary.failed_samples = 0;
+  summary.branch_jumps = 0;
+  summary.max_closure_residual = 0.0;
+  for (const CycleSample& s : summary.samples) {
+    summary.E_mean += s.energy / N;
+    summary.E_max = std::max(summary.E_max, s.energy);
+    summary.failed_samples += s.status == SampleStatus::failed;
+    summary.branch_jumps += s.status == SampleStatus::branch_jump;
+    summary.max_closure_residual = std::max(summary.max_closure_residual, s.closure_residual);
+  }
+}
+
 }  // namespace
 
 bool CycleOptions::full_turn() const { return range >= kTwoPi; }
@@ -565,19 +582,7 @@ void cycle_energy(const LoopModel& model, EquilibriumWorkspace& ws, double theta
   }
 
   if (!anchor_recorded) summary.total_iterations += anchor.iterations;
-
-  summary.E_mean = 0.0;
-  summary.E_max = 0.0;
-  summary.failed_samples = 0;
-  summary.branch_jumps = 0;
-  summary.max_closure_residual = 0.0;
-  for (const CycleSample& s : summary.samples) {
-    summary.E_mean += s.energy / N;
-    summary.E_max = std::max(summary.E_max, s.energy);
-    summary.failed_samples += s.status == SampleStatus::failed;
-    summary.branch_jumps += s.status == SampleStatus::branch_jump;
-    summary.max_closure_residual = std::max(summary.max_closure_residual, s.closure_residual);
-  }
+  summarize_samples(summary);
 }
 
 bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& ws, const CycleSummary& nearby,
@@ -589,11 +594,6 @@ bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& ws, 
   summary.samples.resize(static_cast<size_t>(N));
   summary.total_iterations = 0;
   summary.refinements = 0;
-  summary.E_mean = 0.0;
-  summary.E_max = 0.0;
-  summary.failed_samples = 0;
-  summary.branch_jumps = 0;
-  summary.max_closure_residual = 0.0;
   for (int j = 0; j < N; ++j) {
     const CycleSample& from = nearby.samples[static_cast<size_t>(j)];
     if (from.state.theta.size() != model.joints() ||
@@ -625,16 +625,13 @@ bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& ws, 
     // continuously in the geometry, but it is still not joined to the
     // sample before it.
     s.status = from.status == SampleStatus::branch_jump ? SampleStatus::branch_jump : SampleStatus::converged;
-    summary.branch_jumps += s.status == SampleStatus::branch_jump;
     s.solve_status = solve.status;
     s.iterations = solve.iterations;
     s.refinements = 0;
     s.closure_residual = solve.closure_residual;
     s.state = solve.state;
-    summary.E_mean += s.energy / N;
-    summary.E_max = std::max(summary.E_max, s.energy);
-    summary.max_closure_residual = std::max(summary.max_closure_residual, s.closure_residual);
   }
+  summarize_samples(summary);
   return true;
 }
 
