@@ -297,28 +297,230 @@ void coaxial_13_conditions(const Writing& w, Sink& c) {
         [&]() -> GeometryVector { return s.ratio_gradient(2 * n, w.d(0)) + s.ratio_gradient(2 * n + 2, w.d(2)); });
 }
 
+
+// ---------------------------------------------------------------------------
+// 5R and 6R families (docs/families.md). Helpers for the conditions they
+// share: a length difference, a twist sum or difference, an offset or a sum
+// of offsets, and a Bennett product.
+
+// (a_i + sign a_j) / L, or a_i / L alone when j < 0.
+template <class Writing, class Sink>
+void add_length(const Writing& w, Sink& c, const char* text, int i, int j, double sign) {
+  const Scale& s = w.scale();
+  c.add([&] { return std::string(text); },
+        [&] { return (w.a(i) + (j >= 0 ? sign * w.a(j) : 0.0)) / s.L; },
+        [&]() -> GeometryVector {
+          GeometryVector g = s.ratio_gradient(i, w.a(i));
+          if (j >= 0) g += sign * s.ratio_gradient(j, w.a(j));
+          return g;
+        });
+}
+
+// (d_i + sign d_j) / L, or d_i / L alone when j < 0.
+template <class Writing, class Sink>
+void add_offset(const Writing& w, Sink& c, const char* text, int i, int j, double sign) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  c.add([&] { return std::string(text); },
+        [&] { return (w.d(i) + (j >= 0 ? sign * w.d(j) : 0.0)) / s.L; },
+        [&]() -> GeometryVector {
+          GeometryVector g = s.ratio_gradient(2 * n + i, w.d(i));
+          if (j >= 0) g += sign * s.ratio_gradient(2 * n + j, w.d(j));
+          return g;
+        });
+}
+
+// wrap(alpha_i + sign alpha_j - shift) [rad].
+template <class Writing, class Sink>
+void add_twist(const Writing& w, Sink& c, const char* text, int i, int j, double sign, double shift = 0.0) {
+  const int n = w.joints();
+  c.add([&] { return std::string(text); }, [&] { return wrap_angle(w.alpha(i) + sign * w.alpha(j) - shift); },
+        [&] {
+          GeometryVector g = GeometryVector::Zero(3 * n);
+          g[n + i] += 1.0;
+          g[n + j] += sign;
+          return g;
+        });
+}
+
+// The Bennett product of links i and j: (a_i sin alpha_j - sign a_j sin alpha_i) / L,
+// zero when sin(alpha_i)/a_i = sign sin(alpha_j)/a_j.
+template <class Writing, class Sink>
+void add_bennett_product(const Writing& w, Sink& c, const char* text, int i, int j, double sign) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  auto product = [&] { return w.a(i) * w.sin_alpha(j) - sign * w.a(j) * w.sin_alpha(i); };
+  c.add([&] { return std::string(text); }, [&] { return product() / s.L; },
+        [&] {
+          GeometryVector g = -(product() / (s.L * s.L)) * s.dL;
+          g[i] += w.sin_alpha(j) / s.L;
+          g[j] += -sign * w.sin_alpha(i) / s.L;
+          g[n + j] += w.a(i) * w.cos_alpha(j) / s.L;
+          g[n + i] += -sign * w.a(j) * w.cos_alpha(i) / s.L;
+          return g;
+        });
+}
+
+// cos(alpha_i): zero when the twist is a right angle (either sign).
+template <class Writing, class Sink>
+void add_right_twist(const Writing& w, Sink& c, const char* text, int i) {
+  const int n = w.joints();
+  c.add([&] { return std::string(text); }, [&] { return w.cos_alpha(i); },
+        [&] {
+          GeometryVector g = GeometryVector::Zero(3 * n);
+          g[n + i] = -w.sin_alpha(i);
+          return g;
+        });
+}
+
+// Goldberg 5R (n = 5): two Bennett loops (b, beta, a, alpha) and
+// (b, beta, c, gamma) sharing the link (b, beta), written as links
+// 1 (b, beta), 2 (a, alpha), 3 (c, gamma), 4 (b, beta) and 5, the two
+// collinear links fused: (a + c, alpha + gamma) when they lie on opposite
+// sides of the removed joint, (a - c, alpha - gamma) on the same side. Set
+// bits: 0 the first loop's setup (sin alpha/a = -sin beta/b when set), 1 the
+// second's, 2 the same-side (subtractive) fusion.
+template <class Writing, class Sink>
+void goldberg_conditions(int set, const Writing& w, Sink& c) {
+  const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0;
+  const bool subtractive = (set & 4) != 0;
+  add_length(w, c, "a1 - a4", 0, 3, -1.0);
+  add_twist(w, c, "alpha1 - alpha4", 0, 3, -1.0);
+  static constexpr const char* kOffsets[] = {"d1", "d2", "d3", "d4", "d5"};
+  for (int k = 0; k < 5; ++k) add_offset(w, c, kOffsets[k], k, -1, 0.0);
+  add_bennett_product(w, c, s1 > 0 ? "a1 sin(alpha2) - a2 sin(alpha1)" : "a1 sin(alpha2) + a2 sin(alpha1)", 0, 1, s1);
+  add_bennett_product(w, c, s2 > 0 ? "a1 sin(alpha3) - a3 sin(alpha1)" : "a1 sin(alpha3) + a3 sin(alpha1)", 0, 2, s2);
+  // a5 - (a2 +- a3), alpha5 - (alpha2 +- alpha3).
+  const double f = subtractive ? 1.0 : -1.0;  // sign of a3 in a5 - a2 + f a3
+  const Scale& s = w.scale();
+  const int n = 5;
+  c.add([&] { return subtractive ? "a5 - (a2 - a3)" : "a5 - (a2 + a3)"; },
+        [&] { return (w.a(4) - w.a(1) + f * w.a(2)) / s.L; },
+        [&]() -> GeometryVector {
+          return s.ratio_gradient(4, w.a(4)) - s.ratio_gradient(1, w.a(1)) + f * s.ratio_gradient(2, w.a(2));
+        });
+  c.add([&] { return subtractive ? "alpha5 - (alpha2 - alpha3)" : "alpha5 - (alpha2 + alpha3)"; },
+        [&] { return wrap_angle(w.alpha(4) - w.alpha(1) + f * w.alpha(2)); },
+        [&] {
+          GeometryVector g = GeometryVector::Zero(3 * n);
+          g[n + 4] = 1.0;
+          g[n + 1] = -1.0;
+          g[n + 2] = f;
+          return g;
+        });
+}
+
+// Myard 5R: the Goldberg 5R whose two Bennett loops are mirror images,
+// which makes it plane-symmetric: a2 = a3, alpha3 = -alpha2 (bit 3 clear)
+// or pi - alpha2 (bit 3 set), and the shared link's twist a right angle.
+// Bits 0-2 as goldberg_conditions.
+template <class Writing, class Sink>
+void myard_conditions(int set, const Writing& w, Sink& c) {
+  goldberg_conditions(set & 7, w, c);
+  const double pi_shift = (set & 8) ? kPi : 0.0;
+  add_length(w, c, "a2 - a3", 1, 2, -1.0);
+  add_twist(w, c, (set & 8) ? "alpha2 + alpha3 - pi" : "alpha2 + alpha3", 1, 2, 1.0, pi_shift);
+  add_right_twist(w, c, "cos(alpha1)", 0);
+}
+
+// Bricard line-symmetric 6R: a_i = a_{i+3}, alpha_i = alpha_{i+3}, d_i = d_{i+3}.
+template <class Writing, class Sink>
+void bricard_line_conditions(const Writing& w, Sink& c) {
+  static constexpr const char* kA[] = {"a1 - a4", "a2 - a5", "a3 - a6"};
+  static constexpr const char* kAlpha[] = {"alpha1 - alpha4", "alpha2 - alpha5", "alpha3 - alpha6"};
+  static constexpr const char* kD[] = {"d1 - d4", "d2 - d5", "d3 - d6"};
+  for (int i = 0; i < 3; ++i) add_length(w, c, kA[i], i, i + 3, -1.0);
+  for (int i = 0; i < 3; ++i) add_twist(w, c, kAlpha[i], i, i + 3, -1.0);
+  for (int i = 0; i < 3; ++i) add_offset(w, c, kD[i], i, i + 3, -1.0);
+}
+
+// Bricard plane-symmetric 6R, the plane through joints 1 and 4: a1 = a6,
+// a2 = a5, a3 = a4, alpha1 = -alpha6, alpha2 = -alpha5, alpha3 = -alpha4,
+// d1 = d4 = 0, d2 = -d6, d3 = -d5 (in this project's convention; the
+// literature's "alpha12 + alpha61 = pi" is the same loop in its own).
+template <class Writing, class Sink>
+void bricard_plane_conditions(const Writing& w, Sink& c) {
+  static constexpr const char* kA[] = {"a1 - a6", "a2 - a5", "a3 - a4"};
+  static constexpr const char* kAlpha[] = {"alpha1 + alpha6", "alpha2 + alpha5", "alpha3 + alpha4"};
+  for (int i = 0; i < 3; ++i) add_length(w, c, kA[i], i, 5 - i, -1.0);
+  for (int i = 0; i < 3; ++i) add_twist(w, c, kAlpha[i], i, 5 - i, 1.0);
+  add_offset(w, c, "d1", 0, -1, 0.0);
+  add_offset(w, c, "d4", 3, -1, 0.0);
+  add_offset(w, c, "d2 + d6", 1, 5, 1.0);
+  add_offset(w, c, "d3 + d5", 2, 4, 1.0);
+}
+
+// Bricard trihedral 6R: every twist a right angle, every offset zero, and
+// a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2 (in units of L^2).
+template <class Writing, class Sink>
+void bricard_trihedral_conditions(const Writing& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  static constexpr const char* kCos[] = {"cos(alpha1)", "cos(alpha2)", "cos(alpha3)",
+                                         "cos(alpha4)", "cos(alpha5)", "cos(alpha6)"};
+  static constexpr const char* kD[] = {"d1", "d2", "d3", "d4", "d5", "d6"};
+  for (int k = 0; k < n; ++k) add_right_twist(w, c, kCos[k], k);
+  for (int k = 0; k < n; ++k) add_offset(w, c, kD[k], k, -1, 0.0);
+  auto squares = [&] {
+    double q = 0.0;
+    for (int k = 0; k < n; ++k) q += (k % 2 == 0 ? 1.0 : -1.0) * w.a(k) * w.a(k);
+    return q;
+  };
+  c.add([] { return "(a1^2 - a2^2 + a3^2 - a4^2 + a5^2 - a6^2) / L^2"; },
+        [&] { return squares() / (s.L * s.L); },
+        [&] {
+          const double q = squares();
+          GeometryVector g = -(2.0 * q / (s.L * s.L * s.L)) * s.dL;
+          for (int k = 0; k < n; ++k) g[k] += (k % 2 == 0 ? 2.0 : -2.0) * w.a(k) / (s.L * s.L);
+          return g;
+        });
+}
+
 // The condition sets of a writing that a family's score takes the best of,
 // numbered: for Bennett loops set 0 is the asymmetric setup and set 1 the
 // line-symmetric one; for trivial loops set 0 is axes 1 and 2 coinciding and
-// set 1 (n = 4) axes 1 and 3; planar loops have one set.
+// set 1 (n = 4) axes 1 and 3; planar loops have one set; Goldberg and Myard
+// sets as goldberg_conditions and myard_conditions say; Bricard loops one.
 int condition_sets(Family family, int joints) {
   switch (family) {
     case Family::bennett: return 2;
     case Family::planar: return 1;
     case Family::trivial: return joints == 4 ? 2 : 1;
+    case Family::goldberg: return 8;
+    case Family::myard: return 16;
+    case Family::bricard_line_symmetric:
+    case Family::bricard_plane_symmetric:
+    case Family::bricard_trihedral: return 1;
     case Family::spherical:
+    case Family::degenerate:
     case Family::unclassified: break;
   }
   return 0;  // no writings
 }
 
+// Whether a family's conditions read cosines of twists (the numeric path
+// tabulates them only then).
+constexpr bool reads_cosines(Family family) {
+  return family == Family::planar || family == Family::myard || family == Family::bricard_trihedral;
+}
+
 template <Family F, class Writing, class Sink>
 void condition_set(int set, const Writing& w, Sink& c) {
-  static_assert(F == Family::bennett || F == Family::planar || F == Family::trivial);
+  static_assert(F != Family::spherical && F != Family::degenerate && F != Family::unclassified);
   if constexpr (F == Family::bennett) {
     bennett_conditions(w, set == 0 ? 1.0 : -1.0, c);
   } else if constexpr (F == Family::planar) {
     planar_conditions(w, c);
+  } else if constexpr (F == Family::goldberg) {
+    goldberg_conditions(set, w, c);
+  } else if constexpr (F == Family::myard) {
+    myard_conditions(set, w, c);
+  } else if constexpr (F == Family::bricard_line_symmetric) {
+    bricard_line_conditions(w, c);
+  } else if constexpr (F == Family::bricard_plane_symmetric) {
+    bricard_plane_conditions(w, c);
+  } else if constexpr (F == Family::bricard_trihedral) {
+    bricard_trihedral_conditions(w, c);
   } else if (set == 0) {
     adjacent_coaxial_conditions(w, c);
   } else {
@@ -336,6 +538,7 @@ struct Best {
   const detail::Representation* writing = nullptr;
   double score = kInf;
   double setup_sign = 0.0;  // Bennett: +1 asymmetric, -1 line-symmetric
+  int set = 0;              // the best writing's condition set (condition_sets)
 };
 
 template <Family F>
@@ -353,6 +556,7 @@ Best best_over_writings(const LoopGeometry& g, bool by_norm) {
         best.conditions = std::move(c);
         best.writing = &r;
         best.setup_sign = F == Family::bennett ? (set == 0 ? 1.0 : -1.0) : 0.0;
+        best.set = set;
       }
     }
   }
@@ -393,6 +597,157 @@ AxisPair nearest_coincident_axes(const LoopGeometry& g, const JointVector& pose)
     }
   }
   return best;
+}
+
+// ---------------------------------------------------------------------------
+// Families decided by the geometry alone, by joint count, for classify() and
+// for the merged loop of a degenerate one.
+
+// best_over_writings for a family named at run time (those with writings).
+Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
+  switch (family) {
+    case Family::bennett: return best_over_writings<Family::bennett>(g, by_norm);
+    case Family::planar: return best_over_writings<Family::planar>(g, by_norm);
+    case Family::trivial: return best_over_writings<Family::trivial>(g, by_norm);
+    case Family::goldberg: return best_over_writings<Family::goldberg>(g, by_norm);
+    case Family::myard: return best_over_writings<Family::myard>(g, by_norm);
+    case Family::bricard_line_symmetric: return best_over_writings<Family::bricard_line_symmetric>(g, by_norm);
+    case Family::bricard_plane_symmetric: return best_over_writings<Family::bricard_plane_symmetric>(g, by_norm);
+    case Family::bricard_trihedral: return best_over_writings<Family::bricard_trihedral>(g, by_norm);
+    case Family::spherical:
+    case Family::degenerate:
+    case Family::unclassified: break;
+  }
+  throw std::logic_error(std::string("best_for: no writings for ") + to_string(family));
+}
+
+// A family's check on the geometry alone (not trivial, not degenerate).
+FamilyCheck family_check(Family family, const LoopGeometry& g) {
+  Best best;
+  if (family == Family::spherical) {
+    spherical_conditions(g, true, best.conditions);
+    best.score = best.conditions.max_abs();
+  } else {
+    best = best_for(family, g, false);
+  }
+  FamilyCheck check = check_from(family, best);
+  if (family == Family::bennett) {
+    check.setup = best.setup_sign > 0 ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
+  }
+  if (family == Family::goldberg || family == Family::myard) check.setup = BennettSetup::none;
+  return check;
+}
+
+// The n-specific families beyond planar and spherical, in the order they are
+// tried (the more special first).
+std::vector<Family> special_families(int n) {
+  switch (n) {
+    case 4: return {Family::bennett};
+    case 5: return {Family::myard, Family::goldberg};
+    case 6: return {Family::bricard_trihedral, Family::bricard_plane_symmetric, Family::bricard_line_symmetric};
+    default: return {};
+  }
+}
+
+// The loop with joints k and k + 1 merged (a_k = 0 and alpha_k snapped to 0
+// or pi): joint k keeps offset d_k +- d_{k+1}, the next link's twist gains
+// the snapped alpha_k. T_k T_{k+1} = Rz(theta_k +- theta_{k+1})
+// Tz(d_k +- d_{k+1}) Tx(a_{k+1}) Rx(alpha_{k+1} + alpha_k) exactly when
+// a_k = 0 and alpha_k is 0 (+) or pi (-).
+LoopGeometry merged_loop(const LoopGeometry& g, int k) {
+  const LoopGeometry w = relabelled(g, k);
+  const int n = g.joints();
+  const bool flipped = std::cos(w.alpha[0]) < 0.0;
+  LoopGeometry r;
+  r.a = w.a.tail(n - 1);
+  r.alpha = w.alpha.tail(n - 1);
+  r.d.resize(n - 1);
+  r.d[0] = w.d[0] + (flipped ? -w.d[1] : w.d[1]);
+  r.d.tail(n - 2) = w.d.tail(n - 2);
+  if (flipped) r.alpha[0] = wrap_angle(r.alpha[0] + kPi);
+  return r;
+}
+
+struct GeometricFit {
+  Family family = Family::unclassified;
+  double residual = kInf;
+  std::string detail;
+};
+
+GeometricFit degenerate_fit(const LoopGeometry& g, FamilyCheck& check);
+
+// The best-fitting movable family of a loop by its geometry alone (planar,
+// spherical, degenerate, then the n-specific ones), for a merged loop.
+GeometricFit geometric_fit(const LoopGeometry& g) {
+  const int n = g.joints();
+  GeometricFit best;
+  std::vector<Family> families = {Family::planar, Family::spherical};
+  for (Family f : special_families(n)) families.push_back(f);
+  for (Family f : families) {
+    const FamilyCheck c = family_check(f, g);
+    if (c.residual < best.residual) {
+      best = {f, c.residual, to_string(f)};
+      if (f == Family::bennett) best.detail += std::string(" (") + to_string(c.setup) + " setup)";
+    }
+  }
+  if (n == 5) {
+    FamilyCheck degenerate;
+    const GeometricFit d = degenerate_fit(g, degenerate);
+    if (d.residual < best.residual) best = d;
+  }
+  return best;
+}
+
+// Degenerate: over the adjacent pairs of axes, max(a_k / L, |sin alpha_k|,
+// the merged loop's best family residual), the least; only pairs that can
+// still beat the best so far are merged and classified.
+GeometricFit degenerate_fit(const LoopGeometry& g, FamilyCheck& check) {
+  const int n = g.joints();
+  const double L = length_scale(g);
+  std::vector<std::pair<double, int>> pairs;
+  for (int k = 0; k < n; ++k) pairs.push_back({std::max(g.a[k] / L, std::abs(std::sin(g.alpha[k]))), k});
+  std::stable_sort(pairs.begin(), pairs.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  check = FamilyCheck{};
+  check.family = Family::degenerate;
+  check.residual = kInf;
+  GeometricFit out;
+  out.family = Family::degenerate;
+  for (const auto& [pair_residual, k] : pairs) {
+    if (!(pair_residual < out.residual)) break;
+    const GeometricFit merged = geometric_fit(merged_loop(g, k));
+    const double residual = std::max(pair_residual, merged.residual);
+    if (residual < out.residual) {
+      out.residual = residual;
+      const int j = (k + 1) % n;
+      out.detail = "axes " + std::to_string(k + 1) + " and " + std::to_string(j + 1) + " coincide; merged " +
+                   std::to_string(n - 1) + "R: " + merged.detail;
+      check.residual = residual;
+      check.conditions = {{label("a", k) + " / L", g.a[k] / L},
+                          {"sin(" + label("alpha", k) + ")", std::sin(g.alpha[k])},
+                          {"merged " + std::to_string(n - 1) + "R loop: " + to_string(merged.family) + " residual",
+                           merged.residual}};
+    }
+  }
+  return out;
+}
+
+// The detail line of a 5R or 6R family found.
+std::string special_detail(Family family, const LoopGeometry& g) {
+  if (family != Family::goldberg && family != Family::myard) {
+    switch (family) {
+      case Family::bricard_line_symmetric: return "line symmetry: link i and joint i as link and joint i + 3";
+      case Family::bricard_plane_symmetric: return "plane symmetry through joints 1 and 4 of the best writing";
+      case Family::bricard_trihedral: return "right-angle twists, no offsets, a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2";
+      default: return "";
+    }
+  }
+  const Best best = family == Family::goldberg ? best_over_writings<Family::goldberg>(g, false)
+                                               : best_over_writings<Family::myard>(g, false);
+  std::string d = (best.set & 4) ? "fused links on the same side (a5 = a2 - a3)"
+                                 : "fused links on opposite sides (a5 = a2 + a3)";
+  d += std::string(", Bennett loops ") + ((best.set & 1) ? "line-symmetric" : "asymmetric") + " and " +
+       ((best.set & 2) ? "line-symmetric" : "asymmetric") + " in the best writing";
+  return d;
 }
 
 // ---------------------------------------------------------------------------
@@ -558,8 +913,8 @@ struct Search {
 template <Family F>
 Search best_writing(const LoopGeometry& g, const WritingTable& table) {
   const int n = g.joints();
-  // Cosines only decide the planar signed sum; elsewhere they enter gradients alone.
-  const Tables t = tabulate(g, F == Family::planar);
+  // Cosines only where a condition's value reads them; elsewhere they enter gradients alone.
+  const Tables t = tabulate(g, reads_cosines(F));
   const int sets = condition_sets(F, n);
   const int flips = 1 << n;
   Search best;
@@ -620,6 +975,20 @@ double spherical_distance(const LoopGeometry& g, GeometryVector* gradient) {
   return std::sqrt(c.sum);
 }
 
+// The 5R and 6R families' distances need their joint count.
+void require_joints(const char* where, Family family, const LoopGeometry& g) {
+  int joints = 0;
+  if (family == Family::goldberg || family == Family::myard) joints = 5;
+  if (family == Family::bricard_line_symmetric || family == Family::bricard_plane_symmetric ||
+      family == Family::bricard_trihedral) {
+    joints = 6;
+  }
+  if (joints != 0 && g.joints() != joints) {
+    throw std::invalid_argument(std::string(where) + ": " + to_string(family) + " loops have " +
+                                std::to_string(joints) + " joints, not " + std::to_string(g.joints()));
+  }
+}
+
 }  // namespace
 
 const char* to_string(Family family) {
@@ -629,6 +998,12 @@ const char* to_string(Family family) {
     case Family::spherical: return "spherical";
     case Family::trivial: return "trivial";
     case Family::unclassified: return "unclassified";
+    case Family::goldberg: return "goldberg";
+    case Family::myard: return "myard";
+    case Family::bricard_line_symmetric: return "bricard_line_symmetric";
+    case Family::bricard_plane_symmetric: return "bricard_plane_symmetric";
+    case Family::bricard_trihedral: return "bricard_trihedral";
+    case Family::degenerate: return "degenerate";
   }
   return "unknown";
 }
@@ -697,7 +1072,23 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   trivial.residual = has_frozen ? pair.residual : kInf;
 
   out.checks = {bennett, planar, spherical, trivial};
+  // 5R and 6R: degenerate, then the joint count's own families.
+  GeometricFit degenerate;
+  if (n == 5 || n == 6) {
+    FamilyCheck check;
+    degenerate = degenerate_fit(geometry, check);
+    out.checks.push_back(check);
+    for (Family f : special_families(n)) out.checks.push_back(family_check(f, geometry));
+  }
   const double tol = options.tolerance;
+  // The first of the 5R/6R families (after degenerate) that fits, in the order tried.
+  const FamilyCheck* special = nullptr;
+  for (Family f : special_families(n)) {
+    if (n == 4) break;  // Bennett, handled below as before
+    for (const FamilyCheck& c : out.checks) {
+      if (c.family == f && c.residual <= tol && !special) special = &c;
+    }
+  }
   if (trivial.residual <= tol) {
     out.family = Family::trivial;
     out.residual = trivial.residual;
@@ -713,6 +1104,14 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
     out.family = Family::spherical;
     out.residual = spherical.residual;
     out.detail = "all joint axes through one point";
+  } else if (degenerate.residual <= tol) {
+    out.family = Family::degenerate;
+    out.residual = degenerate.residual;
+    out.detail = degenerate.detail;
+  } else if (special) {
+    out.family = special->family;
+    out.residual = special->residual;
+    out.detail = special_detail(special->family, geometry);
   } else if (bennett.residual <= tol) {
     out.family = Family::bennett;
     out.setup = bennett.setup;
@@ -734,6 +1133,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 
 double family_distance(Family family, const LoopGeometry& geometry, GeometryVector* gradient) {
   validate_geometry(geometry);
+  require_joints("family_distance", family, geometry);
   switch (family) {
     case Family::bennett:
       if (geometry.joints() != 4) throw std::invalid_argument("family_distance: Bennett loops have 4 joints");
@@ -741,6 +1141,12 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
     case Family::planar: return distance_over_writings<Family::planar>(geometry, gradient);
     case Family::spherical: return spherical_distance(geometry, gradient);
     case Family::trivial: return distance_over_writings<Family::trivial>(geometry, gradient);
+    case Family::goldberg: return distance_over_writings<Family::goldberg>(geometry, gradient);
+    case Family::myard: return distance_over_writings<Family::myard>(geometry, gradient);
+    case Family::bricard_line_symmetric: return distance_over_writings<Family::bricard_line_symmetric>(geometry, gradient);
+    case Family::bricard_plane_symmetric: return distance_over_writings<Family::bricard_plane_symmetric>(geometry, gradient);
+    case Family::bricard_trihedral: return distance_over_writings<Family::bricard_trihedral>(geometry, gradient);
+    case Family::degenerate: throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified: break;
   }
   throw std::invalid_argument("family_distance: not a family");
@@ -748,6 +1154,7 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
 
 FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, GeometryVector* gradient) {
   validate_geometry(geometry);
+  require_joints("family_distance_report", family, geometry);
   const int n = geometry.joints();
   Best best;
   switch (family) {
@@ -755,12 +1162,19 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
       if (n != 4) throw std::invalid_argument("family_distance_report: Bennett loops have 4 joints");
       best = best_over_writings<Family::bennett>(geometry, true);
       break;
-    case Family::planar: best = best_over_writings<Family::planar>(geometry, true); break;
     case Family::spherical:
       spherical_conditions(geometry, false, best.conditions);
       best.score = best.conditions.norm();
       break;
-    case Family::trivial: best = best_over_writings<Family::trivial>(geometry, true); break;
+    case Family::planar:
+    case Family::trivial:
+    case Family::goldberg:
+    case Family::myard:
+    case Family::bricard_line_symmetric:
+    case Family::bricard_plane_symmetric:
+    case Family::bricard_trihedral: best = best_for(family, geometry, true); break;
+    case Family::degenerate:
+      throw std::invalid_argument("family_distance_report: degenerate loops have no distance");
     case Family::unclassified: throw std::invalid_argument("family_distance_report: not a family");
   }
   if (gradient) {

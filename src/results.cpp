@@ -166,6 +166,14 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::planar: c.planar_residual = check.residual; break;
       case Family::spherical: c.spherical_residual = check.residual; break;
       case Family::trivial: c.trivial_residual = check.residual; break;
+      // The 5R and 6R families have no column of their own (yet): their
+      // residual is family_residual when the loop is classified as one.
+      case Family::goldberg:
+      case Family::myard:
+      case Family::bricard_line_symmetric:
+      case Family::bricard_plane_symmetric:
+      case Family::bricard_trihedral:
+      case Family::degenerate:
       case Family::unclassified: break;
     }
   }

@@ -1,5 +1,6 @@
 // Classification of a movable loop into the known families (DESIGN.md, "Known
-// movable 4R loops"), with the residual of every condition of every family.
+// movable 4R loops"; docs/families.md for 5R and 6R), with the residual of
+// every condition of every family.
 //
 // Conditions are evaluated on every equivalent writing of the loop (cyclic
 // relabelling, reversal, axis flips: 2n * 2^n of them) and the best one is
@@ -14,6 +15,13 @@
 //   spherical  every a_i = 0 and d_i = 0
 //   trivial    two joint axes coincide in the given pose and some joint stays
 //              frozen over the motion: a rigid rotation about the shared axis
+//   goldberg   (n = 5) two Bennett loops sharing a link, the shared link
+//              removed and the two collinear links fused
+//   myard      (n = 5) the plane-symmetric Goldberg 5R
+//   bricard_line_symmetric, bricard_plane_symmetric, bricard_trihedral (n = 6)
+//   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
+//              or pi) and the (n-1)R loop with them merged is in a movable
+//              family (not trivial)
 //
 // docs/classification.md has the details and the tolerances.
 #pragma once
@@ -26,7 +34,25 @@
 
 namespace loopfarm {
 
-enum class Family { bennett, planar, spherical, trivial, unclassified };
+// Strings (to_string) are stored in results databases: a new family gets a
+// new string, an existing one never changes.
+enum class Family {
+  bennett,
+  planar,
+  spherical,
+  trivial,
+  unclassified,
+  // 5R (docs/families.md)
+  goldberg,
+  myard,
+  // 6R
+  bricard_line_symmetric,
+  bricard_plane_symmetric,
+  bricard_trihedral,
+  // n = 5, 6: two adjacent axes coincide and the loop with them merged is in
+  // a movable family (an idle joint)
+  degenerate,
+};
 const char* to_string(Family family);
 enum class BennettSetup { none, asymmetric, line_symmetric };
 const char* to_string(BennettSetup setup);
@@ -53,7 +79,10 @@ struct Classification {
   BennettSetup setup = BennettSetup::none;
   double residual = 0.0;          // of the family found (of the nearest family when unclassified)
   std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
-  std::vector<FamilyCheck> checks;  // bennett, planar, spherical, trivial, in this order
+  // bennett, planar, spherical, trivial, in this order; then for n = 5
+  // degenerate, goldberg, myard and for n = 6 degenerate,
+  // bricard_line_symmetric, bricard_plane_symmetric, bricard_trihedral.
+  std::vector<FamilyCheck> checks;
 };
 
 // `pose`: the joint angles of one assembled pose (for the coincidence of
@@ -77,8 +106,11 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 //     alpha3 = alpha4, d2 = d4 = 0, d1 = -d3.
 // The numeric path, called on every evaluation of a steered search: it builds
 // no names and, after the first call for a joint count (which builds that
-// count's table of writings), allocates nothing. Throws
-// std::invalid_argument for an invalid geometry, Bennett with n != 4, or
+// count's table of writings), allocates nothing. Also goldberg and myard
+// (n = 5) and the three Bricard families (n = 6), their conditions as
+// classify() lists them. Throws std::invalid_argument for an invalid
+// geometry, a family for another joint count (Bennett with n != 4, ...),
+// Family::degenerate (its conditions depend on which axes are merged) or
 // Family::unclassified.
 double family_distance(Family family, const LoopGeometry& geometry, GeometryVector* gradient = nullptr);
 
