@@ -20,6 +20,7 @@
 
 #include "cli_support.hpp"
 #include "loopfarm/assembly.hpp"
+#include "loopfarm/classify.hpp"
 #include "loopfarm/cycle.hpp"
 #include "loopfarm/results_database.hpp"
 #include "plot.hpp"
@@ -404,10 +405,18 @@ int run_report(const ReportArguments& args) {
   if (limit < 0) throw UsageError("--limit", "got " + args.limit + "; must be >= 0");
   if (!args.max_energy.empty()) (void)parse_number(args.max_energy, "--max-energy");
   if (!args.run.empty()) (void)parse_integer(args.run, "--run");
-  if (!args.family.empty() && args.family != "bennett" && args.family != "planar" && args.family != "spherical" &&
-      args.family != "trivial" && args.family != "unclassified") {
-    throw UsageError("--family", "got " + quote_text(args.family) +
-                                     "; expected bennett, planar, spherical, trivial or unclassified");
+  if (!args.family.empty()) {
+    // Every family a classification can store (docs/families.md for n = 5, 6).
+    std::string names;
+    bool known = false;
+    for (Family f : {Family::bennett, Family::planar, Family::spherical, Family::trivial, Family::goldberg,
+                     Family::myard, Family::bricard_line_symmetric, Family::bricard_plane_symmetric,
+                     Family::bricard_trihedral, Family::degenerate, Family::unclassified}) {
+      known = known || args.family == to_string(f);
+      names += names.empty() ? "" : (f == Family::unclassified ? " or " : ", ");
+      names += to_string(f);
+    }
+    if (!known) throw UsageError("--family", "got " + quote_text(args.family) + "; expected " + names);
   }
   std::filesystem::path gnuplot;
   if (!args.plot.empty()) {
@@ -467,7 +476,9 @@ Subcommand add_report_command(CLI::App& parent) {
       "Exit codes: 0 done, 1 failure (gnuplot), 2 bad input (options, a file that is not a loopfarm database or\n"
       "is damaged: checked with PRAGMA quick_check, about 2 s per million starts; the file is never changed).\n");
   app->add_option("DB", args->database, "results database (SQLite) written by loopfarm run")->required();
-  app->add_option("--family", args->family, "only this family: bennett, planar, spherical, trivial, unclassified");
+  app->add_option("--family", args->family,
+                  "only this family: bennett, planar, spherical, trivial, goldberg, myard, bricard_line_symmetric, "
+                  "bricard_plane_symmetric, bricard_trihedral, degenerate, unclassified");
   app->add_option("--max-energy", args->max_energy, "only candidates with E_mean at most this")->type_name("E");
   app->add_option("--limit", args->limit, "at most this many candidates")->type_name("N")->capture_default_str();
   app->add_option("--run", args->run, "only what run ID found first (default: every run)")->type_name("ID");

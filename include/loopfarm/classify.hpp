@@ -80,8 +80,8 @@ struct Classification {
   double residual = 0.0;          // of the family found (of the nearest family when unclassified)
   std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
   // bennett, planar, spherical, trivial, in this order; then for n = 5
-  // degenerate, goldberg, myard and for n = 6 degenerate,
-  // bricard_line_symmetric, bricard_plane_symmetric, bricard_trihedral.
+  // degenerate, myard, goldberg and for n = 6 degenerate, bricard_trihedral,
+  // bricard_plane_symmetric, bricard_line_symmetric (the order they are tried).
   std::vector<FamilyCheck> checks;
 };
 
