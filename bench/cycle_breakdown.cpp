@@ -4,10 +4,13 @@
 // (counts, not times), so two settings compare exactly:
 //
 //   build/release/bench/cycle_breakdown [--samples N] [--max-refinements D]
-//                                       [--max-iterations-per-step B]
+//                                       [--max-iterations-per-step B] [--bennett]
 //
 // Prints one line per loop (E_mean, iterations, bisections, jumps, failures)
-// and the total iterations by sample status.
+// and the total iterations by sample status. --bennett drives the paper's
+// Bennett loop from 120 deg instead (BM_Cycle_Bennett's cycle), 8 times, so
+// that instruction counts (valgrind --tool=callgrind) compare with the
+// generic loops'.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -19,6 +22,8 @@
 #include "loopfarm/sample_loops.hpp"
 
 namespace {
+
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
 int integer_argument(int argc, char** argv, int& i) {
   if (i + 1 >= argc) {
@@ -39,6 +44,7 @@ int integer_argument(int argc, char** argv, int& i) {
 int main(int argc, char** argv) {
   using namespace loopfarm;
   CycleOptions options;
+  bool bennett = false;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--samples") == 0) {
       options.samples = integer_argument(argc, argv, i);
@@ -46,6 +52,8 @@ int main(int argc, char** argv) {
       options.max_refinements = integer_argument(argc, argv, i);
     } else if (std::strcmp(argv[i], "--max-iterations-per-step") == 0) {
       options.max_iterations_per_step = integer_argument(argc, argv, i);
+    } else if (std::strcmp(argv[i], "--bennett") == 0) {
+      bennett = true;
     } else {
       std::fprintf(stderr, "cycle_breakdown: unknown option %s\n", argv[i]);
       return 2;
@@ -60,14 +68,17 @@ int main(int argc, char** argv) {
   std::map<std::string, std::pair<long, long>> by_status;  // samples, iterations
   long total = 0;
   for (std::uint64_t seed = 1; seed <= 8; ++seed) {
-    const LoopModel model(random_loop(4, seed));
+    const double theta0 = bennett ? 120.0 * kDegree : 0.0;
+    const LoopModel model(bennett ? paper_bennett_loop() : random_loop(4, seed));
     EquilibriumWorkspace ws(model);
-    const EquilibriumState start = assemble(model, ws, 0.0).state;
+    const EquilibriumState start =
+        bennett ? EquilibriumState::at_angles(model, bennett_angles(model.geometry(), theta0))
+                : assemble(model, ws, theta0).state;
     CycleSummary s;
-    cycle_energy(model, ws, 0.0, start, options, s);
+    cycle_energy(model, ws, theta0, start, options, s);
     total += s.total_iterations;
-    std::printf("random_loop(4, %d): E_mean %.10g, %d iterations, %d bisections, %d branch jumps, %d failed\n",
-                static_cast<int>(seed), s.E_mean, s.total_iterations, s.refinements, s.branch_jumps,
+    std::printf("%s(4, %d): E_mean %.10g, %d iterations, %d bisections, %d branch jumps, %d failed\n",
+                bennett ? "paper_bennett_loop" : "random_loop", static_cast<int>(seed), s.E_mean, s.total_iterations, s.refinements, s.branch_jumps,
                 s.failed_samples);
     for (const CycleSample& sample : s.samples) {
       auto& entry = by_status[to_string(sample.status)];
