@@ -12,8 +12,17 @@
 // AddressSanitizer replaces malloc and operator new itself and calls malloc
 // before its shadow memory exists, where the counter's instrumented increment
 // would crash: under it nothing is replaced, kCountsAllocations is false, and
-// the tests that count skip (tools/test.sh --sanitize).
+// the tests that count skip (tools/test.sh --sanitize). gcc says so with
+// __SANITIZE_ADDRESS__, clang (14) only through __has_feature.
 #pragma once
+
+#if defined(__SANITIZE_ADDRESS__)
+#define LOOPFARM_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LOOPFARM_UNDER_ASAN 1
+#endif
+#endif
 
 #include <atomic>
 #include <cstdlib>
@@ -22,14 +31,14 @@
 namespace loopfarm::testing {
 inline std::atomic<long> g_allocations{0};
 inline long allocations() { return g_allocations.load(); }
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(LOOPFARM_UNDER_ASAN)
 inline constexpr bool kCountsAllocations = false;
 #else
 inline constexpr bool kCountsAllocations = true;
 #endif
 }  // namespace loopfarm::testing
 
-#if !defined(__SANITIZE_ADDRESS__)
+#if !defined(LOOPFARM_UNDER_ASAN)
 #if defined(__GLIBC__)
 extern "C" {
 void* __libc_malloc(std::size_t size);  // glibc's allocator, under its own name
@@ -49,4 +58,4 @@ void* operator new(std::size_t size) {
 // at the call site and warn (-Wmismatched-new-delete), although the pair matches.
 [[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
 [[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-#endif  // !__SANITIZE_ADDRESS__
+#endif  // !LOOPFARM_UNDER_ASAN
