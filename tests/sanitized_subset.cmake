@@ -1,0 +1,42 @@
+# CI's sanitized subset (tools/test.sh builds it with clang, AddressSanitizer
+# and UndefinedBehaviorSanitizer into build/sanitize-subset and runs it after
+# the normal suite). tools/test.sh --sanitize runs everything instrumented,
+# but its build alone takes some 15 minutes on 2 cores, most of it the
+# numerical core (src/cycle.cpp and the search) compiled with the sanitizers;
+# CI cannot afford that. These test programs need only a few library sources,
+# which each compiles itself (as fuzz/ does), so the whole subset builds and
+# runs in about a minute:
+#
+#   loop_test               the loop's geometry and frames (loop.cpp, sample_loops.cpp)
+#   equilibrium_test        the equilibrium solve and assembly (equilibrium.cpp, assembly.cpp)
+#   sampler_test            the job's parameter space and sampler (job.cpp, parameter_space.cpp, sampler.cpp)
+#   results_database_test   the results database, SQLite's C API (results_database.cpp)
+#
+# The parsers are sanitized by the fuzzers (fuzz/), the rest only by
+# tools/test.sh --sanitize. A link error here means a test needs a source more:
+# add it to the list.
+find_package(GTest REQUIRED)
+include(GoogleTest)
+enable_testing()
+
+add_custom_target(sanitized_subset)
+function(loopfarm_add_sanitized_test name)
+  add_executable(${name} ${PROJECT_SOURCE_DIR}/tests/${name}.cpp ${ARGN})
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/include ${PROJECT_SOURCE_DIR}/src)
+  target_compile_definitions(${name} PRIVATE LOOPFARM_VERSION="${PROJECT_VERSION}")
+  target_link_libraries(${name} PRIVATE loopfarm_options Eigen3::Eigen GTest::gtest_main)
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60)
+  add_dependencies(sanitized_subset ${name})
+endfunction()
+
+set(loopfarm_geometry ${PROJECT_SOURCE_DIR}/src/loop.cpp ${PROJECT_SOURCE_DIR}/src/sample_loops.cpp)
+loopfarm_add_sanitized_test(loop_test ${loopfarm_geometry})
+loopfarm_add_sanitized_test(equilibrium_test ${loopfarm_geometry}
+  ${PROJECT_SOURCE_DIR}/src/equilibrium.cpp ${PROJECT_SOURCE_DIR}/src/assembly.cpp)
+loopfarm_add_sanitized_test(sampler_test
+  ${PROJECT_SOURCE_DIR}/src/job.cpp ${PROJECT_SOURCE_DIR}/src/parameter_space.cpp ${PROJECT_SOURCE_DIR}/src/sampler.cpp
+  ${PROJECT_SOURCE_DIR}/src/loop.cpp)
+target_link_libraries(sampler_test PRIVATE tomlplusplus::tomlplusplus NLopt::nlopt)
+loopfarm_add_sanitized_test(results_database_test ${PROJECT_SOURCE_DIR}/src/results_database.cpp
+  ${PROJECT_SOURCE_DIR}/src/loop.cpp)
+target_link_libraries(results_database_test PRIVATE SQLite::SQLite3)
