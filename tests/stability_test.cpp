@@ -250,7 +250,11 @@ LocalSearchSummary search(const ParameterSpace& space, const LoopGeometry& g0, c
     LocalSearchOptions options;
     options.settings.algorithm = algorithm;
     options.settings.max_evaluations = kMaxEvaluations;
-    options.settings.time_limit = 20.0;  // a guard only; no assertion depends on time
+    // A guard against a hang only, far above any search's time: the
+    // assertion below says the evaluation limit stops first. 20 s was too
+    // little for LBFGS from the near-spherical loop in the sanitized build
+    // (tools/test.sh --sanitize) on a loaded machine.
+    options.settings.time_limit = 300.0;
     s = local_minimize(objective, space.free_values(g0), options);
     if (final_cycle != nullptr) *final_cycle = objective.cycle();
   } catch (const std::exception& e) {
