@@ -101,6 +101,27 @@ struct Reader {
   }
 };
 
+// The families [steering] deflate accepts: those family_distance
+// (classify.hpp) measures, with the joint count each needs (0: any). Kept
+// here rather than taken from classify, so that the parser stands alone (fuzz/);
+// start.cpp maps the names to classify's families and a test checks both agree.
+struct DeflatableFamily {
+  const char* name;
+  int joints;
+  const char* why;
+};
+constexpr DeflatableFamily kDeflatable[] = {
+    {"planar", 0, ""},
+    {"spherical", 0, ""},
+    {"trivial", 0, ""},
+    {"bennett", 4, "Bennett loops have 4 joints"},
+    {"goldberg", 5, "Goldberg loops have 5 joints"},
+    {"myard", 5, "Myard loops have 5 joints"},
+    {"bricard_line_symmetric", 6, "Bricard loops have 6 joints"},
+    {"bricard_plane_symmetric", 6, "Bricard loops have 6 joints"},
+    {"bricard_trihedral", 6, "Bricard loops have 6 joints"},
+};
+
 // The settings tables and their keys; anything else is an error.
 const std::set<std::string> kTables = {"loop", "space", "optimizer", "search", "steering", "output"};
 
@@ -217,6 +238,51 @@ ParameterSpec read_spec(const Reader& r, const toml::node& node, const std::stri
              Reader::describe(node));
 }
 
+// A symmetric sub-space ([space] symmetry, docs/job-file.md): for every
+// geometric parameter that the symmetry makes an image of another, the
+// source and the sign (image = sign * source); a source of -1 fixes the
+// parameter at 0 (an offset on the plane of symmetry). Indices 0-based into
+// ParameterSpace::specs; lower joints are the sources.
+struct SymmetryTie {
+  int image;
+  int source;
+  double sign;
+};
+
+std::vector<SymmetryTie> symmetry_ties(const std::string& symmetry, const ParameterSpace& space) {
+  const int n = space.joints;
+  std::vector<SymmetryTie> ties;
+  auto at = [&](ParameterKind kind, int joint) { return space.index(kind, ((joint % n) + n) % n); };
+  if (symmetry == "line") {
+    // A half-turn about a line maps joint i to joint i + n/2 and link i to
+    // link i + n/2, keeping every parameter (Bricard's line-symmetric 6R).
+    for (int i = n / 2; i < n; ++i) {
+      for (ParameterKind kind : {ParameterKind::a, ParameterKind::alpha, ParameterKind::d}) {
+        ties.push_back({at(kind, i), at(kind, i - n / 2), 1.0});
+      }
+    }
+  } else if (symmetry == "plane") {
+    // A reflection in a plane through joints 1 and n/2 + 1 (1-based) maps
+    // joint j to joint 2 - j and link i (joint i to i + 1) to link n + 1 - i,
+    // run backwards: lengths equal, twists and offsets negated
+    // (docs/families.md: the twist sums are 0 in this convention). The
+    // offsets of the two joints on the plane are 0.
+    for (int i = 0; i < n; ++i) {  // 0-based link i <-> link n - 1 - i
+      const int mirror = n - 1 - i;
+      if (mirror > i) {
+        ties.push_back({at(ParameterKind::a, mirror), at(ParameterKind::a, i), 1.0});
+        ties.push_back({at(ParameterKind::alpha, mirror), at(ParameterKind::alpha, i), -1.0});
+      }
+    }
+    for (int j = 0; j < n; ++j) {  // 0-based joint j <-> joint -j
+      const int mirror = (n - j) % n;
+      if (mirror == j) ties.push_back({at(ParameterKind::d, j), -1, 0.0});
+      if (mirror > j) ties.push_back({at(ParameterKind::d, mirror), at(ParameterKind::d, j), -1.0});
+    }
+  }
+  return ties;
+}
+
 ParameterSpace read_space(const Reader& r, const toml::table* table, int joints) {
   ParameterSpace space;
   space.joints = joints;
@@ -235,17 +301,32 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
   std::vector<std::string> keys(space.specs.size());
   std::vector<toml::source_region> places(space.specs.size());
   std::vector<bool> named(space.specs.size(), false);
+  std::string symmetry = "none";
+  int symmetry_line = 0;
 
   if (table) {
     // Defaults first, whatever their place in the file.
     for (const auto& [key, node] : *table) {
       const std::string name(key.str());
       const std::string full = "space." + name;
+      if (name == "symmetry") {
+        symmetry = r.string(node, full);
+        if (symmetry != "none" && symmetry != "line" && symmetry != "plane") {
+          r.fail(node.source(), full, "got \"" + symmetry + "\"; expected \"none\", \"line\" (a_i = a_{i+n/2}, "
+                                      "alpha and d likewise) or \"plane\" (mirror through joints 1 and n/2+1)");
+        }
+        if (symmetry != "none" && joints % 2 != 0) {
+          r.fail(node.source(), full, "\"" + symmetry + "\" needs an even number of joints, the job has " +
+                                          std::to_string(joints) + " (write the ties per parameter instead)");
+        }
+        symmetry_line = static_cast<int>(node.source().begin.line);
+        continue;
+      }
       const std::optional<ParameterName> p = parse_parameter_name(name);
       if (!p) {
         r.fail(key.source(), full,
-               "unknown parameter; expected a1..a" + std::to_string(joints) + ", alpha1_deg.., d1.., theta1_deg.. "
-               "or a default a, alpha_deg, d, theta_deg");
+               "unknown parameter; expected a1..a" + std::to_string(joints) + ", alpha1_deg.., d1.., theta1_deg.., "
+               "a default a, alpha_deg, d, theta_deg, or symmetry");
       }
       if (p->joint > joints) {
         r.fail(key.source(), full, "joint " + std::to_string(p->joint) + " but [loop] joints = " + std::to_string(joints));
@@ -263,17 +344,34 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
   if (table) {
     for (const auto& [key, node] : *table) {
       const std::string name(key.str());
+      if (name == "symmetry") continue;
       const ParameterName p = *parse_parameter_name(name);
       if (p.joint == 0) continue;
       const int i = space.index(p.kind, p.joint - 1);
       if (name != space.name(i)) {
         r.fail(key.source(), "space." + name, "write it " + space.name(i));  // e.g. a leading zero
       }
+      // The symmetry decides its images; only their sources can be given.
+      for (const SymmetryTie& t : symmetry_ties(symmetry, space)) {
+        if (t.image != i) continue;
+        r.fail(key.source(), keys[static_cast<size_t>(i)],
+               "symmetry = \"" + symmetry + "\" " +
+                   (t.source < 0 ? "fixes " + space.name(i) + " = 0"
+                                 : "makes " + space.name(i) + " = " + (t.sign < 0 ? "-" : "") + space.name(t.source) +
+                                       "; give " + space.name(t.source) + " instead"));
+      }
       space.specs[static_cast<size_t>(i)] = read_spec(r, node, keys[static_cast<size_t>(i)], p.kind, true,
                                                       &ties[static_cast<size_t>(i)]);
       places[static_cast<size_t>(i)] = node.source();
       named[static_cast<size_t>(i)] = true;
     }
+  }
+  // The symmetry's images are ties (or zeros) too: mark them before the
+  // user's ties are resolved, so that a tie to an image is refused as a tie
+  // to a tied parameter. Their sources are filled in below.
+  for (const SymmetryTie& t : symmetry_ties(symmetry, space)) {
+    space.specs[static_cast<size_t>(t.image)].mode =
+        t.source < 0 ? ParameterSpec::Mode::fixed : ParameterSpec::Mode::tied;
   }
   // Resolve the ties now that every parameter is known.
   for (size_t i = 0; i < space.specs.size(); ++i) {
@@ -296,6 +394,22 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
       r.fail(places[i], key, "tied to " + ties[i]->source + ", which is itself tied; tie to its source instead");
     }
     space.specs[i].source = source;
+  }
+  // The symmetry's images follow their sources: tied to the source, or to
+  // the source's own source where the user tied it (ties never chain).
+  for (const SymmetryTie& t : symmetry_ties(symmetry, space)) {
+    ParameterSpec& image = space.specs[static_cast<size_t>(t.image)];
+    image = ParameterSpec{};
+    image.line = symmetry_line;
+    if (t.source < 0) {
+      image.mode = ParameterSpec::Mode::fixed;
+      image.value = 0.0;
+      continue;
+    }
+    const ParameterSpec& source = space.specs[static_cast<size_t>(t.source)];
+    image.mode = ParameterSpec::Mode::tied;
+    image.source = source.mode == ParameterSpec::Mode::tied ? source.source : t.source;
+    image.sign = source.mode == ParameterSpec::Mode::tied ? t.sign * source.sign : t.sign;
   }
   // Link lengths must stay >= 0 whatever the search does.
   for (int j = 0; j < joints; ++j) {
@@ -477,13 +591,19 @@ Job parse_table(const toml::table& root, const std::string& file) {
                      }
                      for (const toml::node& item : *list) {
                        const std::string family = r.string(item, full);
-                       if (family != "planar" && family != "spherical" && family != "trivial" && family != "bennett") {
-                         r.fail(item.source(), full, "unknown family \"" + family +
-                                                         "\"; expected planar, spherical, trivial or bennett");
+                       const DeflatableFamily* known = nullptr;
+                       std::string names;
+                       for (const DeflatableFamily& f : kDeflatable) {
+                         if (family == f.name) known = &f;
+                         names += std::string(names.empty() ? "" : ", ") + f.name;
                        }
-                       if (family == "bennett" && job.loop.joints != 4) {
-                         r.fail(item.source(), full, "\"bennett\" needs joints = 4 (Bennett loops have 4 joints), "
-                                                     "the job has " + std::to_string(job.loop.joints));
+                       if (known == nullptr) {
+                         r.fail(item.source(), full, "unknown family \"" + family + "\"; expected one of " + names);
+                       }
+                       if (known->joints != 0 && known->joints != job.loop.joints) {
+                         r.fail(item.source(), full, "\"" + family + "\" needs joints = " +
+                                                         std::to_string(known->joints) + " (" + known->why +
+                                                         "), the job has " + std::to_string(job.loop.joints));
                        }
                        if (std::count(job.steering.deflate.begin(), job.steering.deflate.end(), family)) {
                          r.fail(item.source(), full, "\"" + family + "\" is listed twice");

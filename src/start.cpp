@@ -13,7 +13,11 @@ namespace loopfarm {
 namespace {
 
 Family family_from_name(const std::string& name) {
-  for (Family f : {Family::bennett, Family::planar, Family::spherical, Family::trivial}) {
+  // Every family family_distance measures (the job parser has checked the
+  // name and the joint count; family_distance checks the count again).
+  for (Family f : {Family::bennett, Family::planar, Family::spherical, Family::trivial, Family::goldberg,
+                   Family::myard, Family::bricard_line_symmetric, Family::bricard_plane_symmetric,
+                   Family::bricard_trihedral}) {
     if (name == to_string(f)) return f;
   }
   throw std::invalid_argument("unknown family \"" + name + "\" to deflate");

@@ -186,6 +186,69 @@ TEST(ParameterSpace, GeometryHonoursFixedFreeAndTiedAndItsJacobianIsExact) {
   EXPECT_EQ(theta[1], -theta[2]);
 }
 
+// The geometry of a space at free values spread over their boxes.
+LoopGeometry geometry_inside(const ParameterSpace& s) {
+  Eigen::VectorXd x(s.free_count());
+  for (int i = 0; i < x.size(); ++i) {
+    const double u = 0.13 + 0.71 * std::fmod(0.37 * (i + 1), 1.0);
+    x[i] = s.lower_bounds()[i] + u * (s.upper_bounds()[i] - s.lower_bounds()[i]);
+  }
+  return s.geometry(x);
+}
+
+// symmetry = "line": a_{i+3} = a_i, alpha_{i+3} = alpha_i, d_{i+3} = d_i
+// for 6R, as ties to the first half (9 free parameters: the dimension of
+// Bricard's line-symmetric family); the sources keep their own forms, and a
+// source tied by the user takes its image along (alpha5 = alpha2 = -alpha1).
+TEST(ParameterSpace, LineSymmetryTiesTheSecondHalfToTheFirst) {
+  const Job job = parse_job("[loop]\njoints = 6\n[space]\nsymmetry = \"line\"\na1 = 2\nalpha2_deg = \"-alpha1_deg\"\n",
+                            "line.toml");
+  const ParameterSpace& s = job.space;
+  EXPECT_EQ(s.free_count(), 7);  // a2, a3, alpha1, alpha3, d1..d3
+  const LoopGeometry g = geometry_inside(s);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(g.a[i + 3], g.a[i]) << i;
+    EXPECT_EQ(g.alpha[i + 3], g.alpha[i]) << i;
+    EXPECT_EQ(g.d[i + 3], g.d[i]) << i;
+  }
+  EXPECT_EQ(g.a[3], 2.0);
+  EXPECT_EQ(g.alpha[4], -g.alpha[0]);
+  EXPECT_NE(g.d[0], g.d[1]);
+  EXPECT_EQ(s.random_angle_count(), 6);  // initial angles are not tied
+  const Job plain = parse_job("[loop]\njoints = 6\n[space]\nsymmetry = \"line\"\n", "line.toml");
+  EXPECT_EQ(plain.space.free_count(), 9);
+  EXPECT_EQ(parse_job("[loop]\njoints = 6\n[space]\nsymmetry = \"none\"\n", "none.toml").space.free_count(), 18);
+}
+
+// symmetry = "plane" (6R): the mirror through joints 1 and 4 of
+// docs/families.md, a1 = a6, a2 = a5, a3 = a4, alpha1 = -alpha6, alpha2 =
+// -alpha5, alpha3 = -alpha4, d1 = d4 = 0, d2 = -d6, d3 = -d5 (8 free: the
+// dimension of Bricard's plane-symmetric family); for 4R the same mirror.
+TEST(ParameterSpace, PlaneSymmetryMirrorsThroughJointsOneAndHalfWay) {
+  const Job job = parse_job("[loop]\njoints = 6\n[space]\nsymmetry = \"plane\"\n", "plane.toml");
+  EXPECT_EQ(job.space.free_count(), 8);
+  const LoopGeometry g = geometry_inside(job.space);
+  EXPECT_EQ(g.d[0], 0.0);
+  EXPECT_EQ(g.d[3], 0.0);
+  EXPECT_EQ(g.d[5], -g.d[1]);
+  EXPECT_EQ(g.d[4], -g.d[2]);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(g.a[5 - i], g.a[i]) << i;
+    EXPECT_EQ(g.alpha[5 - i], -g.alpha[i]) << i;
+  }
+  EXPECT_NE(g.d[1], 0.0);
+  const Job four = parse_job("[space]\nsymmetry = \"plane\"\n", "plane4.toml");
+  const LoopGeometry h = geometry_inside(four.space);
+  EXPECT_EQ(four.space.free_count(), 5);  // a1, a2, alpha1, alpha2, d2
+  EXPECT_EQ(h.a[3], h.a[0]);
+  EXPECT_EQ(h.a[2], h.a[1]);
+  EXPECT_EQ(h.alpha[3], -h.alpha[0]);
+  EXPECT_EQ(h.alpha[2], -h.alpha[1]);
+  EXPECT_EQ(h.d[0], 0.0);
+  EXPECT_EQ(h.d[2], 0.0);
+  EXPECT_EQ(h.d[3], -h.d[1]);
+}
+
 // One bad input: the text, and what the one-line message must contain.
 struct BadJob {
   const char* name;
@@ -262,6 +325,23 @@ INSTANTIATE_TEST_SUITE_P(
         BadJob{"output_type", "[output]\ndatabase = 3\n", 2, "output.database", "expected a string"},
         BadJob{"deflate_bennett_5r", "[loop]\njoints = 5\n[steering]\ndeflate = [\"bennett\"]\n", 4,
                "steering.deflate", "joints = 4"},
+        BadJob{"deflate_goldberg_6r", "[loop]\njoints = 6\n[steering]\ndeflate = [\"goldberg\"]\n", 4,
+               "steering.deflate", "\"goldberg\" needs joints = 5"},
+        BadJob{"deflate_bricard_5r", "[loop]\njoints = 5\n[steering]\ndeflate = [\"planar\", \"bricard_trihedral\"]\n", 4,
+               "steering.deflate", "\"bricard_trihedral\" needs joints = 6"},
+        BadJob{"deflate_degenerate", "[loop]\njoints = 5\n[steering]\ndeflate = [\"degenerate\"]\n", 4,
+               "steering.deflate", "unknown family \"degenerate\""},
+        BadJob{"symmetry_unknown", "[loop]\njoints = 6\n[space]\nsymmetry = \"diagonal\"\n", 4, "space.symmetry",
+               "got \"diagonal\"; expected \"none\", \"line\""},
+        BadJob{"symmetry_type", "[space]\nsymmetry = 3\n", 2, "space.symmetry", "expected a string"},
+        BadJob{"symmetry_odd", "[loop]\njoints = 5\n[space]\nsymmetry = \"line\"\n", 4, "space.symmetry",
+               "needs an even number of joints, the job has 5"},
+        BadJob{"symmetry_image_named", "[loop]\njoints = 6\n[space]\nsymmetry = \"line\"\na4 = 2\n", 5, "space.a4",
+               "makes a4 = a1; give a1 instead"},
+        BadJob{"symmetry_zero_named", "[loop]\njoints = 6\n[space]\nd4 = 0.5\nsymmetry = \"plane\"\n", 4, "space.d4",
+               "fixes d4 = 0"},
+        BadJob{"symmetry_tie_to_image", "[loop]\njoints = 6\n[space]\nsymmetry = \"plane\"\na2 = \"a6\"\n", 5,
+               "space.a2", "itself tied"},
         BadJob{"algorithm_auglag", "[optimizer]\nalgorithm = \"LD_AUGLAG\"\n", 2, "optimizer.algorithm", "unknown"},
         BadJob{"report_threshold", "[output]\nreport_threshold = -1\n", 2, "output.report_threshold", "> 0"},
         BadJob{"table_is_value", "loop = 4\n", 1, "loop", "expected a table"},
@@ -348,7 +428,7 @@ TEST(Job, MissingFileIsAJobErrorNamingIt) {
 TEST(Job, ShippedJobFilesParse) {
   const std::filesystem::path dir = std::filesystem::path(LOOPFARM_SOURCE_DIR) / "jobs";
   int count = 0;
-  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir)) {  // jobs/discovery/ too
     if (entry.path().extension() != ".toml") continue;
     EXPECT_NO_THROW(read_job_file(entry.path().string())) << entry.path();
     ++count;

@@ -130,7 +130,9 @@ struct SearchSettings {
 };
 
 // Steering away from the known families (DESIGN.md). Families are named
-// "planar", "spherical", "trivial" and "bennett".
+// "planar", "spherical", "trivial" (any n), "bennett" (n = 4), "goldberg",
+// "myard" (n = 5), "bricard_line_symmetric", "bricard_plane_symmetric",
+// "bricard_trihedral" (n = 6): those family_distance measures.
 struct SteeringSettings {
   bool nontrivial = false;             // every joint must move over the cycle
   double min_travel = 0.0872664625997164788;  // [rad] (5 deg): what "moves" means
