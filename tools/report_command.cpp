@@ -177,10 +177,11 @@ std::vector<CandidateRow> read_candidates(sqlite3* db, const std::string& path, 
 }
 
 void print_table(const std::vector<CandidateRow>& rows) {
-  std::printf("%-5s %-12s %-14s %-10s %-6s %-8s %-5s %-10s %-10s %-16s %s\n", "id", "family", "setup", "E_mean", "hits",
+  // The family column fits the longest name (bricard_plane_symmetric).
+  std::printf("%-5s %-23s %-14s %-10s %-6s %-8s %-5s %-10s %-10s %-16s %s\n", "id", "family", "setup", "E_mean", "hits",
               "first", "dim", "rigid_res", "family_res", "input range", "geometry (canonical, L = 1; twists in deg)");
   for (const CandidateRow& r : rows) {
-    std::printf("%-5lld %-12s %-14s %-10s %-6lld %-8s %-5s %-10s %-10s %-16s a=%s alpha=%s d=%s\n", r.id,
+    std::printf("%-5lld %-23s %-14s %-10s %-6lld %-8s %-5s %-10s %-10s %-16s a=%s alpha=%s d=%s\n", r.id,
                 r.family.c_str(), r.setup.c_str(), g(r.E_mean).c_str(), r.hits,
                 (std::to_string(r.first_run) + ":" + std::to_string(r.first_start)).c_str(),
                 (std::to_string(r.local_dimension) + "/" + std::to_string(r.free_parameters)).c_str(),
@@ -344,7 +345,7 @@ void print_summary(sqlite3* db, const std::string& path, const ReportArguments& 
                 std::string(args.run.empty() ? "" : " WHERE first_run = ?1") + " GROUP BY family ORDER BY family");
     bind_run(q);
     std::printf("candidates by family (distinct linkages, starts that found them)\n");
-    while (q.step()) std::printf("  %-13s %6lld %8lld\n", q.text(0).c_str(), q.integer(1), q.integer(2));
+    while (q.step()) std::printf("  %-23s %6lld %8lld\n", q.text(0).c_str(), q.integer(1), q.integer(2));
   }
   const Histogram h = energy_histogram(db, path, args);
   long most = 1;
