@@ -1,7 +1,9 @@
 // analyse_candidate: verification, then classification, strict first and
 // loosened to the rigid residual only when no family fits strictly.
 #include <cmath>
+#include <span>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -97,6 +99,77 @@ zero_threshold = 1e-20
     EXPECT_EQ(s.candidate.classification.family, Family::bennett) << objective;
     EXPECT_EQ(s.candidate.local_dimension.parameters, 8) << objective;
     EXPECT_EQ(s.candidate.local_dimension.dimension, 3) << objective;
+  }
+}
+
+// A search in a symmetric sub-space stays in it: the start, every step and
+// the final geometry are line- or plane-symmetric to the bit (the images are
+// ties, not variables of their own).
+TEST(RunStart, ASearchInASymmetricSubspaceStaysInIt) {
+  for (const char* symmetry : {"line", "plane"}) {
+    const Job job = parse_job(std::string("[loop]\njoints = 6\nsamples = 8\n[space]\nsymmetry = \"") + symmetry +
+                                  "\"\n[optimizer]\nmax_evaluations = 15\n",
+                              "symmetric.toml");
+    for (std::uint64_t index : {0u, 1u}) {
+      const StartSummary s = run_start(job, index);
+      for (const LoopGeometry* g : {&s.initial_geometry, &s.final_geometry}) {
+        for (int i = 0; i < 6; ++i) {
+          if (std::string(symmetry) == "line") {
+            EXPECT_EQ(g->a[(i + 3) % 6], g->a[i]) << i;
+            EXPECT_EQ(g->alpha[(i + 3) % 6], g->alpha[i]) << i;
+            EXPECT_EQ(g->d[(i + 3) % 6], g->d[i]) << i;
+          } else {
+            EXPECT_EQ(g->a[5 - i], g->a[i]) << i;
+            EXPECT_EQ(g->alpha[5 - i], -g->alpha[i]) << i;
+            EXPECT_EQ(g->d[(6 - i) % 6], -g->d[i]) << i;
+          }
+        }
+      }
+      EXPECT_GE(s.evaluations, 1) << symmetry << " " << index;
+    }
+  }
+}
+
+LoopGeometry from_degrees(std::vector<double> a, std::vector<double> alpha_deg, std::vector<double> d) {
+  return LoopGeometry::from_degrees(std::span<const double>(a), std::span<const double>(alpha_deg),
+                                    std::span<const double>(d));
+}
+
+// Every family that [steering] deflate accepts for a loop of its size becomes
+// a deflation term measuring the distance to that family: zero (to round-off)
+// on a member (the examples of docs/families.md), not on a generic loop of
+// the same size. The job parser keeps its own list of these names (it stands
+// alone for the fuzzers); this checks that start.cpp maps each of them.
+TEST(ObjectiveSettings, EveryDeflatableFamilyMeasuresItsDistance) {
+  const double s3 = std::sqrt(3.0);
+  struct Case {
+    const char* family;
+    LoopGeometry member;
+  };
+  const Case cases[] = {
+      {"bennett", paper_bennett_loop()},
+      {"goldberg", from_degrees({2, 1, s3, 2, 1 + s3}, {90, 30, 60, 90, 90}, {0, 0, 0, 0, 0})},
+      {"myard", from_degrees({2, 1, 1, 2, 2}, {90, 30, -30, 90, 0}, {0, 0, 0, 0, 0})},
+      {"bricard_line_symmetric", from_degrees({1, 1.7, 0.8, 1, 1.7, 0.8}, {51.566, 120.321, -34.377, 51.566, 120.321, -34.377},
+                                              {0.4, 0.3, -0.5, 0.4, 0.3, -0.5})},
+      {"bricard_plane_symmetric", from_degrees({1, 1.7, 0.8, 0.8, 1.7, 1}, {51.566, 120.321, -34.377, 34.377, -120.321, -51.566},
+                                               {0, 0.3, -0.5, 0, 0.5, -0.3})},
+      {"bricard_trihedral", from_degrees({1.5, 1, 1.2, 0.8, 1, std::sqrt(1.5 * 1.5 + 1.2 * 1.2 + 1.0 - 1.0 - 0.8 * 0.8)},
+                                         {90, -90, 90, -90, 90, -90}, {0, 0, 0, 0, 0, 0})},
+  };
+  for (const Case& c : cases) {
+    const int n = c.member.joints();
+    const Job job = parse_job("[loop]\njoints = " + std::to_string(n) + "\n[steering]\ndeflate = [\"" + c.family +
+                                  "\", \"planar\"]\n",
+                              "deflate.toml");
+    const ObjectiveSettings settings = objective_settings(job);
+    ASSERT_EQ(settings.deflation.size(), 2u) << c.family;
+    EXPECT_EQ(settings.deflation[0].family, c.family);
+    GeometryVector gradient;
+    EXPECT_LT(settings.deflation[0].distance(c.member, &gradient), 1e-12) << c.family;
+    const double generic = settings.deflation[0].distance(random_loop(n, 11), nullptr);
+    EXPECT_GT(generic, 1e-3) << c.family;
+    EXPECT_GT(settings.deflation[1].distance(c.member, nullptr), 1e-3) << c.family << ": planar";
   }
 }
 
