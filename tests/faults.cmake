@@ -3,12 +3,15 @@
 # damaged database files refused untouched, and reading while a run writes.
 # tests/fault_test.sh describes each case. Each runs 2-rank jobs of about
 # 15 s (a few times over for kill and term) on the 2 cores CI has.
+# tools/test.sh --sanitize gives them longer (LOOPFARM_FAULT_TEST_TIMEOUT=900):
+# instrumented, fault_kill needed more than 240 s even with 150 starts.
+set(LOOPFARM_FAULT_TEST_TIMEOUT 240 CACHE STRING "CTest time limit of each fault test, in seconds")
 foreach(fault_case kill term damage concurrent)
   add_test(NAME fault_${fault_case}
            COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/fault_test.sh $<TARGET_FILE:loopfarm_cli> ${fault_case}
                    ${MPIEXEC_EXECUTABLE})
   set_tests_properties(fault_${fault_case} PROPERTIES
     PROCESSORS 2
-    TIMEOUT 240
+    TIMEOUT ${LOOPFARM_FAULT_TEST_TIMEOUT}
     ENVIRONMENT "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
 endforeach()

@@ -99,7 +99,7 @@ ctest_sanitized() {  # DIR [CTEST ARGS...]
 }
 
 if [ "$sanitize" -eq 1 ]; then
-  configure_sanitized build/sanitize
+  configure_sanitized build/sanitize -DLOOPFARM_FAULT_TEST_TIMEOUT=900
   start=$SECONDS
   cmake --build build/sanitize -j"$jobs"
   echo "== sanitized build: $((SECONDS - start)) s"
