@@ -39,9 +39,11 @@ constexpr double kMaxBend = 0.1;
 
 // A landing after a fold starts this many max_passive_step along the last
 // tangent (see Stepper::land). Over the bench's 8 generic 4R cycles at
-// N = 32, reaches of 0.2, 0.5, 1 and 2 gave 2176, 2088, 1972 and 1901
-// Newton iterations (2305 without), the last with the most landings
-// converged.
+// N = 32 (bench/cycle_breakdown), with the tangent start tried first,
+// reaches of 0.2, 0.5, 1 and 2 gave 2176, 2088, 1972 and 1901 Newton
+// iterations (2305 with no tangent start), the last with every landing
+// converged; with the budgeted solve from the last point tried first, as
+// land() does, 2021.
 constexpr double kLandingReach = 2.0;
 
 // Largest rate of change of a passive angle along a path tangent.
@@ -227,8 +229,12 @@ class Stepper {
   // the full iteration limit.
   EquilibriumSummary land(const PathPoint& from, double target) const {
     EquilibriumSummary summary = solve_equilibrium(model_, ws_, target, *from.state, options_.max_iterations_per_step);
-    int spent = summary.iterations;
     if (summary.status == SolveStatus::converged) return summary;
+    int iterations = summary.iterations, evaluations = summary.residual_evaluations;
+    auto count = [&](const EquilibriumSummary& s) {
+      iterations += s.iterations;
+      evaluations += s.residual_evaluations;
+    };
     const double rate = from.tangent != nullptr ? passive_rate(model_, *from.tangent) : 0.0;
     if (rate > 0.0 && std::isfinite(rate)) {
       const double s = kLandingReach * options_.max_passive_step / rate;
@@ -236,13 +242,14 @@ class Stepper {
       guess.theta += s * from.tangent->theta;
       guess.deformations += s * from.tangent->deformations;
       summary = solve_equilibrium(model_, ws_, target, guess);
-      spent += summary.iterations;
+      count(summary);
     }
     if (summary.status != SolveStatus::converged) {
       summary = solve_equilibrium(model_, ws_, target, *from.state);
-      spent += summary.iterations;
+      count(summary);
     }
-    summary.iterations = spent;
+    summary.iterations = iterations;
+    summary.residual_evaluations = evaluations;
     return summary;
   }
 
