@@ -7,6 +7,7 @@
 #include "report_command.hpp"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "atlas.hpp"
 #include "cli_support.hpp"
 #include "loopfarm/assembly.hpp"
 #include "loopfarm/classify.hpp"
@@ -38,6 +40,7 @@ struct ReportArguments {
   std::string format = "table";
   std::string run;
   std::string plot;
+  std::string atlas;
   bool summary = false;
 };
 
@@ -84,20 +87,6 @@ class Query {
   sqlite3* db_;
   std::string path_;
   sqlite3_stmt* statement_ = nullptr;
-};
-
-struct CandidateRow {
-  long long id = 0;
-  std::string family, setup, detail;
-  double E_mean = NAN, E_max = NAN;
-  long long hits = 0, first_run = 0, first_start = 0;
-  int local_dimension = 0, free_parameters = 0;
-  double rigid_residual = NAN, family_residual = NAN;
-  double bennett_residual = NAN, planar_residual = NAN, spherical_residual = NAN, trivial_residual = NAN;
-  bool full_turn = false;
-  double range_lo_deg = NAN, range_hi_deg = NAN;
-  int joints = 0;
-  std::vector<double> a, alpha_deg, d;
 };
 
 std::string g(double v, int digits = 3) {
@@ -398,6 +387,22 @@ void plot_candidates(const std::filesystem::path& gnuplot, const std::vector<Can
   }
 }
 
+// Markdown for the atlas: the database, the selection and its runs.
+std::string atlas_header(sqlite3* db, const std::string& path, const ReportArguments& args) {
+  std::string out = "Database `" + path + "`";
+  if (!args.family.empty()) out += ", family " + args.family;
+  if (!args.run.empty()) out += ", candidates run " + args.run + " found first";
+  if (!args.max_energy.empty()) out += ", E_mean <= " + args.max_energy;
+  out += ". Runs:\n\n";
+  Query q(db, path, "SELECT run_id, job_path, seed, starts_done, starts, status, joints FROM runs ORDER BY run_id");
+  while (q.step()) {
+    out += "- run " + std::to_string(q.integer(0)) + ": `" + q.text(1) + "`, " + std::to_string(q.integer(6)) +
+           "R, seed " + std::to_string(q.integer(2)) + ", " + std::to_string(q.integer(3)) + " of " +
+           std::to_string(q.integer(4)) + " starts, " + q.text(5) + "\n";
+  }
+  return out;
+}
+
 int run_report(const ReportArguments& args) {
   if (args.format != "table" && args.format != "csv" && args.format != "json" && args.format != "markdown") {
     throw UsageError("--format", "got " + quote_text(args.format) + "; expected table, csv, json or markdown");
@@ -428,6 +433,23 @@ int run_report(const ReportArguments& args) {
       throw UsageError("--plot", "cannot create directory " + quote_text(args.plot) + ": " + ec.message());
     }
   }
+  std::filesystem::path atlas_dir;
+  if (!args.atlas.empty()) {
+    // Checked before the database is opened: a bad directory costs nothing.
+    gnuplot = require_gnuplot("--atlas");
+    atlas_dir = args.atlas;
+    std::error_code ec;
+    if (std::filesystem::exists(atlas_dir, ec) && !std::filesystem::is_directory(atlas_dir, ec)) {
+      throw UsageError("--atlas", quote_text(args.atlas) + " exists and is not a directory");
+    }
+    std::filesystem::create_directories(atlas_dir, ec);
+    if (ec || !std::filesystem::is_directory(atlas_dir)) {
+      throw UsageError("--atlas", "cannot create directory " + quote_text(args.atlas) + ": " + ec.message());
+    }
+    if (::access(atlas_dir.c_str(), W_OK | X_OK) != 0) {
+      throw UsageError("--atlas", "cannot write into directory " + quote_text(args.atlas));
+    }
+  }
   std::optional<ResultsDatabase> db;
   try {
     db.emplace(ResultsDatabase::open(args.database, DatabaseMode::read));
@@ -438,7 +460,11 @@ int run_report(const ReportArguments& args) {
   // One read transaction: the summary and the list see the same state even
   // while a run commits.
   sqlite3_exec(handle, "BEGIN", nullptr, nullptr, nullptr);
-  if (args.summary) {
+  if (!args.atlas.empty()) {
+    ReportArguments every = args;
+    every.limit = "-1";  // SQLite: no limit; the atlas counts every candidate selected
+    write_atlas(gnuplot, read_candidates(handle, args.database, every), atlas_header(handle, args.database, args), atlas_dir);
+  } else if (args.summary) {
     print_summary(handle, args.database, args);
   } else {
     const std::vector<CandidateRow> rows = read_candidates(handle, args.database, args);
@@ -473,6 +499,7 @@ Subcommand add_report_command(CLI::App& parent) {
       "  loopfarm report jobs/default.sqlite\n"
       "  loopfarm report jobs/default.sqlite --family bennett --format csv > bennett.csv\n"
       "  loopfarm report jobs/default.sqlite --summary --plot docs/default\n"
+      "  loopfarm report jobs/goldberg-5r.sqlite --atlas docs/atlas\n"
       "Read-only; works while a run is writing. Unclassified candidates (possible new families) come first.\n"
       "Exit codes: 0 done, 1 failure (gnuplot), 2 bad input (options, a file that is not a loopfarm database or\n"
       "is damaged: checked with PRAGMA quick_check, about 2 s per million starts; the file is never changed).\n");
@@ -489,6 +516,13 @@ Subcommand add_report_command(CLI::App& parent) {
                   "write PNG charts into DIR: the histogram of minima and the cycle energy of the listed candidates "
                   "(at most 10)")
       ->type_name("DIR");
+  CLI::Option* atlas =
+      app->add_option("--atlas", args->atlas,
+                      "write a family atlas into DIR: atlas.md with, per family, the counts, the spread of the "
+                      "parameters, the local dimension against the known one, and a representative's cycle-energy "
+                      "chart (PNG) and motion (SVG); --family, --run and --max-energy select, --limit does not apply")
+          ->type_name("DIR");
+  atlas->excludes("--summary")->excludes("--plot")->excludes("--limit")->excludes("--format");
   return {app, [args] { return run_report(*args); }};
 }
 

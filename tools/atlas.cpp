@@ -1,0 +1,437 @@
+#include "atlas.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <span>
+#include <tuple>
+#include <utility>
+
+#include <Eigen/Geometry>
+
+#include "cli_support.hpp"
+#include "loopfarm/assembly.hpp"
+#include "loopfarm/cycle.hpp"
+#include "loopfarm/equilibrium.hpp"
+#include "loopfarm/loop.hpp"
+#include "plot.hpp"
+
+namespace loopfarm::cli {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegreesPerRadian = 180.0 / kPi;
+constexpr int kFrames = 8;          // frames in the motion strip
+constexpr int kCycleSamples = 360;  // samples of the representative's cycle
+
+std::string g(double v, int digits = 4) {
+  if (std::isnan(v)) return "-";
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.*g", digits, v);
+  return buffer;
+}
+
+std::string joined(const std::vector<double>& values, int digits) {
+  std::string out;
+  for (size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + g(values[i], digits);
+  return out;
+}
+
+// The candidates of one family (one joint count).
+struct FamilyGroup {
+  int joints = 0;
+  std::string family;
+  std::vector<const CandidateRow*> rows;
+  long long hits = 0;
+};
+
+// Unclassified first (possible new families), then the most candidates, then by name.
+std::vector<FamilyGroup> group_by_family(const std::vector<CandidateRow>& rows) {
+  std::map<std::pair<int, std::string>, FamilyGroup> groups;
+  for (const CandidateRow& r : rows) {
+    FamilyGroup& group = groups[{r.joints, r.family}];
+    group.joints = r.joints;
+    group.family = r.family;
+    group.rows.push_back(&r);
+    group.hits += r.hits;
+  }
+  std::vector<FamilyGroup> out;
+  for (auto& [key, group] : groups) out.push_back(std::move(group));
+  std::stable_sort(out.begin(), out.end(), [](const FamilyGroup& x, const FamilyGroup& y) {
+    const bool xu = x.family == "unclassified", yu = y.family == "unclassified";
+    if (xu != yu) return xu;
+    if (x.rows.size() != y.rows.size()) return x.rows.size() > y.rows.size();
+    return std::make_pair(x.joints, x.family) < std::make_pair(y.joints, y.family);
+  });
+  return out;
+}
+
+// The representative: a full turn first (the whole motion can be shown), then
+// the smallest rigid-closure residual along the verified motion, then the
+// lowest energy, then the first committed.
+const CandidateRow& representative(const FamilyGroup& group) {
+  auto rank = [](const CandidateRow* r) {
+    const double rigid = std::isnan(r->rigid_residual) ? 1e300 : r->rigid_residual;
+    const double energy = std::isnan(r->E_mean) ? 1e300 : r->E_mean;
+    return std::make_tuple(!r->full_turn, rigid, energy, r->id);
+  };
+  return **std::min_element(group.rows.begin(), group.rows.end(),
+                            [&](const CandidateRow* x, const CandidateRow* y) { return rank(x) < rank(y); });
+}
+
+struct Spread {
+  double min = kNaN, median = kNaN, max = kNaN;
+  int count = 0;
+};
+
+Spread spread(std::vector<double> values) {
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }), values.end());
+  Spread s;
+  s.count = static_cast<int>(values.size());
+  if (values.empty()) return s;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  s.min = values.front();
+  s.max = values.back();
+  s.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  return s;
+}
+
+// "4 (572), 5 (7)": the local dimensions found and how many candidates each.
+std::string dimension_counts(const FamilyGroup& group) {
+  std::map<int, int> counts;
+  for (const CandidateRow* r : group.rows) ++counts[r->local_dimension];
+  std::string out;
+  for (const auto& [dimension, count] : counts) {
+    out += (out.empty() ? "" : ", ") + std::to_string(dimension) + " (" + std::to_string(count) + ")";
+  }
+  return out;
+}
+
+std::string free_parameter_counts(const FamilyGroup& group) {
+  std::map<int, int> counts;
+  for (const CandidateRow* r : group.rows) ++counts[r->free_parameters];
+  std::string out;
+  for (const auto& [free, count] : counts) out += (out.empty() ? "" : ", ") + std::to_string(free);
+  return out;
+}
+
+// What a found local dimension says against the known one.
+std::string dimension_reading(int found, std::optional<int> known, int free_parameters, int joints) {
+  if (!known) return "no single known dimension to compare with";
+  if (found == *known) return "as known";
+  if (found > *known) {
+    return "more than known: the point lies on a larger family of movable loops (or the zero set is not "
+           "regular there)";
+  }
+  if (free_parameters < 3 * joints) {
+    return "less than known: the search space (" + std::to_string(free_parameters) + " of " +
+           std::to_string(3 * joints) + " parameters) may hold only part of the family at this point";
+  }
+  return "less than known";
+}
+
+struct Representation {
+  CycleSummary cycle;
+  double theta0 = 0.0;  // [rad]
+  bool full_turn = true;
+};
+
+// The cycle energy of the representative's canonical geometry, as `loopfarm
+// energy` computes it (assembly at theta0, then the cycle): a full turn from 0,
+// or, for a loop whose verified motion does not turn fully, the verified range.
+Representation compute_cycle(const CandidateRow& r) {
+  const LoopGeometry geometry = LoopGeometry::from_degrees(std::span<const double>(r.a),
+                                                           std::span<const double>(r.alpha_deg),
+                                                           std::span<const double>(r.d));
+  const LoopModel model(geometry);
+  EquilibriumWorkspace workspace(model);
+  Representation out;
+  CycleOptions options;
+  options.samples = kCycleSamples;
+  const double span_deg = r.range_hi_deg - r.range_lo_deg;
+  if (!r.full_turn && std::isfinite(span_deg) && span_deg > 0.0 && span_deg < 360.0) {
+    out.full_turn = false;
+    out.theta0 = 0.5 * (r.range_lo_deg + r.range_hi_deg) / kDegreesPerRadian;
+    options.range = span_deg / kDegreesPerRadian;
+  }
+  const EquilibriumSummary assembly = assemble(model, workspace, out.theta0);
+  cycle_energy(model, workspace, out.theta0, assembly.state, options, out.cycle);
+  return out;
+}
+
+// kFrames samples of the cycle, evenly spaced in input angle, in input order.
+void pick_frames(const Representation& rep, std::vector<std::vector<double>>& theta, std::vector<double>& input_deg) {
+  std::vector<const CycleSample*> samples;
+  for (const CycleSample& s : rep.cycle.samples) {
+    if (s.status != SampleStatus::failed) samples.push_back(&s);
+  }
+  std::sort(samples.begin(), samples.end(),
+            [](const CycleSample* x, const CycleSample* y) { return x->theta_in < y->theta_in; });
+  if (samples.empty()) return;
+  const int frames = std::min<int>(kFrames, static_cast<int>(samples.size()));
+  for (int k = 0; k < frames; ++k) {
+    // A full turn: k/frames of the turn; a range: both ends included.
+    const double position = rep.full_turn ? static_cast<double>(k) / frames
+                                          : (frames > 1 ? static_cast<double>(k) / (frames - 1) : 0.0);
+    const size_t index = std::min(samples.size() - 1, static_cast<size_t>(std::lround(position * samples.size())));
+    const CycleSample& s = *samples[index];
+    theta.emplace_back(s.state.theta.data(), s.state.theta.data() + s.state.theta.size());
+    input_deg.push_back(s.theta_in * kDegreesPerRadian);
+  }
+}
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) throw EnvironmentError("--atlas: cannot write " + path.string());
+}
+
+}  // namespace
+
+std::optional<int> known_family_dimension(const std::string& family, int joints) {
+  // docs/families.md and docs/classification.md: free real parameters of the
+  // family including the scale.
+  if (family == "bennett" && joints == 4) return 3;
+  if (family == "planar") return 2 * joints - 1;  // n lengths, n - 1 independent offsets
+  if (family == "spherical") return joints;       // n twists
+  if (family == "goldberg" && joints == 5) return 4;
+  if (family == "myard" && joints == 5) return 2;
+  if (family == "bricard_line_symmetric" && joints == 6) return 9;
+  if (family == "bricard_plane_symmetric" && joints == 6) return 8;
+  if (family == "bricard_trihedral" && joints == 6) return 5;
+  return std::nullopt;
+}
+
+std::string atlas_stem(const std::string& family, int joints) {
+  std::string stem = std::to_string(joints) + "r_";
+  for (char c : family) stem += (std::isalnum(static_cast<unsigned char>(c)) || c == '_') ? c : '-';
+  return stem;
+}
+
+std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vector<double>>& theta,
+                             const std::vector<double>& input_deg, const std::string& title) {
+  const LoopGeometry geometry = LoopGeometry::from_degrees(std::span<const double>(row.a),
+                                                           std::span<const double>(row.alpha_deg),
+                                                           std::span<const double>(row.d));
+  const int n = geometry.joints();
+  // A fixed oblique view: azimuth 35 deg, elevation 25 deg, orthographic.
+  const double az = 35.0 / kDegreesPerRadian, el = 25.0 / kDegreesPerRadian;
+  const Eigen::Vector3d right(-std::sin(az), std::cos(az), 0.0);
+  const Eigen::Vector3d up(-std::sin(el) * std::cos(az), -std::sin(el) * std::sin(az), std::cos(el));
+  constexpr double kAxisHalf = 0.45;  // drawn half-length of a joint axis beyond its link ends [L]
+
+  // Per frame and joint: the point where link i-1 meets axis i (O), the foot
+  // of link i's common normal on axis i (P = O + d_i z_i), and axis i's direction.
+  struct Joint {
+    Eigen::Vector3d o, p, z;
+  };
+  std::vector<std::vector<Joint>> frames;
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  auto project = [&](const Eigen::Vector3d& v) { return std::make_pair(v.dot(right), -v.dot(up)); };
+  for (const std::vector<double>& angles : theta) {
+    JointVector t(n);
+    for (int i = 0; i < n; ++i) t[i] = angles[static_cast<size_t>(i)];
+    std::vector<Joint> joints;
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Isometry3d f = forward_transform(geometry, t, i);
+      Joint j;
+      j.o = f.translation();
+      j.z = f.linear().col(2);
+      j.p = j.o + geometry.d[i] * j.z;
+      joints.push_back(j);
+      const double lo = std::min(0.0, geometry.d[i]) - kAxisHalf, hi = std::max(0.0, geometry.d[i]) + kAxisHalf;
+      for (const Eigen::Vector3d& v : {Eigen::Vector3d(j.o + lo * j.z), Eigen::Vector3d(j.o + hi * j.z)}) {
+        const auto [x, y] = project(v);
+        xmin = std::min(xmin, x), xmax = std::max(xmax, x), ymin = std::min(ymin, y), ymax = std::max(ymax, y);
+      }
+    }
+    frames.push_back(std::move(joints));
+  }
+  constexpr double kPanel = 240.0, kMargin = 16.0, kTop = 34.0, kBottom = 26.0;
+  const double extent = std::max({xmax - xmin, ymax - ymin, 1e-9});
+  const double scale = (kPanel - 2 * kMargin) / extent;
+  const double width = kPanel * static_cast<double>(std::max<size_t>(frames.size(), 1));
+  const double height = kTop + kPanel + kBottom;
+  char buffer[512];
+  std::string svg;
+  std::snprintf(buffer, sizeof buffer,
+                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" "
+                "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
+                width, height, width, height);
+  svg += buffer;
+  std::string escaped;
+  for (char c : title) escaped += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
+  svg += "<text x=\"8\" y=\"20\" font-size=\"14\">" + escaped + "</text>\n";
+  const char* colours[] = {"#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf"};
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const double x0 = kPanel * static_cast<double>(k) + kMargin - xmin * scale +
+                      0.5 * (kPanel - 2 * kMargin - (xmax - xmin) * scale);
+    const double y0 = kTop + kMargin - ymin * scale + 0.5 * (kPanel - 2 * kMargin - (ymax - ymin) * scale);
+    auto screen = [&](const Eigen::Vector3d& v) {
+      const auto [x, y] = project(v);
+      return std::make_pair(x0 + x * scale, y0 + y * scale);
+    };
+    std::snprintf(buffer, sizeof buffer,
+                  "<g><rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" stroke=\"#ccc\"/>\n",
+                  kPanel * static_cast<double>(k) + 2, kTop, kPanel - 4, kPanel);
+    svg += buffer;
+    const std::vector<Joint>& joints = frames[k];
+    // Joint axes, dashed, in the joint's colour.
+    for (int i = 0; i < n; ++i) {
+      const Joint& j = joints[static_cast<size_t>(i)];
+      const double lo = std::min(0.0, geometry.d[i]) - kAxisHalf, hi = std::max(0.0, geometry.d[i]) + kAxisHalf;
+      const auto [ax, ay] = screen(j.o + lo * j.z);
+      const auto [bx, by] = screen(j.o + hi * j.z);
+      std::snprintf(buffer, sizeof buffer,
+                    "<line x1=\"%.2f\" y1=\"%.2f\" x2=\"%.2f\" y2=\"%.2f\" stroke=\"%s\" stroke-width=\"1.5\" "
+                    "stroke-dasharray=\"5,3\"/>\n",
+                    ax, ay, bx, by, colours[i % 8]);
+      svg += buffer;
+    }
+    // Links: along axis i by the offset (O_i to P_i), then the common normal to O_{i+1}.
+    std::string points;
+    for (int i = 0; i <= n; ++i) {
+      const Joint& j = joints[static_cast<size_t>(i % n)];
+      const auto [ox, oy] = screen(j.o);
+      std::snprintf(buffer, sizeof buffer, "%.2f,%.2f ", ox, oy);
+      points += buffer;
+      if (i == n) break;
+      const auto [px, py] = screen(j.p);
+      std::snprintf(buffer, sizeof buffer, "%.2f,%.2f ", px, py);
+      points += buffer;
+    }
+    svg += "<polyline points=\"" + points + "\" fill=\"none\" stroke=\"black\" stroke-width=\"2.5\" "
+           "stroke-linejoin=\"round\"/>\n";
+    // Joints: a dot where each link meets its axis, numbered 1..n.
+    for (int i = 0; i < n; ++i) {
+      const Joint& j = joints[static_cast<size_t>(i)];
+      const auto [px, py] = screen(j.p);
+      std::snprintf(buffer, sizeof buffer,
+                    "<circle cx=\"%.2f\" cy=\"%.2f\" r=\"4\" fill=\"%s\"/><text x=\"%.2f\" y=\"%.2f\" fill=\"%s\">%d"
+                    "</text>\n",
+                    px, py, colours[i % 8], px + 5, py - 5, colours[i % 8], i + 1);
+      svg += buffer;
+    }
+    std::snprintf(buffer, sizeof buffer,
+                  "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">theta1 = %.0f deg</text></g>\n",
+                  kPanel * (static_cast<double>(k) + 0.5), kTop + kPanel + 18, input_deg[k]);
+    svg += buffer;
+  }
+  svg += "</svg>\n";
+  return svg;
+}
+
+int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
+                const std::string& header, const std::filesystem::path& dir) {
+  const std::vector<FamilyGroup> groups = group_by_family(rows);
+  std::string md = "# Family atlas\n\n" + header + "\n";
+  md +=
+      "Per family: the candidates (distinct verified movable linkages) and the starts that found them (hits); "
+      "the spread of their canonical parameters (length scale L = 1, twists in degrees, the writing that gives "
+      "the canonical key); the local dimension found and the family's known dimension. Both count free real "
+      "parameters **including the scale**: the known one in the full 3n-parameter space (docs/families.md, "
+      "docs/classification.md), the found one (`candidates.local_dimension`) among the search's free "
+      "parameters, so a sub-space search (ties, zero offsets, symmetry) can find less than the family has and a "
+      "point on a larger family more. The representative is a full-turn candidate if there is one, with the "
+      "smallest rigid-closure residual; its cycle energy is recomputed from its canonical geometry (" +
+      std::to_string(kCycleSamples) +
+      " samples, log axis) and its motion drawn at " + std::to_string(kFrames) +
+      " input angles of that cycle (oblique view; dashed: joint axes, black: links, dots: joints). "
+      "Unclassified candidates come first: a possible new family.\n\n";
+  md += "| family | joints | candidates | hits | local dimension found (candidates) | free parameters | known dimension |\n";
+  md += "|---|---|---|---|---|---|---|\n";
+  for (const FamilyGroup& group : groups) {
+    const std::optional<int> known = known_family_dimension(group.family, group.joints);
+    md += "| [" + group.family + "](#" + atlas_stem(group.family, group.joints) + ") | " +
+          std::to_string(group.joints) + " | " + std::to_string(group.rows.size()) + " | " +
+          std::to_string(group.hits) + " | " + dimension_counts(group) + " | " + free_parameter_counts(group) + " | " +
+          (known ? std::to_string(*known) : "-") + " |\n";
+  }
+  if (groups.empty()) md += "\n(no candidates)\n";
+
+  for (const FamilyGroup& group : groups) {
+    const std::string stem = atlas_stem(group.family, group.joints);
+    const std::optional<int> known = known_family_dimension(group.family, group.joints);
+    md += "\n<a id=\"" + stem + "\"></a>\n## " + group.family + " (" + std::to_string(group.joints) + "R): " +
+          std::to_string(group.rows.size()) + " candidates, " + std::to_string(group.hits) + " hits\n\n";
+    if (group.family == "unclassified") md += "Fits no known family: a possible new family (or a known one whose conditions `classify` does not write, docs/families.md).\n\n";
+
+    // Local dimension.
+    std::map<int, std::pair<int, int>> found;  // dimension -> (candidates, free parameters of the first)
+    for (const CandidateRow* r : group.rows) {
+      auto& entry = found[r->local_dimension];
+      if (entry.first++ == 0) entry.second = r->free_parameters;
+    }
+    md += "Local dimension (scale included): known **" + (known ? std::to_string(*known) : std::string("-")) +
+          "** in the full " + std::to_string(3 * group.joints) + "-parameter space.\n\n";
+    md += "| found | candidates | free parameters | reading |\n|---|---|---|---|\n";
+    for (const auto& [dimension, entry] : found) {
+      md += "| " + std::to_string(dimension) + " | " + std::to_string(entry.first) + " | " +
+            std::to_string(entry.second) + " | " +
+            dimension_reading(dimension, known, entry.second, group.joints) + " |\n";
+    }
+
+    // Parameter spread.
+    md += "\nParameters (canonical, L = 1, twists in degrees):\n\n| parameter | min | median | max |\n|---|---|---|---|\n";
+    for (int kind = 0; kind < 3; ++kind) {
+      for (int i = 0; i < group.joints; ++i) {
+        std::vector<double> values;
+        for (const CandidateRow* r : group.rows) {
+          const std::vector<double>& v = kind == 0 ? r->a : kind == 1 ? r->alpha_deg : r->d;
+          if (i < static_cast<int>(v.size())) values.push_back(v[static_cast<size_t>(i)]);
+        }
+        const Spread s = spread(values);
+        const std::string name = (kind == 0 ? "a" : kind == 1 ? "alpha" : "d") + std::to_string(i + 1) +
+                                 (kind == 1 ? " [deg]" : "");
+        md += "| " + name + " | " + g(s.min) + " | " + g(s.median) + " | " + g(s.max) + " |\n";
+      }
+    }
+
+    // The representative.
+    const CandidateRow& r = representative(group);
+    const Representation rep = compute_cycle(r);
+    const std::filesystem::path png = dir / (stem + "_cycle.png");
+    EnergyPlotStyle style;
+    style.title = group.family + " (" + std::to_string(group.joints) + "R), candidate " + std::to_string(r.id) +
+                  ": cycle energy of the canonical geometry" + (rep.full_turn ? "" : " over the verified range");
+    style.log_scale = true;
+    style.theta0 = rep.theta0;
+    style.theta0_deg = rep.theta0 * kDegreesPerRadian;
+    plot_energy_curve(gnuplot, rep.cycle, style, png);
+    std::vector<std::vector<double>> theta;
+    std::vector<double> input_deg;
+    pick_frames(rep, theta, input_deg);
+    const std::filesystem::path svg = dir / (stem + "_motion.svg");
+    write_text(svg, motion_strip_svg(r, theta, input_deg,
+                                     group.family + " (" + std::to_string(group.joints) + "R), candidate " +
+                                         std::to_string(r.id) + ": the loop at " + std::to_string(theta.size()) +
+                                         " input angles"));
+    md += "\nRepresentative: candidate " + std::to_string(r.id) + " (first found by run " +
+          std::to_string(r.first_run) + ", start " + std::to_string(r.first_start) + "; " + std::to_string(r.hits) +
+          " hits), E_mean " + g(r.E_mean, 3) + ", rigid residual " + g(r.rigid_residual, 2) + ", family residual " +
+          g(r.family_residual, 2) + ", local dimension " + std::to_string(r.local_dimension) + " of " +
+          std::to_string(r.free_parameters) + ", " +
+          (r.full_turn ? std::string("full turn") : "input range [" + g(r.range_lo_deg) + ", " + g(r.range_hi_deg) + "] deg") +
+          (r.setup != "none" && !r.setup.empty() ? ", setup " + r.setup : "") + ".\n";
+    if (!r.detail.empty()) md += "Classification: " + r.detail + ".\n";
+    md += "\n```\na     = " + joined(r.a, 9) + "\nalpha = " + joined(r.alpha_deg, 9) + " deg\nd     = " +
+          joined(r.d, 9) + "\n```\n\n";
+    md += "Cycle energy recomputed here: E_mean " + g(rep.cycle.E_mean, 3) + ", E_max " + g(rep.cycle.E_max, 3) +
+          ", " + std::to_string(rep.cycle.failed_samples) + " failed samples.\n\n";
+    md += "![cycle energy of candidate " + std::to_string(r.id) + "](" + png.filename().string() + ")\n\n";
+    md += "![motion of candidate " + std::to_string(r.id) + "](" + svg.filename().string() + ")\n";
+    std::fprintf(stderr, "loopfarm report: wrote %s and %s\n", png.string().c_str(), svg.string().c_str());
+  }
+  const std::filesystem::path index = dir / "atlas.md";
+  write_text(index, md);
+  std::fprintf(stderr, "loopfarm report: wrote %s (%zu families, %zu candidates)\n", index.string().c_str(),
+               groups.size(), rows.size());
+  return static_cast<int>(groups.size());
+}
+
+}  // namespace loopfarm::cli

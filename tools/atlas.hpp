@@ -1,0 +1,58 @@
+// The family atlas of `loopfarm report --atlas DIR` (atlas.cpp): per family of
+// the candidates read from a results database, the count, the spread of the
+// canonical parameters, the local dimension found against the family's known
+// one, and one representative with its cycle-energy chart (PNG, gnuplot) and a
+// strip of frames of its motion (SVG, drawn from the forward kinematics).
+#pragma once
+
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace loopfarm::cli {
+
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// One row of the candidates table, as the report reads it (NULL is NaN).
+struct CandidateRow {
+  long long id = 0;
+  std::string family, setup, detail;
+  double E_mean = kNaN, E_max = kNaN;
+  long long hits = 0, first_run = 0, first_start = 0;
+  int local_dimension = 0, free_parameters = 0;
+  double rigid_residual = kNaN, family_residual = kNaN;
+  double bennett_residual = kNaN, planar_residual = kNaN, spherical_residual = kNaN,
+         trivial_residual = kNaN;
+  bool full_turn = false;
+  double range_lo_deg = kNaN, range_hi_deg = kNaN;
+  int joints = 0;
+  std::vector<double> a, alpha_deg, d;  // canonical geometry, L = 1, twists in degrees
+};
+
+// The dimension of a family (free real parameters, scale included, in the full
+// 3n-parameter space) as docs/families.md and docs/classification.md give it;
+// nothing when it is not one number (trivial, degenerate, unclassified).
+std::optional<int> known_family_dimension(const std::string& family, int joints);
+
+// The file name stem of a family's files in the atlas: "5r_goldberg".
+std::string atlas_stem(const std::string& family, int joints);
+
+// Writes DIR/atlas.md and, per family, STEM_cycle.png and STEM_motion.svg.
+// `rows` are every candidate selected (in the report's order: unclassified
+// first, then by energy); `header` is Markdown put under the title (the
+// database and its runs). Unclassified families come first, then by count.
+// Returns the number of families. Throws EnvironmentError when gnuplot fails
+// or a file cannot be written.
+int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
+                const std::string& header, const std::filesystem::path& dir);
+
+// The SVG strip of frames (exposed for the atlas only; one row of `frames`
+// panels): the joint axes and links of the loop at evenly spaced samples of
+// its motion. `theta` holds each frame's joint angles [rad], `input_deg` the
+// input angle shown under each frame.
+std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vector<double>>& theta,
+                             const std::vector<double>& input_deg, const std::string& title);
+
+}  // namespace loopfarm::cli
