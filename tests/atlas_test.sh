@@ -41,7 +41,9 @@ while IFS='|' read -r family joints count hits; do
   stem="${joints}r_${family}"
   grep -qF "| [$family](#$stem) | $joints | $count | $hits |" "$index" ||
     fail "atlas.md has no row '$family $joints $count $hits': $(grep -F "[$family]" "$index" | head -1)"
-  grep -q "^## $family (${joints}R): $count candidates, $hits hits\$" "$index" || fail "no section for $family"
+  candidates="$count candidates"; [[ "$count" -eq 1 ]] && candidates="1 candidate"
+  hit_count="$hits hits"; [[ "$hits" -eq 1 ]] && hit_count="1 hit"
+  grep -q "^## $family (${joints}R): $candidates, $hit_count\$" "$index" || fail "no section for $family"
   [[ "$(head -c 8 "$tmp/atlas/${stem}_cycle.png" | od -An -tx1 | tr -d ' \n')" == 89504e470d0a1a0a ]] ||
     fail "${stem}_cycle.png is not a PNG"
   grep -qF "](${stem}_cycle.png)" "$index" || fail "atlas.md does not link ${stem}_cycle.png"

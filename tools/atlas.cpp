@@ -27,6 +27,11 @@ constexpr double kDegreesPerRadian = 180.0 / kPi;
 constexpr int kFrames = 8;          // frames in the motion strip
 constexpr int kCycleSamples = 360;  // samples of the representative's cycle
 
+// "1 hit", "2 hits".
+std::string count_of(long long count, const std::string& noun) {
+  return std::to_string(count) + " " + noun + (count == 1 ? "" : "s");
+}
+
 std::string g(double v, int digits = 4) {
   if (std::isnan(v)) return "-";
   char buffer[40];
@@ -358,7 +363,8 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
     const std::string stem = atlas_stem(group.family, group.joints);
     const std::optional<int> known = known_family_dimension(group.family, group.joints);
     md += "\n<a id=\"" + stem + "\"></a>\n## " + group.family + " (" + std::to_string(group.joints) + "R): " +
-          std::to_string(group.rows.size()) + " candidates, " + std::to_string(group.hits) + " hits\n\n";
+          count_of(static_cast<long long>(group.rows.size()), "candidate") + ", " + count_of(group.hits, "hit") +
+          "\n\n";
     if (group.family == "unclassified") md += "Fits no known family: a possible new family (or a known one whose conditions `classify` does not write, docs/families.md).\n\n";
 
     // Local dimension.
@@ -412,8 +418,8 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
                                          std::to_string(r.id) + ": the loop at " + std::to_string(theta.size()) +
                                          " input angles"));
     md += "\nRepresentative: candidate " + std::to_string(r.id) + " (first found by run " +
-          std::to_string(r.first_run) + ", start " + std::to_string(r.first_start) + "; " + std::to_string(r.hits) +
-          " hits), E_mean " + g(r.E_mean, 3) + ", rigid residual " + g(r.rigid_residual, 2) + ", family residual " +
+          std::to_string(r.first_run) + ", start " + std::to_string(r.first_start) + "; " + count_of(r.hits, "hit") +
+          "), E_mean " + g(r.E_mean, 3) + ", rigid residual " + g(r.rigid_residual, 2) + ", family residual " +
           g(r.family_residual, 2) + ", local dimension " + std::to_string(r.local_dimension) + " of " +
           std::to_string(r.free_parameters) + ", " +
           (r.full_turn ? std::string("full turn") : "input range [" + g(r.range_lo_deg) + ", " + g(r.range_hi_deg) + "] deg") +
