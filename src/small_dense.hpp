@@ -8,7 +8,6 @@
 #pragma once
 
 #include <cmath>
-#include <type_traits>
 
 namespace loopfarm::dense {
 
@@ -19,9 +18,8 @@ namespace loopfarm::dense {
 // critical path costs as much as the rest of the row). Returns false as soon
 // as a pivot is not positive (or not a number): the matrix is then not
 // positive definite, which is what the solver uses this test for.
-template <int Fixed, class Matrix>
-bool cholesky_in_place_sized(Matrix& matrix, int runtime_n) {
-  const int n = Fixed > 0 ? Fixed : runtime_n;
+template <class Matrix>
+bool cholesky_in_place(Matrix& matrix, int n) {
   double* __restrict a = matrix.data();
   const long lda = matrix.outerStride();
   for (int j = 0; j < n; ++j) {
@@ -45,9 +43,8 @@ bool cholesky_in_place_sized(Matrix& matrix, int runtime_n) {
 // B <- L^-1 B for a row-major B of n rows and a fixed number of columns,
 // L from cholesky_in_place (inverted diagonal): row i of B is updated by
 // whole rows, which the compiler unrolls and vectorises.
-template <int Fixed, class Matrix, class Rows>
-void solve_lower_rows_sized(const Matrix& lower, int runtime_n, Rows& b) {
-  const int n = Fixed > 0 ? Fixed : runtime_n;
+template <class Matrix, class Rows>
+void solve_lower_rows(const Matrix& lower, int n, Rows& b) {
   static_assert(Rows::IsRowMajor && Rows::ColsAtCompileTime > 0, "row-major, fixed width");
   constexpr int width = Rows::ColsAtCompileTime;
   const double* __restrict l = lower.data();
@@ -67,9 +64,8 @@ void solve_lower_rows_sized(const Matrix& lower, int runtime_n, Rows& b) {
 }
 
 // b <- L^-ᵀ b for every column of b, L from cholesky_in_place (inverted diagonal).
-template <int Fixed, class Matrix, class Rhs>
-void solve_lower_transposed_sized(const Matrix& lower, int runtime_n, Rhs& rhs) {
-  const int n = Fixed > 0 ? Fixed : runtime_n;
+template <class Matrix, class Rhs>
+void solve_lower_transposed(const Matrix& lower, int n, Rhs& rhs) {
   const double* __restrict l = lower.data();
   const long ldl = lower.outerStride();
   for (long c = 0; c < rhs.cols(); ++c) {
@@ -87,40 +83,6 @@ void solve_lower_transposed_sized(const Matrix& lower, int runtime_n, Rhs& rhs) 
       b[i] = (s0 + s1) * column[i];
     }
   }
-}
-
-// The kernels' entry points. The sizes of 4R, 5R and 6R loops (n - 1
-// passive angles plus 2n deformations, or 3n with the offsets: 11, 15, 14,
-// 19, 17, 23 unknowns) get an instantiation with the size known to the
-// compiler, which unrolls the short inner loops whose bounds otherwise cost
-// more than their arithmetic; other sizes take the general one. Same
-// operations in the same order either way, so the results are bit-identical.
-template <class Kernel>
-decltype(auto) with_size(int n, Kernel&& kernel) {
-  switch (n) {
-    case 11: return kernel(std::integral_constant<int, 11>{});
-    case 14: return kernel(std::integral_constant<int, 14>{});
-    case 15: return kernel(std::integral_constant<int, 15>{});
-    case 17: return kernel(std::integral_constant<int, 17>{});
-    case 19: return kernel(std::integral_constant<int, 19>{});
-    case 23: return kernel(std::integral_constant<int, 23>{});
-    default: return kernel(std::integral_constant<int, 0>{});
-  }
-}
-
-template <class Matrix>
-bool cholesky_in_place(Matrix& matrix, int n) {
-  return with_size(n, [&](auto size) { return cholesky_in_place_sized<decltype(size)::value>(matrix, n); });
-}
-
-template <class Matrix, class Rows>
-void solve_lower_rows(const Matrix& lower, int n, Rows& b) {
-  with_size(n, [&](auto size) { solve_lower_rows_sized<decltype(size)::value>(lower, n, b); });
-}
-
-template <class Matrix, class Rhs>
-void solve_lower_transposed(const Matrix& lower, int n, Rhs& rhs) {
-  with_size(n, [&](auto size) { solve_lower_transposed_sized<decltype(size)::value>(lower, n, rhs); });
 }
 
 }  // namespace loopfarm::dense
