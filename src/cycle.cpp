@@ -165,9 +165,8 @@ class Stepper {
       // the bench's generic loops (18 tries, 316 iterations, none accepted).
       if (!can_refine) {
         // The equilibrium branch ends here (a fold of the elastic path) or the
-        // solve is hard: one solve from the last point of the branch with the
-        // full iteration budget, and whatever it lands on is a jump to another
-        // branch. Where the budgeted solve has already converged (to a point
+        // solve is hard: a landing (land() below), and whatever it lands on
+        // is a jump to another branch. Where the budgeted solve has already converged (to a point
         // too far away: the jump itself) that solve is the landing: solving
         // again from the last point took 10-75 Newton iterations, mostly
         // linearly converging Gauss-Newton steps, and on the bench's generic
