@@ -32,18 +32,9 @@ std::string count_of(long long count, const std::string& noun) {
   return std::to_string(count) + " " + noun + (count == 1 ? "" : "s");
 }
 
-std::string g(double v, int digits = 4) {
-  if (std::isnan(v)) return "-";
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.*g", digits, v);
-  return buffer;
-}
+std::string g(double v, int digits = 4) { return format_significant(v, digits); }
 
-std::string joined(const std::vector<double>& values, int digits) {
-  std::string out;
-  for (size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + g(values[i], digits);
-  return out;
-}
+std::string joined(const std::vector<double>& values, int digits) { return join_significant(values, digits, ", "); }
 
 // The candidates of one family (one joint count).
 struct FamilyGroup {

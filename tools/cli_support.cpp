@@ -140,6 +140,22 @@ std::string format_double(double value) {
   return buffer;
 }
 
+std::string format_significant(double value, int digits) {
+  if (std::isnan(value)) return "-";
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
+  return buffer;
+}
+
+std::string join_significant(const std::vector<double>& values, int digits, std::string_view separator) {
+  std::string out;
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (i > 0) out += separator;
+    out += format_significant(values[i], digits);
+  }
+  return out;
+}
+
 std::string json_number(double value) { return std::isfinite(value) ? format_double(value) : "null"; }
 
 std::string json_string(std::string_view text) {

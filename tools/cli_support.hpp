@@ -58,6 +58,11 @@ std::vector<double> parse_number_list(std::string_view text, const std::string& 
 // %.17g: enough digits that the double reads back exactly.
 std::string format_double(double value);
 
+// For tables people read: `digits` significant digits (%.*g), "-" for NaN.
+std::string format_significant(double value, int digits);
+// The values so formatted, joined by `separator`.
+std::string join_significant(const std::vector<double>& values, int digits, std::string_view separator);
+
 // A JSON number (%.17g), or null when the value is NaN or infinite, since JSON
 // has no tokens for those.
 std::string json_number(double value);

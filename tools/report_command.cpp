@@ -89,18 +89,9 @@ class Query {
   sqlite3_stmt* statement_ = nullptr;
 };
 
-std::string g(double v, int digits = 3) {
-  if (std::isnan(v)) return "-";
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.*g", digits, v);
-  return buffer;
-}
+std::string g(double v, int digits = 3) { return format_significant(v, digits); }
 
-std::string list(const std::vector<double>& values, int digits) {
-  std::string out;
-  for (size_t i = 0; i < values.size(); ++i) out += (i ? "," : "") + g(values[i], digits);
-  return out;
-}
+std::string list(const std::vector<double>& values, int digits) { return join_significant(values, digits, ","); }
 
 std::string range_text(const CandidateRow& r) {
   return r.full_turn ? "full turn" : "[" + g(r.range_lo_deg, 4) + ", " + g(r.range_hi_deg, 4) + "] deg";
