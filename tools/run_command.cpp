@@ -46,6 +46,24 @@
 #include "loopfarm/start.hpp"
 #include "progress.hpp"
 
+// Under AddressSanitizer (tools/test.sh --sanitize): the allocations Open MPI
+// keeps until exit are suppressed by library name (tools/sanitizers/lsan.supp),
+// which needs whole allocation stacks; the default fast unwinder stops in
+// Open MPI's components, which are built without frame pointers. Full
+// unwinding costs every allocation a slow walk, so only the program that
+// starts MPI asks for it, here, and the test programs keep the fast one
+// (ASAN_OPTIONS in the environment still overrides this default).
+#if defined(__SANITIZE_ADDRESS__)
+#define LOOPFARM_ADDRESS_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LOOPFARM_ADDRESS_SANITIZER 1
+#endif
+#endif
+#ifdef LOOPFARM_ADDRESS_SANITIZER
+extern "C" const char* __asan_default_options() { return "fast_unwind_on_malloc=0"; }
+#endif
+
 namespace loopfarm::cli {
 namespace {
 
