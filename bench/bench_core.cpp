@@ -31,7 +31,14 @@ struct Fixture {
   LoopGeometry geometry;
   double theta0 = 0.0;
   JointVector start;  // empty: assemble from the deterministic guesses
+  bool structured_step = true;  // EquilibriumOptions::structured_step (off: the general step, to compare)
 };
+
+EquilibriumOptions solver_options(const Fixture& f) {
+  EquilibriumOptions options;
+  options.structured_step = f.structured_step;
+  return options;
+}
 
 // Generic loops: the same fixed seeds everywhere, so runs compare.
 constexpr std::uint64_t kGenericSeeds[] = {1, 2, 3, 4, 5, 6, 7, 8};
@@ -39,6 +46,12 @@ constexpr std::uint64_t kGenericSeeds[] = {1, 2, 3, 4, 5, 6, 7, 8};
 Fixture bennett() {
   const LoopGeometry g = paper_bennett_loop();
   return {g, 120 * kDeg, bennett_angles(g, 120 * kDeg)};
+}
+
+Fixture bennett_general_step() {
+  Fixture f = bennett();
+  f.structured_step = false;
+  return f;
 }
 
 Fixture generic(std::uint64_t seed) { return {random_loop(4, seed), 0.0, JointVector()}; }
@@ -52,7 +65,7 @@ EquilibriumState assembled(const LoopModel& model, EquilibriumWorkspace& ws, con
 // moved 1 degree along its path tangent (what a cycle's first step starts
 // from; later steps use the sharper cubic through two samples).
 void solve_step(benchmark::State& state, const Fixture& f, bool predicted) {
-  const LoopModel model(f.geometry);
+  const LoopModel model(f.geometry, solver_options(f));
   EquilibriumWorkspace ws(model);
   EquilibriumState guess = assembled(model, ws, f);
   if (predicted) {
@@ -88,7 +101,7 @@ std::vector<Prepared> prepare(const std::vector<Fixture>& fixtures) {
   std::vector<Prepared> prepared;
   prepared.reserve(fixtures.size());
   for (const Fixture& f : fixtures) {
-    LoopModel model(f.geometry);
+    LoopModel model(f.geometry, solver_options(f));
     EquilibriumWorkspace ws(model);
     EquilibriumState start = assembled(model, ws, f);
     prepared.push_back({model, ws, start, f.theta0});
@@ -166,6 +179,11 @@ void BM_SolvePredicted_Bennett(benchmark::State& state) { solve_step(state, benn
 void BM_SolvePredicted_Generic(benchmark::State& state) { solve_step(state, generic(3), true); }
 
 void BM_Cycle_Bennett(benchmark::State& state) { cycle(state, {bennett()}); }
+// The same with EquilibriumOptions::structured_step off: what the structured step saves.
+void BM_SolvePredicted_Bennett_GeneralStep(benchmark::State& state) {
+  solve_step(state, bennett_general_step(), true);
+}
+void BM_Cycle_Bennett_GeneralStep(benchmark::State& state) { cycle(state, {bennett_general_step()}); }
 void BM_Cycle_Generic(benchmark::State& state) {
   std::vector<Fixture> fixtures;
   for (std::uint64_t seed : kGenericSeeds) fixtures.push_back(generic(seed));
@@ -183,6 +201,8 @@ BENCHMARK(BM_SolveWarm_Generic);
 BENCHMARK(BM_SolvePredicted_Bennett);
 BENCHMARK(BM_SolvePredicted_Generic);
 BENCHMARK(BM_Cycle_Bennett)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SolvePredicted_Bennett_GeneralStep);
+BENCHMARK(BM_Cycle_Bennett_GeneralStep)->Arg(32)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Cycle_Generic)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CycleJacobian_Generic)->Arg(32)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_FamilyDistance, planar, Family::planar, false);

@@ -1,6 +1,7 @@
 #include "loopfarm/equilibrium.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -29,6 +30,12 @@ constexpr int kMaxBacktracks = 40;
 // Multipliers (max-norm) below which the constraint curvature they weight is
 // left out of the Newton Hessian.
 constexpr double kNegligibleMultiplier = 1e-6;
+// The structured step (below) is used only where its two small factorisations
+// are well conditioned: every Cholesky pivot at least this fraction of its
+// diagonal entry. Elsewhere (a planar loop, whose link axes span only five
+// of the six directions of a deformation; a flat-folded pose) the general
+// factorisation, regularised as it is, takes over.
+constexpr double kStructuredPivotRatio = 1e-8;
 
 double max_abs(const Vector6& v) { return v.cwiseAbs().maxCoeff(); }
 
@@ -291,6 +298,26 @@ void solve_columns(const LoopModel& model, EquilibriumWorkspace& ws, const Unkno
   }
 }
 
+// The path tangent t from its components in unknown order (`unknowns`) and
+// its multiplier part `dual`; d theta_in / d theta_in = 1. False if any is
+// not finite.
+bool tangent_from_unknowns(const LoopModel& model, const EquilibriumState& x, const UnknownVector& unknowns,
+                           const Vector6& dual, EquilibriumState& t) {
+  t.theta.setZero(x.theta.size());
+  t.theta[model.options().input_joint] = 1.0;
+  t.deformations.setZero(x.deformations.size());
+  for (int u = 0; u < model.unknown_count(); ++u) {
+    const int k = model.unknown_deformation(u);
+    if (k >= 0) {
+      t.deformations[k] = unknowns[u];
+    } else {
+      t.theta[model.unknown_joint(u)] = unknowns[u];
+    }
+  }
+  t.multipliers = dual;
+  return t.theta.allFinite() && t.deformations.allFinite() && t.multipliers.allFinite();
+}
+
 // The tangent of the equilibrium path, d(x, lambda)/d theta_in, from
 // differentiating the KKT conditions: [W Aᵀ; A 0] [dx; dl] = -[b; c_t] with
 // b = d g / d theta_in and c_t = d c / d theta_in. Solved with the last Newton
@@ -308,19 +335,147 @@ bool path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const Equili
   ws.scratch = -ws.scratch;
   dense::solve_lower_transposed(ws.hessian, m, ws.scratch);
   dual -= sigma * c_t;  // the shift the sigma AᵀA term makes, as in the step
-  t.theta.setZero(x.theta.size());
-  t.theta[input] = 1.0;
-  t.deformations.setZero(x.deformations.size());
+  return tangent_from_unknowns(model, x, ws.scratch, dual, t);
+}
+
+// The Newton step where the Hessian of the Lagrangian is the springs' alone,
+// W = blockdiag(0, K) on (passive angles q, deformations delta), as it is
+// wherever the multipliers are negligible: on every movable loop, the ones
+// the search is after. The stabilised KKT system
+//
+//     [0    0    A_qᵀ] [dq]   [r_q]
+//     [0    K    A_dᵀ] [dd] = [r_d]
+//     [A_q  A_d  -mu I] [dl]   [r_c]
+//
+// then reduces, K being diagonal, to two small positive definite systems:
+// with S = A_d K^-1 A_dᵀ + mu I (6 x 6) and q = A_d K^-1 r_d - r_c,
+// S dl = A_q dq + q, and (A_qᵀ S^-1 A_q) dq = r_q - A_qᵀ S^-1 q (n - 1 square);
+// then dd = K^-1 (r_d - A_dᵀ dl). Exactly the Newton step the general path
+// computes through the m x m matrix H = W + sigma AᵀA (m = 11 for a 4R loop),
+// at a fraction of its cost: no m x m factorisation, no m-row solves.
+struct StructuredFactors {
+  Matrix6 constraint;  // S = L_S L_Sᵀ, factor with inverted diagonal
+  // Y = L_S^-1 A_q in the first `passive` columns (row-major and 8 wide, so
+  // that the triangular solve runs on whole rows).
+  Eigen::Matrix<double, 6, 8, Eigen::RowMajor> solved_passive;
+  Eigen::Matrix<double, kMaxJoints - 1, kMaxJoints - 1> passive;  // YᵀY = L_M L_Mᵀ, factor
+  int passive_count = 0;
+};
+static_assert(kMaxJoints - 1 <= 8, "the passive angles' columns fit the 8-wide rows");
+
+// Cholesky in place (dense::cholesky_in_place) of a matrix whose diagonal
+// was shifted by `shift` (the dual regularisation mu), which also refuses a
+// pivot less than `shift` above kStructuredPivotRatio of its diagonal entry:
+// the conditioning judged is the unshifted matrix's. (A direction that only
+// the shift makes positive is one the general path handles through the
+// passive angles' columns; solving it here with the shift alone, up to
+// 1e-6, changes the iterates: on the kite of the stability tests at an
+// unreachable input angle it made the assembly converge where the general
+// path does not.)
+template <class Matrix>
+bool well_conditioned_cholesky(Matrix& a, int n, double shift) {
+  std::array<double, 8> diagonal{};
+  for (int i = 0; i < n; ++i) diagonal[static_cast<size_t>(i)] = a(i, i);
+  if (!dense::cholesky_in_place(a, n)) return false;
+  for (int i = 0; i < n; ++i) {
+    // a(i, i) now holds 1 / L(i, i): the pivot is L(i, i)^2.
+    const double pivot = 1.0 / (a(i, i) * a(i, i));
+    if (!(pivot - shift >= kStructuredPivotRatio * (diagonal[static_cast<size_t>(i)] - shift))) return false;
+  }
+  return true;
+}
+
+// x <- L^-1 x for a factor from dense::cholesky_in_place (inverted diagonal).
+template <class Matrix, class Vector>
+void solve_lower_vector(const Matrix& lower, int n, Vector& x) {
+  for (int i = 0; i < n; ++i) {
+    double sum = x[i];
+    for (int k = 0; k < i; ++k) sum -= lower(i, k) * x[k];
+    x[i] = sum * lower(i, i);
+  }
+}
+
+// Factors S and A_qᵀ S^-1 A_q from the workspace's closure Jacobian. False
+// where either is not well conditioned, or there are more passive angles than
+// closure equations (n = 8: A_qᵀ S^-1 A_q is singular).
+bool factor_structured(const LoopModel& model, const EquilibriumWorkspace& ws, double mu, StructuredFactors& f) {
+  const int m = model.unknown_count();
+  const int passive = model.joints() - 1;
+  if (passive > 6) return false;
+  f.passive_count = passive;
+  // Lower triangles only: all that the factorisations read. Written out
+  // (fixed 6 x 6 loops the compiler unrolls): Eigen's products of these
+  // dynamic-width blocks dispatch at run time, which cost more than the sums.
+  Matrix6& S = f.constraint;
+  S.setZero();
+  int column = 0;
   for (int u = 0; u < m; ++u) {
     const int k = model.unknown_deformation(u);
-    if (k >= 0) {
-      t.deformations[k] = ws.scratch[u];
-    } else {
-      t.theta[model.unknown_joint(u)] = ws.scratch[u];
+    const auto a = ws.jacobian.col(u);
+    if (k < 0) {
+      f.solved_passive.col(column++) = a;
+      continue;
+    }
+    const double compliance = 1.0 / model.deformation_stiffness(k);
+    for (int j = 0; j < 6; ++j) {
+      const double scaled = compliance * a[j];
+      for (int i = j; i < 6; ++i) S(i, j) += scaled * a[i];
     }
   }
-  t.multipliers = dual;
-  return t.theta.allFinite() && t.deformations.allFinite() && t.multipliers.allFinite();
+  S.diagonal().array() += mu;
+  if (!well_conditioned_cholesky(S, 6, mu)) return false;
+  dense::solve_lower_rows(S, 6, f.solved_passive);
+  for (int j = 0; j < passive; ++j) {
+    for (int i = j; i < passive; ++i) f.passive(i, j) = f.solved_passive.col(i).dot(f.solved_passive.col(j));
+  }
+  return well_conditioned_cholesky(f.passive, passive, 0.0);
+}
+
+// Solves the structured system above for the right-hand side (r_q, r_d, r_c)
+// given in unknown order in `rhs` and `r_c`: the step in `step` (unknown
+// order), the multiplier step in `dual`.
+void solve_structured(const LoopModel& model, const EquilibriumWorkspace& ws, const StructuredFactors& f,
+                      const UnknownVector& rhs, const Vector6& r_c, UnknownVector& step, Vector6& dual) {
+  const int m = model.unknown_count();
+  const int passive = f.passive_count;
+  Vector6 z = -r_c;
+  for (int u = 0; u < m; ++u) {
+    const int k = model.unknown_deformation(u);
+    if (k >= 0) z += (rhs[u] / model.deformation_stiffness(k)) * ws.jacobian.col(u);
+  }
+  solve_lower_vector(f.constraint, 6, z);  // z = L_S^-1 q
+  // (YᵀY) dq = r_q - Yᵀ z.
+  Eigen::Matrix<double, kMaxJoints - 1, 1> dq;
+  for (int u = 0, i = 0; u < m; ++u) {
+    if (model.unknown_deformation(u) < 0) {
+      dq[i] = rhs[u] - f.solved_passive.col(i).dot(z);
+      ++i;
+    }
+  }
+  solve_lower_vector(f.passive, passive, dq);
+  auto dq_head = dq.head(passive);
+  dense::solve_lower_transposed(f.passive, passive, dq_head);
+  // dl = L_S^-ᵀ (Y dq + z).
+  dual = z;
+  for (int i = 0; i < passive; ++i) dual += dq[i] * f.solved_passive.col(i);
+  dense::solve_lower_transposed(f.constraint, 6, dual);
+  for (int u = 0, i = 0; u < m; ++u) {
+    const int k = model.unknown_deformation(u);
+    step[u] = k >= 0 ? (rhs[u] - ws.jacobian.col(u).dot(dual)) / model.deformation_stiffness(k) : dq[i++];
+  }
+}
+
+// The path tangent (as path_tangent) from the structured factors of the last
+// step: b = 0 (no curvature), so the right-hand side is (0, 0, -c_t).
+bool structured_path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& x,
+                             const StructuredFactors& f, EquilibriumState& t) {
+  const int m = model.unknown_count();
+  const int input = model.options().input_joint;
+  const Vector6 c_t = residual_derivative(ws.chain, chain_index(input, ChainParameter::theta));
+  UnknownVector rhs = UnknownVector::Zero(m);
+  Vector6 dual;
+  solve_structured(model, ws, f, rhs, -c_t, ws.scratch, dual);
+  return tangent_from_unknowns(model, x, ws.scratch, dual, t);
 }
 
 }  // namespace
@@ -349,6 +504,8 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
   SolvedGram gram;
   bool last_step_exact = false;  // the last factorisation holds the exact Hessian
   bool last_step_gauss_newton = false;  // the last step fell back to the Gauss-Newton model
+  bool last_step_structured = false;    // the last step was the structured one (factors below)
+  StructuredFactors structured_factors;
 
   for (;;) {
     const Vector6 c = ws.chain.residual;
@@ -363,7 +520,9 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     if (summary.closure_residual <= opt.closure_tolerance && summary.stationarity <= opt.stationarity_tolerance) {
       summary.status = SolveStatus::converged;
       if (summary.iterations > 0 && last_step_exact) {
-        summary.has_tangent = path_tangent(model, ws, x, gram, schur_llt, sigma_last, summary.tangent);
+        summary.has_tangent = last_step_structured
+                                  ? structured_path_tangent(model, ws, x, structured_factors, summary.tangent)
+                                  : path_tangent(model, ws, x, gram, schur_llt, sigma_last, summary.tangent);
       }
       break;
     }
@@ -397,6 +556,30 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // Gauss-Newton model, which keeps only the springs' stiffness K, gives a
     // least-norm projection step towards closure, defined once a small rho
     // covers the passive angles (K has no block for them).
+    // Negligible multipliers: the structured step, where it is well
+    // conditioned. It reproduces the general path's step below exactly (to
+    // round-off), sigma's shift of the multipliers included: that path solves
+    // [H Aᵀ; A -mu I] [dx; dl'] = -[g; c] with H = W + sigma AᵀA and takes
+    // dl = dl' - sigma c, which is the solution of the unaugmented system
+    // [W Aᵀ; A -mu' I] [dx; nu] = -[g; c s], s = 1 / (1 + sigma mu),
+    // mu' = mu s, with dl = s (nu + sigma c) - sigma c. (Solving the plain
+    // system with mu instead changes the iterates by O(mu); where a solve is
+    // far from converging, mu = 1e-6, that sent the stability tests' kite at
+    // an unreachable input angle elsewhere.)
+    Vector6 dual;
+    double step_curvature = 0.0;  // stepᵀ H step, for the merit's weight
+    const double shrink = 1.0 / (1.0 + sigma * mu);
+    const bool structured = !curvature && opt.structured_step && factor_structured(model, ws, mu * shrink, structured_factors);
+    if (structured) {
+      ws.scratch = -ws.gradient;
+      solve_structured(model, ws, structured_factors, ws.scratch, -shrink * c, ws.step, dual);
+      dual = shrink * (dual + sigma * c) - sigma * c;
+      rho_last = 0.0;
+      last_step_gauss_newton = false;
+      last_step_exact = true;
+      last_step_structured = true;
+      ++summary.structured_steps;
+    } else {
     normal_matrix(model, ws);
     bool factored = false;
     bool exact = true;
@@ -432,6 +615,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     rho_last = rho;
     last_step_gauss_newton = !exact;
     last_step_exact = exact;
+    last_step_structured = false;
     sigma_last = sigma;
     summary.max_regularization = std::max(summary.max_regularization, rho);
 
@@ -445,9 +629,9 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       summary.status = SolveStatus::singular;
       break;
     }
-    Vector6 dual = schur_llt.solve(c - gram.row(6).transpose());
+    dual = schur_llt.solve(c - gram.row(6).transpose());
     for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 6) + ws.solved.row(u).head<6>().dot(dual);
-    const double step_curvature = ws.scratch.squaredNorm();  // stepᵀ H step
+    step_curvature = ws.scratch.squaredNorm();
     ws.step = -ws.scratch;
     dense::solve_lower_transposed(ws.hessian, m, ws.step);
     // The sigma AᵀA term leaves dx the Newton step but shifts the multiplier
@@ -455,6 +639,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // Undo the shift, or the multipliers (and with them x) converge only
     // linearly.
     dual -= sigma * c;
+    }
     if (!ws.step.allFinite() || !dual.allFinite()) {
       summary.status = SolveStatus::non_finite;
       break;
@@ -464,6 +649,14 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // multipliers l+ = l + dl; nu grows until the step is a descent direction.
     const Vector6 lambda_plus = x.multipliers + dual;
     Vector6 jacobian_step = ws.jacobian * ws.step;
+    if (structured) {
+      // stepᵀ (W + sigma AᵀA) step, the quantity the general path reads off its factorisation.
+      step_curvature = sigma * jacobian_step.squaredNorm();
+      for (int u = 0; u < m; ++u) {
+        const int k = model.unknown_deformation(u);
+        if (k >= 0) step_curvature += model.deformation_stiffness(k) * ws.step[u] * ws.step[u];
+      }
+    }
     double energy_slope = 0.0;
     for (int u = 0; u < m; ++u) {
       const int k = model.unknown_deformation(u);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -254,6 +255,77 @@ TEST(Equilibrium, PathTangentMatchesCentralDifferences) {
   }
 }
 
+// The structured step (negligible multipliers: W = blockdiag(0, K)) against
+// the general m x m factorisation it replaces: the same iterates to
+// round-off, step by step (solves cut at 1, 2, 3 iterations from a guess
+// away from the answer), the same iteration counts to convergence and the
+// same path tangent. The paper's Bennett loop (both compliance sets, two
+// input joints) and a Goldberg 5R loop, all movable. The structured steps
+// are counted, so that the comparison cannot pass by both sides taking the
+// general path.
+TEST(Equilibrium, StructuredStepIsTheGeneralNewtonStep) {
+  struct Case {
+    LoopGeometry geometry;
+    Compliance compliance;
+    int input_joint;
+    JointVector start;
+  };
+  const LoopGeometry bennett = paper_bennett_loop();
+  // Goldberg's 5R from two Bennett loops (tests/cycle_nr_test.cpp), assembled.
+  const double s3 = std::sqrt(3.0);
+  const double a[] = {2, 1, s3, 2, 1 + s3}, alpha[] = {90, 30, 60, 90, 90}, d[] = {0, 0, 0, 0, 0};
+  const LoopGeometry goldberg = LoopGeometry::from_degrees(a, alpha, d);
+  const LoopModel goldberg_model(goldberg);
+  EquilibriumWorkspace goldberg_ws(goldberg_model);
+  const EquilibriumSummary goldberg_start = assemble(goldberg_model, goldberg_ws, 0.5);
+  ASSERT_EQ(goldberg_start.status, SolveStatus::converged);
+  ASSERT_LE(goldberg_start.energy, 1e-20);
+  const std::vector<Case> cases = {{bennett, Compliance::paper, 0, bennett_angles(bennett, rad(120))},
+                                   {bennett, Compliance::full, 2, bennett_angles(bennett, rad(-60))},
+                                   {goldberg, Compliance::paper, 0, goldberg_start.state.theta}};
+  for (const Case& c : cases) {
+    EquilibriumOptions structured_options, general_options;
+    structured_options.compliance = general_options.compliance = c.compliance;
+    structured_options.input_joint = general_options.input_joint = c.input_joint;
+    general_options.structured_step = false;
+    const LoopModel structured(c.geometry, structured_options), general(c.geometry, general_options);
+    EquilibriumWorkspace ws_structured(structured), ws_general(general);
+    EquilibriumState guess = EquilibriumState::at_angles(structured, c.start);
+    for (int i = 0; i < structured.joints(); ++i) {
+      if (i != c.input_joint) guess.theta[i] += 0.05 * (i + 1);
+    }
+    const double theta_in = c.start[c.input_joint];
+    for (int limit : {1, 2, 3, 0}) {
+      const EquilibriumSummary s = solve_equilibrium(structured, ws_structured, theta_in, guess, limit);
+      const EquilibriumSummary g = solve_equilibrium(general, ws_general, theta_in, guess, limit);
+      // The first step always is one (the guess's multipliers are zero); in
+      // between, the multipliers of a guess off the closure curve can grow
+      // past the negligible level, and such steps are general on both sides.
+      EXPECT_GE(s.structured_steps, 1) << "limit " << limit;
+      if (limit == 1) {
+        EXPECT_EQ(s.structured_steps, 1);
+      }
+      EXPECT_EQ(g.structured_steps, 0);
+      EXPECT_EQ(s.iterations, g.iterations) << "limit " << limit;
+      EXPECT_EQ(s.status, g.status) << "limit " << limit;
+      for (int i = 0; i < structured.joints(); ++i) {
+        EXPECT_NEAR(wrap_angle(s.state.theta[i] - g.state.theta[i]), 0.0, 1e-12) << "limit " << limit;
+      }
+      EXPECT_LE((s.state.deformations - g.state.deformations).cwiseAbs().maxCoeff(), 1e-12) << "limit " << limit;
+      EXPECT_LE((s.state.multipliers - g.state.multipliers).cwiseAbs().maxCoeff(), 1e-12) << "limit " << limit;
+      if (limit == 0) {
+        ASSERT_EQ(s.status, SolveStatus::converged);
+        EXPECT_GT(s.iterations, 2);
+        ASSERT_TRUE(s.has_tangent && g.has_tangent);
+        for (int i = 0; i < structured.joints(); ++i) {
+          EXPECT_NEAR(s.tangent.theta[i], g.tangent.theta[i], 1e-9 * std::max(1.0, std::abs(g.tangent.theta[i])));
+        }
+        EXPECT_LE((s.tangent.deformations - g.tangent.deformations).cwiseAbs().maxCoeff(), 1e-9);
+      }
+    }
+  }
+}
+
 TEST(Equilibrium, SolveDoesNotAllocate) {
   if (!testing::kCountsAllocations) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
   for (int n : {4, 6, 8}) {
@@ -271,6 +343,21 @@ TEST(Equilibrium, SolveDoesNotAllocate) {
     equilibrium_tangent(model, ws, s.state, tangent);
     EXPECT_EQ(testing::allocations() - before, 0) << "n = " << n;
     EXPECT_GT(s.iterations, 0);
+  }
+  {
+    // The structured step (a movable loop: negligible multipliers), with the tangent it leaves.
+    const LoopModel model(paper_bennett_loop());
+    EquilibriumWorkspace ws(model);
+    JointVector start = bennett_angles(model.geometry(), 1.0);
+    start.tail(3).array() += 0.1;
+    const EquilibriumState guess = EquilibriumState::at_angles(model, start);
+    EquilibriumSummary s = solve_equilibrium(model, ws, 1.0, guess);  // warm-up
+    const long before = testing::allocations();
+    s = solve_equilibrium(model, ws, 1.0, guess);
+    s = solve_equilibrium(model, ws, 1.1, s.state);
+    EXPECT_EQ(testing::allocations() - before, 0) << "structured step";
+    EXPECT_GT(s.structured_steps, 0);
+    EXPECT_TRUE(s.has_tangent);
   }
   // The counter works: an allocation is seen, from new and from Eigen's
   // dynamic-size matrices (std::malloc) alike.

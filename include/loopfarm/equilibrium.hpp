@@ -57,6 +57,12 @@ struct EquilibriumOptions {
   double closure_tolerance = 1e-13;
   double stationarity_tolerance = 1e-11;
   int max_iterations = 100;
+  // Where the multipliers are negligible (every movable loop), take the
+  // Newton step through two small systems (6 x 6 and the passive angles')
+  // instead of the general m x m factorisation: the same step to round-off,
+  // at about two thirds of the Bennett cycle's instructions (src/equilibrium.cpp).
+  // Off only to compare the two (tests, benchmarks).
+  bool structured_step = true;
 
   // Throws std::invalid_argument naming the first invalid option.
   void validate() const;
@@ -139,6 +145,7 @@ struct EquilibriumSummary {
   double closure_residual = 0.0;  // max-norm of (rotation, translation / L)
   double stationarity = 0.0;      // max-norm of the Lagrangian gradient
   int gauss_newton_steps = 0;       // iterations that fell back to the Gauss-Newton model
+  int structured_steps = 0;         // iterations that took the structured step (options.structured_step)
   double max_regularization = 0.0;  // largest primal regularisation used
   EquilibriumState state;            // the solution (deformations, angles, multipliers)
   // d state / d theta_in along the equilibrium path (theta: 1 for the input
