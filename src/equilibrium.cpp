@@ -340,26 +340,29 @@ bool path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const Equili
 
 // The Newton step where the Hessian of the Lagrangian is the springs' alone,
 // W = blockdiag(0, K) on (passive angles q, deformations delta), as it is
-// wherever the multipliers are negligible: on every movable loop, the ones
-// the search is after. The stabilised KKT system
+// wherever the multipliers are negligible (on every movable loop, the ones
+// the search is after), or that plus rho I (a Gauss-Newton step). With
+// K_rho = K + rho I, the stabilised KKT system
 //
-//     [0    0    A_qᵀ] [dq]   [r_q]
-//     [0    K    A_dᵀ] [dd] = [r_d]
-//     [A_q  A_d  -mu I] [dl]   [r_c]
+//     [rho I  0      A_qᵀ ] [dq]   [r_q]
+//     [0      K_rho  A_dᵀ ] [dd] = [r_d]
+//     [A_q    A_d    -mu I] [dl]   [r_c]
 //
-// then reduces, K being diagonal, to two small positive definite systems:
-// with S = A_d K^-1 A_dᵀ + mu I (6 x 6) and q = A_d K^-1 r_d - r_c,
-// S dl = A_q dq + q, and (A_qᵀ S^-1 A_q) dq = r_q - A_qᵀ S^-1 q (n - 1 square);
-// then dd = K^-1 (r_d - A_dᵀ dl). Exactly the Newton step the general path
-// computes through the m x m matrix H = W + sigma AᵀA (m = 11 for a 4R loop),
-// at a fraction of its cost: no m x m factorisation, no m-row solves.
+// reduces, K being diagonal, to two small positive definite systems: with
+// S = A_d K_rho^-1 A_dᵀ + mu I (6 x 6) and q = A_d K_rho^-1 r_d - r_c,
+// S dl = A_q dq + q, and (rho I + A_qᵀ S^-1 A_q) dq = r_q - A_qᵀ S^-1 q (n - 1
+// square); then dd = K_rho^-1 (r_d - A_dᵀ dl). Exactly the step the general
+// path computes through the m x m matrix H = W + sigma AᵀA + rho I (m = 11
+// for a 4R loop), at a fraction of its cost: no m x m factorisation, no
+// m-row solves.
 struct StructuredFactors {
   Matrix6 constraint;  // S = L_S L_Sᵀ, factor with inverted diagonal
   // Y = L_S^-1 A_q in the first `passive` columns (row-major and 8 wide, so
   // that the triangular solve runs on whole rows).
   Eigen::Matrix<double, 6, 8, Eigen::RowMajor> solved_passive;
-  Eigen::Matrix<double, kMaxJoints - 1, kMaxJoints - 1> passive;  // YᵀY = L_M L_Mᵀ, factor
+  Eigen::Matrix<double, kMaxJoints - 1, kMaxJoints - 1> passive;  // rho I + YᵀY = L_M L_Mᵀ, factor
   int passive_count = 0;
+  double rho = 0.0;
 };
 static_assert(kMaxJoints - 1 <= 8, "the passive angles' columns fit the 8-wide rows");
 
@@ -395,14 +398,16 @@ void solve_lower_vector(const Matrix& lower, int n, Vector& x) {
   }
 }
 
-// Factors S and A_qᵀ S^-1 A_q from the workspace's closure Jacobian. False
-// where either is not well conditioned, or there are more passive angles than
-// closure equations (n = 8: A_qᵀ S^-1 A_q is singular).
-bool factor_structured(const LoopModel& model, const EquilibriumWorkspace& ws, double mu, StructuredFactors& f) {
+// Factors S and rho I + A_qᵀ S^-1 A_q from the workspace's closure Jacobian.
+// False where either is not well conditioned, or there are more passive
+// angles than closure equations (n = 8: A_qᵀ S^-1 A_q is singular).
+bool factor_structured(const LoopModel& model, const EquilibriumWorkspace& ws, double mu, double rho,
+                       StructuredFactors& f) {
   const int m = model.unknown_count();
   const int passive = model.joints() - 1;
   if (passive > 6) return false;
   f.passive_count = passive;
+  f.rho = rho;
   // Lower triangles only: all that the factorisations read. Written out
   // (fixed 6 x 6 loops the compiler unrolls): Eigen's products of these
   // dynamic-width blocks dispatch at run time, which cost more than the sums.
@@ -416,7 +421,7 @@ bool factor_structured(const LoopModel& model, const EquilibriumWorkspace& ws, d
       f.solved_passive.col(column++) = a;
       continue;
     }
-    const double compliance = 1.0 / model.deformation_stiffness(k);
+    const double compliance = 1.0 / (model.deformation_stiffness(k) + rho);
     for (int j = 0; j < 6; ++j) {
       const double scaled = compliance * a[j];
       for (int i = j; i < 6; ++i) S(i, j) += scaled * a[i];
@@ -427,8 +432,11 @@ bool factor_structured(const LoopModel& model, const EquilibriumWorkspace& ws, d
   dense::solve_lower_rows(S, 6, f.solved_passive);
   for (int j = 0; j < passive; ++j) {
     for (int i = j; i < passive; ++i) f.passive(i, j) = f.solved_passive.col(i).dot(f.solved_passive.col(j));
+    f.passive(j, j) += rho;
   }
-  return well_conditioned_cholesky(f.passive, passive, 0.0);
+  // rho judged as a shift too: where only it makes the passive block definite
+  // (the passive angles' columns dependent), the general path takes over.
+  return well_conditioned_cholesky(f.passive, passive, rho);
 }
 
 // Solves the structured system above for the right-hand side (r_q, r_d, r_c)
@@ -441,7 +449,7 @@ void solve_structured(const LoopModel& model, const EquilibriumWorkspace& ws, co
   Vector6 z = -r_c;
   for (int u = 0; u < m; ++u) {
     const int k = model.unknown_deformation(u);
-    if (k >= 0) z += (rhs[u] / model.deformation_stiffness(k)) * ws.jacobian.col(u);
+    if (k >= 0) z += (rhs[u] / (model.deformation_stiffness(k) + f.rho)) * ws.jacobian.col(u);
   }
   solve_lower_vector(f.constraint, 6, z);  // z = L_S^-1 q
   // (YᵀY) dq = r_q - Yᵀ z.
@@ -461,7 +469,7 @@ void solve_structured(const LoopModel& model, const EquilibriumWorkspace& ws, co
   dense::solve_lower_transposed(f.constraint, 6, dual);
   for (int u = 0, i = 0; u < m; ++u) {
     const int k = model.unknown_deformation(u);
-    step[u] = k >= 0 ? (rhs[u] - ws.jacobian.col(u).dot(dual)) / model.deformation_stiffness(k) : dq[i++];
+    step[u] = k >= 0 ? (rhs[u] - ws.jacobian.col(u).dot(dual)) / (model.deformation_stiffness(k) + f.rho) : dq[i++];
   }
 }
 
@@ -556,54 +564,54 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // Gauss-Newton model, which keeps only the springs' stiffness K, gives a
     // least-norm projection step towards closure, defined once a small rho
     // covers the passive angles (K has no block for them).
-    // Negligible multipliers: the structured step, where it is well
-    // conditioned. It reproduces the general path's step below exactly (to
-    // round-off), sigma's shift of the multipliers included: that path solves
-    // [H Aᵀ; A -mu I] [dx; dl'] = -[g; c] with H = W + sigma AᵀA and takes
-    // dl = dl' - sigma c, which is the solution of the unaugmented system
-    // [W Aᵀ; A -mu' I] [dx; nu] = -[g; c s], s = 1 / (1 + sigma mu),
-    // mu' = mu s, with dl = s (nu + sigma c) - sigma c. (Solving the plain
-    // system with mu instead changes the iterates by O(mu); where a solve is
-    // far from converging, mu = 1e-6, that sent the stability tests' kite at
-    // an unreachable input angle elsewhere.)
+    //
+    // Where W is the springs' alone, W = blockdiag(0, K) (negligible
+    // multipliers: every movable loop) or blockdiag(rho I, K + rho I) (a
+    // Gauss-Newton step), the structured step (above) gives the same step
+    // through two small systems, where they are well conditioned. It
+    // reproduces sigma's shift of the multipliers too: the general path takes
+    // dl = dl' - sigma c from the augmented system, which is the solution of
+    // the unaugmented [W Aᵀ; A -mu' I] [dx; nu] = -[g; c s], s = 1 / (1 +
+    // sigma mu), mu' = mu s, as dl = s (nu + sigma c) - sigma c. (Solving the
+    // plain system with mu instead changes the iterates by O(mu); where a
+    // solve is far from converging, mu = 1e-6, that sent the stability tests'
+    // kite at an unreachable input angle elsewhere.)
     Vector6 dual;
     double step_curvature = 0.0;  // stepᵀ H step, for the merit's weight
-    const double shrink = 1.0 / (1.0 + sigma * mu);
-    const bool structured = !curvature && opt.structured_step && factor_structured(model, ws, mu * shrink, structured_factors);
-    if (structured) {
-      ws.scratch = -ws.gradient;
-      solve_structured(model, ws, structured_factors, ws.scratch, -shrink * c, ws.step, dual);
-      dual = shrink * (dual + sigma * c) - sigma * c;
-      rho_last = 0.0;
-      last_step_gauss_newton = false;
-      last_step_exact = true;
-      last_step_structured = true;
-      ++summary.structured_steps;
-    } else {
-    normal_matrix(model, ws);
-    bool factored = false;
     bool exact = true;
     double rho = 0.0;
-    // H is positive definite for a sigma only if it is so for every larger
-    // one (sigma AᵀA is positive semidefinite). After a Gauss-Newton step the
-    // exact Hessian was indefinite on the null space of A, which no sigma
-    // cures, and usually still is (a landing after a fold takes tens of such
-    // steps): one factorisation at the largest sigma tells, where the ladder
-    // would fail at every rung. The sigma chosen is the one the ladder alone
-    // would choose, so the iterates do not change; over the bench's generic
-    // cycles this saves a third of the factorisations.
-    const bool hopeless = last_step_gauss_newton && sigma < kMaxAugmentation &&
-                          !factor_hessian(model, ws, kMaxAugmentation, curvature, 0.0);
-    for (double trial_sigma = sigma; !hopeless && trial_sigma <= kMaxAugmentation && !factored;
-         trial_sigma *= 10.0) {
-      sigma = trial_sigma;
-      factored = factor_hessian(model, ws, sigma, curvature, 0.0);
+    auto try_structured = [&](double regularization) {
+      const double s = 1.0 / (1.0 + sigma * mu);
+      return opt.structured_step && factor_structured(model, ws, mu * s, regularization, structured_factors);
+    };
+    bool structured = !curvature && try_structured(0.0);
+    bool factored = structured;
+    if (!structured) {
+      normal_matrix(model, ws);
+      // H is positive definite for a sigma only if it is so for every larger
+      // one (sigma AᵀA is positive semidefinite). After a Gauss-Newton step the
+      // exact Hessian was indefinite on the null space of A, which no sigma
+      // cures, and usually still is (a landing after a fold takes tens of such
+      // steps): one factorisation at the largest sigma tells, where the ladder
+      // would fail at every rung. The sigma chosen is the one the ladder alone
+      // would choose, so the iterates do not change; over the bench's generic
+      // cycles this saves a third of the factorisations.
+      const bool hopeless = last_step_gauss_newton && sigma < kMaxAugmentation &&
+                            !factor_hessian(model, ws, kMaxAugmentation, curvature, 0.0);
+      for (double trial_sigma = sigma; !hopeless && trial_sigma <= kMaxAugmentation && !factored;
+           trial_sigma *= 10.0) {
+        sigma = trial_sigma;
+        factored = factor_hessian(model, ws, sigma, curvature, 0.0);
+      }
     }
     if (!factored) {
       sigma = kInitialAugmentation;
       exact = false;
       ++summary.gauss_newton_steps;
-      for (rho = std::max(kMinRegularization, rho_last / 4.0); rho <= kMaxRegularization && !factored; rho *= 10.0) {
+      rho = std::max(kMinRegularization, rho_last / 4.0);
+      structured = try_structured(rho);
+      factored = structured;
+      for (; !structured && rho <= kMaxRegularization && !factored; rho *= 10.0) {
         factored = factor_hessian(model, ws, sigma, false, rho);
         if (factored) break;
       }
@@ -615,30 +623,43 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     rho_last = rho;
     last_step_gauss_newton = !exact;
     last_step_exact = exact;
-    last_step_structured = false;
+    last_step_structured = structured;
     sigma_last = sigma;
     summary.max_regularization = std::max(summary.max_regularization, rho);
 
-    // With H = L Lᵀ, Y = L^-1 Aᵀ and z = L^-1 g: the Schur complement
-    // A H^-1 Aᵀ is YᵀY, and the step -H^-1 (g + Aᵀ dl) is -L^-ᵀ (z + Y dl).
-    solve_columns(model, ws, ws.gradient, exact && curvature, gram);
-    ws.schur = gram.topLeftCorner<6, 6>();
-    ws.schur.diagonal().array() += mu;
-    schur_llt.compute(ws.schur);  // fixed 6 x 6: Eigen unrolls it
-    if (schur_llt.info() != Eigen::Success) {
-      summary.status = SolveStatus::singular;
-      break;
-    }
-    dual = schur_llt.solve(c - gram.row(6).transpose());
-    for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 6) + ws.solved.row(u).head<6>().dot(dual);
-    step_curvature = ws.scratch.squaredNorm();
-    ws.step = -ws.scratch;
-    dense::solve_lower_transposed(ws.hessian, m, ws.step);
-    // The sigma AᵀA term leaves dx the Newton step but shifts the multiplier
-    // step: W dx + Aᵀ(dl - sigma c) = -g when A dx = -c (exactly so for mu = 0).
-    // Undo the shift, or the multipliers (and with them x) converge only
-    // linearly.
-    dual -= sigma * c;
+    if (structured) {
+      ++summary.structured_steps;
+      const double s = 1.0 / (1.0 + sigma * mu);
+      ws.scratch = -ws.gradient;
+      solve_structured(model, ws, structured_factors, ws.scratch, -s * c, ws.step, dual);
+      dual = s * (dual + sigma * c) - sigma * c;
+      // stepᵀ (W + sigma AᵀA + rho I) step, which the general path reads off its factorisation.
+      step_curvature = sigma * (ws.jacobian * ws.step).squaredNorm() + rho * ws.step.squaredNorm();
+      for (int u = 0; u < m; ++u) {
+        const int k = model.unknown_deformation(u);
+        if (k >= 0) step_curvature += model.deformation_stiffness(k) * ws.step[u] * ws.step[u];
+      }
+    } else {
+      // With H = L Lᵀ, Y = L^-1 Aᵀ and z = L^-1 g: the Schur complement
+      // A H^-1 Aᵀ is YᵀY, and the step -H^-1 (g + Aᵀ dl) is -L^-ᵀ (z + Y dl).
+      solve_columns(model, ws, ws.gradient, exact && curvature, gram);
+      ws.schur = gram.topLeftCorner<6, 6>();
+      ws.schur.diagonal().array() += mu;
+      schur_llt.compute(ws.schur);  // fixed 6 x 6: Eigen unrolls it
+      if (schur_llt.info() != Eigen::Success) {
+        summary.status = SolveStatus::singular;
+        break;
+      }
+      dual = schur_llt.solve(c - gram.row(6).transpose());
+      for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 6) + ws.solved.row(u).head<6>().dot(dual);
+      step_curvature = ws.scratch.squaredNorm();
+      ws.step = -ws.scratch;
+      dense::solve_lower_transposed(ws.hessian, m, ws.step);
+      // The sigma AᵀA term leaves dx the Newton step but shifts the multiplier
+      // step: W dx + Aᵀ(dl - sigma c) = -g when A dx = -c (exactly so for mu = 0).
+      // Undo the shift, or the multipliers (and with them x) converge only
+      // linearly.
+      dual -= sigma * c;
     }
     if (!ws.step.allFinite() || !dual.allFinite()) {
       summary.status = SolveStatus::non_finite;
@@ -649,14 +670,6 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // multipliers l+ = l + dl; nu grows until the step is a descent direction.
     const Vector6 lambda_plus = x.multipliers + dual;
     Vector6 jacobian_step = ws.jacobian * ws.step;
-    if (structured) {
-      // stepᵀ (W + sigma AᵀA) step, the quantity the general path reads off its factorisation.
-      step_curvature = sigma * jacobian_step.squaredNorm();
-      for (int u = 0; u < m; ++u) {
-        const int k = model.unknown_deformation(u);
-        if (k >= 0) step_curvature += model.deformation_stiffness(k) * ws.step[u] * ws.step[u];
-      }
-    }
     double energy_slope = 0.0;
     for (int u = 0; u < m; ++u) {
       const int k = model.unknown_deformation(u);
