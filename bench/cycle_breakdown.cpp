@@ -5,12 +5,14 @@
 //
 //   build/release/bench/cycle_breakdown [--samples N] [--max-refinements D]
 //                                       [--max-iterations-per-step B] [--bennett]
+//                                       [--general-step]
 //
 // Prints one line per loop (E_mean, iterations, bisections, jumps, failures)
 // and the total iterations by sample status. --bennett drives the paper's
 // Bennett loop from 120 deg instead (BM_Cycle_Bennett's cycle), 8 times, so
 // that instruction counts (valgrind --tool=callgrind) compare with the
-// generic loops'.
+// generic loops'. --general-step turns EquilibriumOptions::structured_step
+// off (the same steps through the general factorisation), to compare.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -45,6 +47,7 @@ int main(int argc, char** argv) {
   using namespace loopfarm;
   CycleOptions options;
   bool bennett = false;
+  EquilibriumOptions solver;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--samples") == 0) {
       options.samples = integer_argument(argc, argv, i);
@@ -54,6 +57,8 @@ int main(int argc, char** argv) {
       options.max_iterations_per_step = integer_argument(argc, argv, i);
     } else if (std::strcmp(argv[i], "--bennett") == 0) {
       bennett = true;
+    } else if (std::strcmp(argv[i], "--general-step") == 0) {
+      solver.structured_step = false;
     } else {
       std::fprintf(stderr, "cycle_breakdown: unknown option %s\n", argv[i]);
       return 2;
@@ -69,7 +74,7 @@ int main(int argc, char** argv) {
   long total = 0;
   for (std::uint64_t seed = 1; seed <= 8; ++seed) {
     const double theta0 = bennett ? 120.0 * kDegree : 0.0;
-    const LoopModel model(bennett ? paper_bennett_loop() : random_loop(4, seed));
+    const LoopModel model(bennett ? paper_bennett_loop() : random_loop(4, seed), solver);
     EquilibriumWorkspace ws(model);
     const EquilibriumState start =
         bennett ? EquilibriumState::at_angles(model, bennett_angles(model.geometry(), theta0))
