@@ -184,17 +184,16 @@ void BM_SolvePredicted_Bennett_GeneralStep(benchmark::State& state) {
   solve_step(state, bennett_general_step(), true);
 }
 void BM_Cycle_Bennett_GeneralStep(benchmark::State& state) { cycle(state, {bennett_general_step()}); }
-void BM_Cycle_Generic(benchmark::State& state) {
+std::vector<Fixture> generic_loops(bool structured_step) {
   std::vector<Fixture> fixtures;
   for (std::uint64_t seed : kGenericSeeds) fixtures.push_back(generic(seed));
-  cycle(state, fixtures);
+  for (Fixture& f : fixtures) f.structured_step = structured_step;
+  return fixtures;
 }
+void BM_Cycle_Generic(benchmark::State& state) { cycle(state, generic_loops(true)); }
+void BM_Cycle_Generic_GeneralStep(benchmark::State& state) { cycle(state, generic_loops(false)); }
 
-void BM_CycleJacobian_Generic(benchmark::State& state) {
-  std::vector<Fixture> fixtures;
-  for (std::uint64_t seed : kGenericSeeds) fixtures.push_back(generic(seed));
-  cycle_jacobian(state, fixtures);
-}
+void BM_CycleJacobian_Generic(benchmark::State& state) { cycle_jacobian(state, generic_loops(true)); }
 
 BENCHMARK(BM_SolveWarm_Bennett);
 BENCHMARK(BM_SolveWarm_Generic);
@@ -204,6 +203,7 @@ BENCHMARK(BM_Cycle_Bennett)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrose
 BENCHMARK(BM_SolvePredicted_Bennett_GeneralStep);
 BENCHMARK(BM_Cycle_Bennett_GeneralStep)->Arg(32)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Cycle_Generic)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Cycle_Generic_GeneralStep)->Arg(32)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CycleJacobian_Generic)->Arg(32)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_FamilyDistance, planar, Family::planar, false);
 BENCHMARK_CAPTURE(BM_FamilyDistance, planar_gradient, Family::planar, true);
