@@ -385,6 +385,12 @@ TEST(Families, GoldbergFromTwoBennettLoopsMovesAndIsGoldbergInBothFusions) {
     // Offsets zero, links 1 and 4 equal, as the construction promises.
     EXPECT_LT(m.g.d.cwiseAbs().maxCoeff(), 1e-12) << tag;
     expect_movable_member(m, Family::goldberg, rng, tag);
+    // Goldberg's collinear fusion is the bent family at phi = 0 or pi.
+    for (const FamilyCheck& check : classify(m.g, m.theta, std::vector<double>(5, 2 * kPi)).checks) {
+      if (check.family == Family::goldberg_bent) {
+        EXPECT_LT(check.residual, 1e-10) << tag;
+      }
+    }
     // a1, alpha2, d3, a5, alpha5 in turn.
     const std::array<int, 5> parameters = {0, 5 + 1, 10 + 2, 4, 5 + 4};
     expect_near_misses_rigid(m, Family::goldberg, parameters[static_cast<size_t>(i) % parameters.size()], tag);
@@ -399,20 +405,81 @@ TEST(Families, GoldbergReportsWhichSideTheFusedLinksAreOn) {
   EXPECT_NE(classify(same.g, same.theta, moving).detail.find("same side"), std::string::npos);
 }
 
-TEST(Families, BentGoldbergMovesButIsNotClassified) {
-  // Fused at an angle other than 0 or pi the construction still moves (two
-  // Bennett loops turning about the common link DA), with d1 = +-d5 != 0;
-  // its conditions are not in the classifier (docs/families.md), so it is
-  // reported as unclassified: what an unknown family looks like.
+// A fusion angle away from 0 and pi (either sign).
+double bent_angle(std::mt19937_64& rng) {
+  const double phi = uniform(rng, 0.2, kPi - 0.2);
+  return uniform(rng, 0.0, 1.0) < 0.5 ? phi : -phi;
+}
+
+TEST(Families, BentGoldbergMovesAndIsGoldbergBentAtAnyFusionAngle) {
+  // Fused at an angle phi other than 0 or pi the construction still moves
+  // (two Bennett loops turning about the common link DA), with offsets d1 =
+  // +-d5 != 0 at the fused link: + when the two Bennett loops are in the
+  // same setup, - otherwise. The conditions of goldberg_bent (the dual-angle
+  // cosine rule of the fused link with phi eliminated) are checked against
+  // that construction, which reads the DH parameters off the axes.
   std::mt19937_64 rng(13);
-  for (double phi : {0.7, 2.0}) {
+  int same = 0, different = 0;
+  for (int i = 0; i < 10; ++i) {
+    const double phi = bent_angle(rng);
     const Posed m = goldberg_member(rng, phi);
-    EXPECT_GT(std::abs(m.g.d[0]), 1e-3);
-    EXPECT_NEAR(std::abs(m.g.d[0]), std::abs(m.g.d[4]), 1e-12);
-    const VerificationSummary v = verify_motion(m.g, m.theta);
-    EXPECT_TRUE(v.verified) << v.limit;
-    const Classification c = classified(m, v);
-    EXPECT_EQ(c.family, Family::unclassified) << c.detail;
+    const std::string tag = "goldberg_bent " + std::to_string(i) + " phi " + std::to_string(phi);
+    EXPECT_GT(std::abs(m.g.d[0]), 1e-3) << tag;
+    EXPECT_LT(m.g.d.segment(1, 3).cwiseAbs().maxCoeff(), 1e-12) << tag;
+    // Links 2 and 3 are (a, alpha) and (c, gamma): their Bennett loops'
+    // setups are the signs of sin(alpha)/a and sin(gamma)/c against sin(beta)/b.
+    const bool same_setup = std::sin(m.g.alpha[1]) * std::sin(m.g.alpha[2]) > 0.0;
+    (same_setup ? same : different) += 1;
+    EXPECT_NEAR(m.g.d[0], same_setup ? m.g.d[4] : -m.g.d[4], 1e-12) << tag;
+    expect_movable_member(m, Family::goldberg_bent, rng, tag);
+    // The detail names the fusion angle: |phi| in degrees, to its 4 digits.
+    const Classification c = classify(m.g, m.theta, std::vector<double>(5, 2 * kPi));
+    const size_t at = c.detail.find("fused at ");
+    ASSERT_NE(at, std::string::npos) << c.detail;
+    EXPECT_NEAR(std::stod(c.detail.substr(at + 9)), std::abs(phi) * 180.0 / kPi, 0.05) << c.detail;
+    // a1, alpha2, d3, a5, alpha5, d5, d1, a2 in turn: every one leaves the family.
+    const std::array<int, 8> parameters = {0, 5 + 1, 10 + 2, 4, 5 + 4, 10 + 4, 10 + 0, 1};
+    expect_near_misses_rigid(m, Family::goldberg_bent, parameters[static_cast<size_t>(i) % parameters.size()], tag);
+  }
+  EXPECT_GT(same, 0);
+  EXPECT_GT(different, 0);
+}
+
+TEST(Families, BentGoldbergNearTheStraightFusionIsStillMovableAndClassified) {
+  // Small fusion angles: offsets of order phi, the conditions still at
+  // round-off (the squared offset condition is smooth at phi = 0).
+  std::mt19937_64 rng(16);
+  for (double phi : {1e-3, -2e-2, kPi - 1e-2}) {
+    const Posed m = goldberg_member(rng, phi);
+    const std::string tag = "phi " + std::to_string(phi);
+    expect_movable_member(m, Family::goldberg_bent, rng, tag);
+  }
+}
+
+TEST(Families, RigidFiveBarsWithBentGoldbergOffsetsAreNotClassified) {
+  // A member's offsets swapped in sign (d1 = -d5 where the setups want
+  // d1 = d5) or doubled: rigid, and not goldberg_bent.
+  std::mt19937_64 rng(17);
+  for (int i = 0; i < 4; ++i) {
+    const Posed m = goldberg_member(rng, bent_angle(rng));
+    for (int variant = 0; variant < 2; ++variant) {
+      LoopGeometry g = m.g;
+      if (variant == 0) {
+        g.d[4] = -g.d[4];
+      } else {
+        g.d[0] *= 2.0;
+        g.d[4] *= 2.0;
+      }
+      const VerificationSummary v = verify_motion(g, m.theta);
+      EXPECT_FALSE(v.verified) << i << " " << variant;
+      const Classification c = classified({g, m.theta}, v);
+      EXPECT_NE(c.family, Family::goldberg_bent) << i << " " << variant;
+      for (const FamilyCheck& check : c.checks) {
+        if (check.family == Family::goldberg_bent) {
+          EXPECT_GT(check.residual, 1e-3) << i << " " << variant;
+        }
+      }
+    }
   }
 }
 
@@ -509,12 +576,18 @@ TEST(Families, BricardTrihedralMovesAndIsClassified) {
 
 TEST(Families, GoldbergWithAnIdleJointIsADegenerate6R) {
   std::mt19937_64 rng(25);
-  for (int i = 0; i < 3; ++i) {
-    const Posed m = with_idle_joint(goldberg_member(rng, i % 2 == 0 ? kPi : 0.0), rng);
+  for (int i = 0; i < 4; ++i) {
+    // Straight fusions, then a bent one.
+    const double phi = i == 3 ? 1.3 : (i % 2 == 0 ? kPi : 0.0);
+    const Posed m = with_idle_joint(goldberg_member(rng, phi), rng);
     const std::string tag = "degenerate 6R " + std::to_string(i);
     expect_movable_member(m, Family::degenerate, rng, tag);
     const Classification c = classify(m.g, m.theta, std::vector<double>(6, 2 * kPi));
-    EXPECT_NE(c.detail.find("merged 5R: goldberg"), std::string::npos) << c.detail;
+    const std::string merged = i == 3 ? "merged 5R: goldberg_bent" : "merged 5R: goldberg";
+    EXPECT_NE(c.detail.find(merged), std::string::npos) << c.detail;
+    if (i != 3) {
+      EXPECT_EQ(c.detail.find("goldberg_bent"), std::string::npos) << c.detail;
+    }
   }
 }
 
@@ -540,7 +613,7 @@ TEST(Families, Generic5RAnd6RAreUnclassifiedWithEveryResidualLarge) {
       const LoopGeometry g = random_loop(n, seed);
       const Classification c = classify(g, random_angles(n, seed), std::vector<double>(n, 1.0));
       EXPECT_EQ(c.family, Family::unclassified) << n << " " << seed;
-      EXPECT_EQ(c.checks.size(), n == 5 ? 7u : 8u);
+      EXPECT_EQ(c.checks.size(), 8u);
       for (const FamilyCheck& check : c.checks) EXPECT_GT(check.residual, 1e-3) << to_string(check.family);
     }
   }
@@ -558,6 +631,8 @@ TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
   std::vector<Case> cases = {{Family::goldberg, goldberg_member(rng, kPi).g},
                              {Family::goldberg, goldberg_member(rng, 0.0).g},
                              {Family::myard, myard_member(rng, kPi).g},
+                             {Family::goldberg_bent, goldberg_member(rng, 1.1).g},
+                             {Family::goldberg_bent, goldberg_member(rng, -2.3).g},
                              {Family::bricard_line_symmetric, bricard_line_geometry(rng)},
                              {Family::bricard_plane_symmetric, bricard_plane_geometry(rng)},
                              {Family::bricard_trihedral, bricard_trihedral_geometry(rng)}};
@@ -590,6 +665,7 @@ TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
 
 TEST(Families, DistanceNeedsTheRightJointCountAndIsAllocationFree) {
   EXPECT_THROW(family_distance(Family::goldberg, random_loop(6, 1)), std::invalid_argument);
+  EXPECT_THROW(family_distance(Family::goldberg_bent, random_loop(4, 1)), std::invalid_argument);
   EXPECT_THROW(family_distance(Family::bricard_line_symmetric, random_loop(5, 1)), std::invalid_argument);
   EXPECT_THROW(family_distance(Family::degenerate, random_loop(5, 1)), std::invalid_argument);
   EXPECT_THROW(family_distance_report(Family::myard, random_loop(4, 1)), std::invalid_argument);
@@ -601,7 +677,7 @@ TEST(Families, DistanceNeedsTheRightJointCountAndIsAllocationFree) {
   family_distance(Family::bricard_trihedral, g6, &gradient);
   const long before = testing::allocations();
   double sum = 0.0;
-  for (Family f : {Family::goldberg, Family::myard}) sum += family_distance(f, g5, &gradient);
+  for (Family f : {Family::goldberg, Family::myard, Family::goldberg_bent}) sum += family_distance(f, g5, &gradient);
   for (Family f : {Family::bricard_line_symmetric, Family::bricard_plane_symmetric, Family::bricard_trihedral}) {
     sum += family_distance(f, g6, &gradient);
   }
