@@ -819,6 +819,88 @@ GeometricFit degenerate_fit(const LoopGeometry& g, double tolerance, FamilyCheck
   return out;
 }
 
+// A fixed transform M between two frames whose z axes are joint axes P and
+// Q, written as one DH link between them: M = Tz(u) Rz(p) Tx(a) Rx(alpha)
+// Rz(q) Tz(v), a >= 0 the common normal, u and v where it meets P and Q.
+// Parallel axes have no unique normal: the one through P's origin (u = 0).
+struct LinkBetween {
+  double u = 0.0, p = 0.0, a = 0.0, alpha = 0.0, q = 0.0, v = 0.0;
+};
+
+LinkBetween link_between(const Eigen::Isometry3d& M) {
+  const Vector3 z = Vector3::UnitZ(), zq = M.linear().col(2), o = M.translation();
+  // Closest points s z (on P) and o + t zq (on Q).
+  const double b = z.dot(zq), du = -o.z(), dv = -zq.dot(o), den = 1.0 - b * b;
+  double s = 0.0, t = -zq.dot(o);
+  if (den > 1e-14) {
+    s = (b * dv - du) / den;
+    t = (dv - b * du) / den;
+  }
+  const Vector3 foot_p = s * z, foot_q = o + t * zq;
+  LinkBetween out;
+  Vector3 x = foot_q - foot_p;
+  out.a = x.norm();
+  if (out.a > 1e-12) {
+    x /= out.a;
+  } else {  // intersecting axes: the normal is their cross product (or any, when they coincide)
+    out.a = 0.0;
+    const Vector3 n = z.cross(zq);
+    x = n.norm() > 1e-12 ? Vector3(n.normalized()) : Vector3::UnitX();
+  }
+  out.alpha = std::atan2(z.cross(zq).dot(x), b);
+  out.u = s;
+  out.p = std::atan2(x.y(), x.x());
+  out.v = -t;
+  const Vector3 xq = M.linear().col(0);
+  out.q = std::atan2(x.cross(xq).dot(zq), x.dot(xq));
+  return out;
+}
+
+// The (n-1)R loop left when joint k is locked at its angle in `pose`: links
+// k-1 and k and the joint between them become one rigid link from axis k-1
+// to axis k+1 (link_between), which moves the feet of the normals on those
+// axes (their offsets change). Written with joint k+1 first.
+LoopGeometry locked_loop(const LoopGeometry& g, const JointVector& pose, int k) {
+  const int n = g.joints();
+  const LoopGeometry w = relabelled(g, k + 1);  // the locked joint last, its neighbours n - 2 and 0
+  const JointVector theta = relabelled_angles(pose, k + 1);
+  const Eigen::Isometry3d M = Eigen::Translation3d(w.a[n - 2], 0.0, 0.0) *
+                              Eigen::AngleAxisd(w.alpha[n - 2], Vector3::UnitX()) *
+                              joint_transform(theta[n - 1], w.d[n - 1], w.a[n - 1], w.alpha[n - 1]);
+  const LinkBetween link = link_between(M);
+  LoopGeometry out;
+  out.a = w.a.head(n - 1);
+  out.alpha = w.alpha.head(n - 1);
+  out.d = w.d.head(n - 1);
+  out.a[n - 2] = link.a;
+  out.alpha[n - 2] = link.alpha;
+  out.d[n - 2] += link.u;
+  out.d[0] += link.v;
+  return out;
+}
+
+// A locked joint: over the frozen joints, the best fit of the loop left by
+// locking one (geometric_fit), for n >= 5 only (a 4R with a joint locked is a
+// 3R, which cannot move).
+GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const std::vector<int>& frozen,
+                        std::span<const double> travel, double tolerance, FamilyCheck& check) {
+  GeometricFit out;
+  out.family = Family::degenerate;
+  for (int k : frozen) {
+    const GeometricFit fit = geometric_fit(locked_loop(g, pose, k), tolerance);
+    if (!(fit.residual < out.residual)) continue;
+    out.residual = fit.residual;
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, "joint %d locked (travel %.2g rad); ", k + 1, travel[static_cast<size_t>(k)]);
+    out.detail = buffer + std::string("locked ") + std::to_string(g.joints() - 1) + "R: " + fit.detail;
+    check.conditions = {{"joint " + std::to_string(k + 1) + " travel [rad]", travel[static_cast<size_t>(k)]},
+                        {"locked " + std::to_string(g.joints() - 1) + "R loop: " + to_string(fit.family) + " residual",
+                         fit.residual}};
+  }
+  check.residual = out.residual;
+  return out;
+}
+
 // The detail line of a 5R or 6R family found.
 std::string special_detail(Family family, const LoopGeometry& g) {
   if (family == Family::goldberg_bent) {
@@ -1182,6 +1264,17 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   if (n == 5 || n == 6) {
     FamilyCheck check;
     degenerate = degenerate_fit(geometry, options.tolerance, check);
+    // A joint locked over the motion (no coincident axes: that is trivial):
+    // the loop moves as the (n-1)R left by locking it, a degenerate loop too.
+    if (has_frozen && !(trivial.residual <= options.tolerance)) {
+      FamilyCheck locked;
+      locked.family = Family::degenerate;
+      const GeometricFit fit = locked_fit(geometry, pose, frozen, joint_travel, options.tolerance, locked);
+      if (fit.residual < degenerate.residual) {
+        degenerate = fit;
+        check = locked;
+      }
+    }
     out.checks.push_back(check);
     for (Family f : special_families(n)) out.checks.push_back(family_check(f, geometry));
   }

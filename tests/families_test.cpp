@@ -144,10 +144,19 @@ Posed rewritten(const Posed& p, int shift, bool reverse, unsigned flips) {
   return out;
 }
 
-Posed random_writing(const Posed& p, std::mt19937_64& rng) {
+// A random writing; when `locked` >= 0, one in which that joint (which the
+// motion does not turn) is not joint 1, the input that verify_motion drives.
+Posed random_writing(const Posed& p, std::mt19937_64& rng, int locked = -1) {
   const int n = p.g.joints();
   std::uniform_int_distribution<int> shift(0, n - 1), flips(0, (1 << n) - 1), coin(0, 1);
-  return rewritten(p, shift(rng), coin(rng) == 1, static_cast<unsigned>(flips(rng)));
+  for (;;) {
+    const int s = shift(rng);
+    const bool reverse = coin(rng) == 1;
+    const unsigned f = static_cast<unsigned>(flips(rng));
+    const int shifted = ((locked - s) % n + n) % n;  // relabelled: new joint j is old joint j + s
+    if (locked >= 0 && (reverse ? n - 1 - shifted : shifted) == 0) continue;
+    return rewritten(p, s, reverse, f);
+  }
 }
 
 double uniform(std::mt19937_64& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
@@ -310,9 +319,10 @@ Classification classified(const Posed& p, const VerificationSummary& v) {
 // The member is movable (rigid closure followed along at least 10 degrees of
 // input, closing to round-off) and, in a random writing, classified as its
 // family with a residual at round-off.
-void expect_movable_member(const Posed& member, Family family, std::mt19937_64& rng, const std::string& tag) {
+void expect_movable_member(const Posed& member, Family family, std::mt19937_64& rng, const std::string& tag,
+                           int locked = -1) {
   ASSERT_LT(closure_error(member), 1e-12) << tag;
-  const Posed w = random_writing(member, rng);
+  const Posed w = random_writing(member, rng, locked);
   ASSERT_LT(closure_error(w), 1e-12) << tag;
   const VerificationSummary v = verify_motion(w.g, w.theta);
   EXPECT_TRUE(v.verified) << tag << ": " << v.limit;
@@ -504,13 +514,18 @@ TEST(Families, MyardIsThePlaneSymmetricGoldberg) {
   }
 }
 
+// A random Bennett loop (either setup, from the twists' signs) in a pose.
+Posed random_bennett_member(std::mt19937_64& rng) {
+  const double a = uniform(rng, 0.5, 2.0), alpha = twist(rng), beta = twist(rng);
+  const double b = a * std::abs(std::sin(beta) / std::sin(alpha));
+  const LoopGeometry g = bennett(a, alpha, b, beta);
+  return {g, bennett_pose(g, uniform(rng, 0.3, kPi - 0.3))};
+}
+
 TEST(Families, BennettWithAnIdleJointIsDegenerate) {
   std::mt19937_64 rng(15);
   for (int i = 0; i < 6; ++i) {
-    const double a = uniform(rng, 0.5, 2.0), alpha = twist(rng), beta = twist(rng);
-    const double b = a * std::abs(std::sin(beta) / std::sin(alpha));
-    const LoopGeometry g = bennett(a, alpha, b, beta);
-    const Posed m = with_idle_joint({g, bennett_pose(g, uniform(rng, 0.3, kPi - 0.3))}, rng);
+    const Posed m = with_idle_joint(random_bennett_member(rng), rng);
     const std::string tag = "degenerate 5R " + std::to_string(i);
     expect_movable_member(m, Family::degenerate, rng, tag);
     const Classification c = classify(m.g, m.theta, std::vector<double>(5, 2 * kPi));
@@ -527,6 +542,80 @@ TEST(Families, BennettWithAnIdleJointIsDegenerate) {
       }
     }
   }
+}
+
+// A loop in a pose with one more joint axis put on link k (between axes k
+// and k+1): a random line fixed to that link. Locked, the new joint leaves
+// the loop as it was; free, it adds a joint that the motion need not turn.
+Posed with_locked_joint(const Posed& p, int k, std::mt19937_64& rng) {
+  std::vector<Axis> axes = axes_of(p.g, p.theta);
+  const double L = length_scale(p.g);
+  const Vector3 point = axes[static_cast<size_t>(k)].p +
+                        L * Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+  const Vector3 direction = Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
+  axes.insert(axes.begin() + k + 1, Axis{point, direction});
+  return dh_from_axes(axes);
+}
+
+TEST(Families, ALockedJointOnABennettLoopIsADegenerate5R) {
+  // The 5R moves as the Bennett loop with the extra joint locked: verified
+  // (rigid closure, every joint free), that joint frozen, and classified
+  // degenerate with the locked 4R a Bennett loop; off Bennett it is rigid.
+  std::mt19937_64 rng(18);
+  for (int i = 0; i < 6; ++i) {
+    const int k = i % 4;
+    const Posed m = with_locked_joint(random_bennett_member(rng), k, rng);
+    const std::string tag = "locked " + std::to_string(i);
+    const VerificationSummary v = verify_motion(m.g, m.theta);
+    ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
+    EXPECT_LT(v.joint_travel[k + 1], 1e-9) << tag;
+    expect_movable_member(m, Family::degenerate, rng, tag, k + 1);
+    const Classification c = classified(m, v);
+    EXPECT_NE(c.detail.find("joint " + std::to_string(k + 2) + " locked"), std::string::npos) << c.detail;
+    EXPECT_NE(c.detail.find("locked 4R: bennett"), std::string::npos) << c.detail;
+    // A Bennett link off by eps: the locked 4R is no Bennett loop, the 5R is rigid.
+    const int bennett_link = k == 0 ? 2 : 0;  // a link the extra joint did not split
+    expect_near_misses_rigid(m, Family::degenerate, bennett_link, tag);
+  }
+}
+
+TEST(Families, GoldbergOnAnEquilateralBennettLoopMovesWithALockedJoint) {
+  // docs/discovery-5r-6r.md: Goldberg's conditions with the second Bennett
+  // loop equilateral, (c, gamma) = (b, beta): links (b, beta), (a, alpha),
+  // (b, beta), (b, beta), (a + b, alpha + beta). Bennett's condition holds for
+  // the equilateral loop whatever b and beta, but such a loop only folds; the
+  // 5R moves with joint 5 locked (the search's loops, in its labels joint 3).
+  // It is classified degenerate (the locked 4R a Bennett loop), although its
+  // geometry is Goldberg's.
+  std::mt19937_64 rng(19);
+  int moving = 0;
+  for (int i = 0; i < 6; ++i) {
+    const double a = uniform(rng, 0.5, 2.0), alpha = twist(rng), beta = twist(rng);
+    const double b = a * std::abs(std::sin(beta) / std::sin(alpha));
+    const LoopGeometry g = make_loop({b, a, b, b, a + b}, {beta, alpha, beta, beta, wrap_angle(alpha + beta)},
+                                     {0, 0, 0, 0, 0});
+    const std::vector<double> turning(5, 2 * kPi);
+    for (const FamilyCheck& check : classify(g, JointVector::Zero(5), turning).checks) {
+      if (check.family == Family::goldberg) {
+        EXPECT_LT(check.residual, 1e-12);
+      }
+    }
+    // Of its assemblies, those where every joint but 5 turns.
+    for (int attempt = 0; attempt < 40; ++attempt) {
+      JointVector theta;
+      if (!assemble(g, uniform(rng, -kPi, kPi), rng, theta, 1)) continue;
+      const VerificationSummary v = verify_motion(g, theta);
+      if (!v.verified) continue;
+      const Classification k = classified({g, theta}, v);
+      if (!(v.joint_travel[4] < 1e-9 && v.joint_travel.head(4).minCoeff() > 1.0)) continue;
+      ++moving;
+      EXPECT_EQ(k.family, Family::degenerate) << i << ": " << k.detail;
+      EXPECT_NE(k.detail.find("joint 5 locked"), std::string::npos) << k.detail;
+      EXPECT_NE(k.detail.find("locked 4R: bennett"), std::string::npos) << k.detail;
+      break;
+    }
+  }
+  EXPECT_GE(moving, 3);
 }
 
 // ---------------------------------------------------------------------------
@@ -588,6 +677,18 @@ TEST(Families, GoldbergWithAnIdleJointIsADegenerate6R) {
     if (i != 3) {
       EXPECT_EQ(c.detail.find("goldberg_bent"), std::string::npos) << c.detail;
     }
+  }
+}
+
+TEST(Families, AGoldbergLoopWithALockedJointIsADegenerate6R) {
+  std::mt19937_64 rng(27);
+  for (int i = 0; i < 3; ++i) {
+    const Posed m = with_locked_joint(goldberg_member(rng, i == 2 ? 1.1 : kPi), i, rng);
+    const std::string tag = "locked 6R " + std::to_string(i);
+    expect_movable_member(m, Family::degenerate, rng, tag, i + 1);
+    const Classification c = classified(m, verify_motion(m.g, m.theta));
+    EXPECT_NE(c.detail.find(i == 2 ? "locked 5R: goldberg_bent" : "locked 5R: goldberg"), std::string::npos)
+        << c.detail;
   }
 }
 

@@ -24,7 +24,9 @@
 //   bricard_line_symmetric, bricard_plane_symmetric, bricard_trihedral (n = 6)
 //   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
 //              or pi) and the (n-1)R loop with them merged is in a movable
-//              family (not trivial)
+//              family (not trivial); or a joint stays locked over the motion
+//              (no axes coincide) and the (n-1)R loop left by locking it is
+//              in a movable family
 //
 // docs/classification.md has the details and the tolerances.
 #pragma once
