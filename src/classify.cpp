@@ -856,46 +856,76 @@ LinkBetween link_between(const Eigen::Isometry3d& M) {
   return out;
 }
 
-// The (n-1)R loop left when joint k is locked at its angle in `pose`: links
-// k-1 and k and the joint between them become one rigid link from axis k-1
-// to axis k+1 (link_between), which moves the feet of the normals on those
-// axes (their offsets change). Written with joint k+1 first.
-LoopGeometry locked_loop(const LoopGeometry& g, const JointVector& pose, int k) {
-  const int n = g.joints();
-  const LoopGeometry w = relabelled(g, k + 1);  // the locked joint last, its neighbours n - 2 and 0
-  const JointVector theta = relabelled_angles(pose, k + 1);
+// A loop in a pose, with the original index of each of its joints.
+struct PosedLoop {
+  LoopGeometry g;
+  JointVector theta;
+  std::vector<int> original;
+};
+
+// The (n-1)R loop left when joint k is locked at its angle: links k-1 and k
+// and the joint between them become one rigid link from axis k-1 to axis k+1
+// (link_between), which moves the feet of the normals on those axes (their
+// offsets and angles change). Written with joint k+1 first.
+PosedLoop locked_loop(const PosedLoop& loop, int k) {
+  const int n = loop.g.joints();
+  const LoopGeometry w = relabelled(loop.g, k + 1);  // the locked joint last, its neighbours n - 2 and 0
+  const JointVector theta = relabelled_angles(loop.theta, k + 1);
   const Eigen::Isometry3d M = Eigen::Translation3d(w.a[n - 2], 0.0, 0.0) *
                               Eigen::AngleAxisd(w.alpha[n - 2], Vector3::UnitX()) *
                               joint_transform(theta[n - 1], w.d[n - 1], w.a[n - 1], w.alpha[n - 1]);
   const LinkBetween link = link_between(M);
-  LoopGeometry out;
-  out.a = w.a.head(n - 1);
-  out.alpha = w.alpha.head(n - 1);
-  out.d = w.d.head(n - 1);
-  out.a[n - 2] = link.a;
-  out.alpha[n - 2] = link.alpha;
-  out.d[n - 2] += link.u;
-  out.d[0] += link.v;
+  PosedLoop out;
+  out.g.a = w.a.head(n - 1);
+  out.g.alpha = w.alpha.head(n - 1);
+  out.g.d = w.d.head(n - 1);
+  out.g.a[n - 2] = link.a;
+  out.g.alpha[n - 2] = link.alpha;
+  out.g.d[n - 2] += link.u;
+  out.g.d[0] += link.v;
+  out.theta = theta.head(n - 1);
+  out.theta[n - 2] += link.p;
+  out.theta[0] += link.q;
+  for (int j = 0; j < n - 1; ++j) out.original.push_back(loop.original[static_cast<size_t>((j + k + 1) % n)]);
   return out;
 }
 
-// A locked joint: over the frozen joints, the best fit of the loop left by
-// locking one (geometric_fit), for n >= 5 only (a 4R with a joint locked is a
-// 3R, which cannot move).
+// Locked joints: the best fit (geometric_fit) of the loop left by locking
+// one frozen joint, or all of them together (a 6R with two joints locked is
+// a 4R), never below 4 joints (a 4R with a joint locked is a 3R, which
+// cannot move); for n >= 5.
 GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const std::vector<int>& frozen,
                         std::span<const double> travel, double tolerance, FamilyCheck& check) {
+  const int n = g.joints();
+  PosedLoop whole{g, pose, {}};
+  for (int j = 0; j < n; ++j) whole.original.push_back(j);
+  std::vector<std::vector<int>> choices;
+  for (int k : frozen) choices.push_back({k});
+  if (frozen.size() > 1 && n - static_cast<int>(frozen.size()) >= 4) choices.push_back(frozen);
   GeometricFit out;
   out.family = Family::degenerate;
-  for (int k : frozen) {
-    const GeometricFit fit = geometric_fit(locked_loop(g, pose, k), tolerance);
+  for (const std::vector<int>& locked : choices) {
+    PosedLoop loop = whole;
+    for (int original : locked) {
+      const auto at = std::find(loop.original.begin(), loop.original.end(), original);
+      loop = locked_loop(loop, static_cast<int>(at - loop.original.begin()));
+    }
+    const GeometricFit fit = geometric_fit(loop.g, tolerance);
     if (!(fit.residual < out.residual)) continue;
     out.residual = fit.residual;
+    std::string joints, travels;
+    double most = 0.0;
+    for (int k : locked) {
+      joints += (joints.empty() ? "" : ", ") + std::to_string(k + 1);
+      most = std::max(most, travel[static_cast<size_t>(k)]);
+    }
+    const std::string remaining = std::to_string(loop.g.joints()) + "R";
     char buffer[64];
-    std::snprintf(buffer, sizeof buffer, "joint %d locked (travel %.2g rad); ", k + 1, travel[static_cast<size_t>(k)]);
-    out.detail = buffer + std::string("locked ") + std::to_string(g.joints() - 1) + "R: " + fit.detail;
-    check.conditions = {{"joint " + std::to_string(k + 1) + " travel [rad]", travel[static_cast<size_t>(k)]},
-                        {"locked " + std::to_string(g.joints() - 1) + "R loop: " + to_string(fit.family) + " residual",
-                         fit.residual}};
+    std::snprintf(buffer, sizeof buffer, " locked (travel %.2g rad); ", most);
+    out.detail = (locked.size() > 1 ? "joints " : "joint ") + joints + buffer + "locked " + remaining + ": " +
+                 fit.detail;
+    check.conditions = {{(locked.size() > 1 ? "largest travel of joints " : "joint ") + joints + " [rad]", most},
+                        {"locked " + remaining + " loop: " + to_string(fit.family) + " residual", fit.residual}};
   }
   check.residual = out.residual;
   return out;

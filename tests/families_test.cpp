@@ -144,17 +144,18 @@ Posed rewritten(const Posed& p, int shift, bool reverse, unsigned flips) {
   return out;
 }
 
-// A random writing; when `locked` >= 0, one in which that joint (which the
-// motion does not turn) is not joint 1, the input that verify_motion drives.
-Posed random_writing(const Posed& p, std::mt19937_64& rng, int locked = -1) {
+// A random writing, one in which no joint of `locked` (which the motion does
+// not turn) is joint 1, the input that verify_motion drives.
+Posed random_writing(const Posed& p, std::mt19937_64& rng, const std::vector<int>& locked = {}) {
   const int n = p.g.joints();
   std::uniform_int_distribution<int> shift(0, n - 1), flips(0, (1 << n) - 1), coin(0, 1);
   for (;;) {
     const int s = shift(rng);
     const bool reverse = coin(rng) == 1;
     const unsigned f = static_cast<unsigned>(flips(rng));
-    const int shifted = ((locked - s) % n + n) % n;  // relabelled: new joint j is old joint j + s
-    if (locked >= 0 && (reverse ? n - 1 - shifted : shifted) == 0) continue;
+    // Relabelled, new joint j is old joint j + s; reversed, new joint j is old n - 1 - j.
+    const int input = reverse ? (n - 1 + s) % n : s;
+    if (std::find(locked.begin(), locked.end(), input) != locked.end()) continue;
     return rewritten(p, s, reverse, f);
   }
 }
@@ -320,7 +321,7 @@ Classification classified(const Posed& p, const VerificationSummary& v) {
 // input, closing to round-off) and, in a random writing, classified as its
 // family with a residual at round-off.
 void expect_movable_member(const Posed& member, Family family, std::mt19937_64& rng, const std::string& tag,
-                           int locked = -1) {
+                           const std::vector<int>& locked = {}) {
   ASSERT_LT(closure_error(member), 1e-12) << tag;
   const Posed w = random_writing(member, rng, locked);
   ASSERT_LT(closure_error(w), 1e-12) << tag;
@@ -569,7 +570,7 @@ TEST(Families, ALockedJointOnABennettLoopIsADegenerate5R) {
     const VerificationSummary v = verify_motion(m.g, m.theta);
     ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
     EXPECT_LT(v.joint_travel[k + 1], 1e-9) << tag;
-    expect_movable_member(m, Family::degenerate, rng, tag, k + 1);
+    expect_movable_member(m, Family::degenerate, rng, tag, {k + 1});
     const Classification c = classified(m, v);
     EXPECT_NE(c.detail.find("joint " + std::to_string(k + 2) + " locked"), std::string::npos) << c.detail;
     EXPECT_NE(c.detail.find("locked 4R: bennett"), std::string::npos) << c.detail;
@@ -685,10 +686,27 @@ TEST(Families, AGoldbergLoopWithALockedJointIsADegenerate6R) {
   for (int i = 0; i < 3; ++i) {
     const Posed m = with_locked_joint(goldberg_member(rng, i == 2 ? 1.1 : kPi), i, rng);
     const std::string tag = "locked 6R " + std::to_string(i);
-    expect_movable_member(m, Family::degenerate, rng, tag, i + 1);
+    expect_movable_member(m, Family::degenerate, rng, tag, {i + 1});
     const Classification c = classified(m, verify_motion(m.g, m.theta));
     EXPECT_NE(c.detail.find(i == 2 ? "locked 5R: goldberg_bent" : "locked 5R: goldberg"), std::string::npos)
         << c.detail;
+  }
+}
+
+TEST(Families, ABennettLoopWithTwoLockedJointsIsADegenerate6R) {
+  // Two extra axes fixed on two links of a Bennett loop: locking one leaves a
+  // 5R that still has a locked joint, locking both the Bennett loop.
+  std::mt19937_64 rng(28);
+  for (int i = 0; i < 3; ++i) {
+    const Posed five = with_locked_joint(random_bennett_member(rng), i, rng);  // joint i + 1 locked
+    const Posed six = with_locked_joint(five, i + 2, rng);                     // and joint i + 3
+    const std::string tag = "two locked " + std::to_string(i);
+    expect_movable_member(six, Family::degenerate, rng, tag, {i + 1, i + 3});
+    const Classification c = classified(six, verify_motion(six.g, six.theta));
+    EXPECT_NE(c.detail.find("joints " + std::to_string(i + 2) + ", " + std::to_string(i + 4) + " locked"),
+              std::string::npos)
+        << c.detail;
+    EXPECT_NE(c.detail.find("locked 4R: bennett"), std::string::npos) << c.detail;
   }
 }
 
