@@ -931,6 +931,29 @@ GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const st
   return out;
 }
 
+// Whether a loop that fits goldberg, myard or goldberg_bent does so with one
+// of its two Bennett loops equilateral and folding: (a, alpha) twice with
+// Bennett's angle relation singular, tan(t1/2) tan(t2/2) = sin((alpha2 +
+// alpha1)/2) / sin((alpha2 - alpha1)/2) (asymmetric setup) or cos(..) /
+// cos(..) (line-symmetric) with a zero denominator. Such a "Bennett loop"
+// only folds, so the 5R has no Goldberg motion (docs/discovery-5r-6r.md).
+// Checked in the family's best writing, links 1 and 2 (first loop) and 1
+// and 3 (second), to `tolerance` (lengths over L).
+bool has_folding_bennett_loop(Family family, const LoopGeometry& g, double tolerance) {
+  if (family != Family::goldberg && family != Family::myard && family != Family::goldberg_bent) return false;
+  const Best best = best_for(family, g, false);
+  const LoopGeometry w = detail::apply(*best.writing, g);
+  const double L = length_scale(w);
+  for (int loop = 0; loop < 2; ++loop) {
+    const int link = loop + 1;
+    const bool line_symmetric = ((best.set >> loop) & 1) != 0;
+    const double half = 0.5 * (w.alpha[link] - w.alpha[0]);
+    const double denominator = line_symmetric ? std::cos(half) : std::sin(half);
+    if (std::abs(w.a[link] - w.a[0]) / L <= tolerance && std::abs(denominator) <= tolerance) return true;
+  }
+  return false;
+}
+
 // The detail line of a 5R or 6R family found.
 std::string special_detail(Family family, const LoopGeometry& g) {
   if (family == Family::goldberg_bent) {
@@ -1290,31 +1313,30 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 
   out.checks = {bennett, planar, spherical, trivial};
   // 5R and 6R: degenerate, then the joint count's own families.
-  GeometricFit degenerate;
+  GeometricFit degenerate, locked;
   if (n == 5 || n == 6) {
     FamilyCheck check;
     degenerate = degenerate_fit(geometry, options.tolerance, check);
     // A joint locked over the motion (no coincident axes: that is trivial):
     // the loop moves as the (n-1)R left by locking it, a degenerate loop too.
+    // The degenerate check keeps the better of the two.
     if (has_frozen && !(trivial.residual <= options.tolerance)) {
-      FamilyCheck locked;
-      locked.family = Family::degenerate;
-      const GeometricFit fit = locked_fit(geometry, pose, frozen, joint_travel, options.tolerance, locked);
-      if (fit.residual < degenerate.residual) {
-        degenerate = fit;
-        check = locked;
-      }
+      FamilyCheck locked_check;
+      locked_check.family = Family::degenerate;
+      locked = locked_fit(geometry, pose, frozen, joint_travel, options.tolerance, locked_check);
+      if (locked.residual < check.residual) check = locked_check;
     }
     out.checks.push_back(check);
     for (Family f : special_families(n)) out.checks.push_back(family_check(f, geometry));
   }
   const double tol = options.tolerance;
-  // The first of the 5R/6R families (after degenerate) that fits, in the order tried.
+  // The first of the 5R/6R families (after degenerate) that fits, in the order
+  // tried; not a Goldberg-type loop one of whose Bennett loops only folds.
   const FamilyCheck* special = nullptr;
   for (Family f : special_families(n)) {
     if (n == 4) break;  // Bennett, handled below as before
     for (const FamilyCheck& c : out.checks) {
-      if (c.family == f && c.residual <= tol && !special) special = &c;
+      if (c.family == f && c.residual <= tol && !special && !has_folding_bennett_loop(f, geometry, tol)) special = &c;
     }
   }
   if (trivial.residual <= tol) {
@@ -1340,6 +1362,12 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
     out.family = special->family;
     out.residual = special->residual;
     out.detail = special_detail(special->family, geometry);
+    // A member whose motion found is another one (some members have several).
+    if (locked.residual <= tol) out.detail += "; the motion found: " + locked.detail;
+  } else if (locked.residual <= tol) {
+    out.family = Family::degenerate;
+    out.residual = locked.residual;
+    out.detail = locked.detail;
   } else if (bennett.residual <= tol) {
     out.family = Family::bennett;
     out.setup = bennett.setup;

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include "allocation_counter.hpp"
@@ -708,6 +709,44 @@ TEST(Families, ABennettLoopWithTwoLockedJointsIsADegenerate6R) {
         << c.detail;
     EXPECT_NE(c.detail.find("locked 4R: bennett"), std::string::npos) << c.detail;
   }
+}
+
+TEST(Families, ALineSymmetricBricardLoopFoundMovingWithTwoLockedJointsStaysBricard) {
+  // A Bennett loop has a half-turn symmetry taking joint i to joint i + 2
+  // (computed here from the pose, Kabsch on the four joint origins). An
+  // extra axis on link 1 and its image on link 3 make a line-symmetric 6R,
+  // a Bricard loop, which also moves as the Bennett loop with the two extra
+  // joints locked: its geometry is Bricard's, so it is classified so, and
+  // the detail names the motion found (the bricard-6r searches meet these).
+  std::mt19937_64 rng(29);
+  int checked = 0;
+  for (int i = 0; i < 4; ++i) {
+    const Posed b = random_bennett_member(rng);
+    const std::vector<Axis> axes = axes_of(b.g, b.theta);
+    Eigen::Matrix<double, 3, 4> from, to;
+    for (int j = 0; j < 4; ++j) {
+      from.col(j) = axes[static_cast<size_t>(j)].p;
+      to.col(j) = axes[static_cast<size_t>((j + 2) % 4)].p;
+    }
+    const Eigen::Matrix4d T = Eigen::umeyama(from, to, false);
+    const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+    const Vector3 t = T.topRightCorner<3, 1>();
+    ASSERT_LT((R * from + t.replicate(1, 4) - to).cwiseAbs().maxCoeff(), 1e-9) << i;
+    const double L = length_scale(b.g);
+    const Vector3 point = axes[0].p + L * Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+    const Vector3 direction = Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
+    const Posed six = dh_from_axes({axes[0], {point, direction}, axes[1], axes[2], {R * point + t, R * direction}, axes[3]});
+    const std::string tag = "symmetric locked " + std::to_string(i);
+    const VerificationSummary v = verify_motion(six.g, six.theta);
+    ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
+    EXPECT_LT(std::max(v.joint_travel[1], v.joint_travel[4]), 1e-9) << tag;
+    const Classification c = classified(six, v);
+    EXPECT_EQ(c.family, Family::bricard_line_symmetric) << tag << ": " << c.detail;
+    EXPECT_NE(c.detail.find("the motion found: joints 2, 5 locked"), std::string::npos) << c.detail;
+    EXPECT_NE(c.detail.find("locked 4R: bennett"), std::string::npos) << c.detail;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 4);
 }
 
 TEST(Families, PlanarAndSpherical5RAnd6RKeepTheirFamilies) {
