@@ -423,6 +423,84 @@ void myard_conditions(int set, const Writing& w, Sink& c) {
   add_right_twist(w, c, "cos(alpha1)", 0);
 }
 
+// Goldberg's 5R with the two links fused at any angle psi about the removed
+// joint's axis (docs/families.md, "Goldberg 5R, bent fused link"). Links 1-4
+// as goldberg_conditions; the fused link 5 (a5, alpha5) and the offsets d1,
+// d5 it leaves at joints 1 and 5 are those of the screw product
+// Rx(-alpha3) Tx(-a3) Rz(psi) Tx(a2) Rx(alpha2). Its dual-angle cosine rule
+// with psi eliminated, and the Bennett relations sin(alpha2)/a2 = kappa,
+// sin(alpha3)/a3 = sigma kappa (sigma = +1 when both Bennett loops are in the
+// same setup, -1 otherwise), give three conditions:
+//   d1 - sigma d5 = 0
+//   a5 sin(alpha2) sin(alpha5) - a2 (sigma cos(alpha2) + cos(alpha3)) (1 - sigma cos(alpha5)) = 0
+//   sin(alpha2)^2 d5^2 (1 + sigma cos(alpha5))^2 - a2^2 G = 0,
+// G = 1 - cos^2(alpha2) - cos^2(alpha3) - cos^2(alpha5) + 2 cos(alpha2) cos(alpha3) cos(alpha5)
+// (= sin^2(alpha2) sin^2(alpha3) sin^2(psi)); the last is squared so that it
+// stays smooth where psi = 0 or pi (Goldberg's own loops, d1 = d5 = 0).
+// Bits 0 and 1 of `set` as goldberg_conditions (the fusion side is psi).
+template <class Writing, class Sink>
+void goldberg_bent_conditions(int set, const Writing& w, Sink& c) {
+  const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0, sigma = s1 * s2;
+  const int n = 5;
+  const Scale& s = w.scale();
+  add_length(w, c, "a1 - a4", 0, 3, -1.0);
+  add_twist(w, c, "alpha1 - alpha4", 0, 3, -1.0);
+  add_offset(w, c, "d2", 1, -1, 0.0);
+  add_offset(w, c, "d3", 2, -1, 0.0);
+  add_offset(w, c, "d4", 3, -1, 0.0);
+  add_bennett_product(w, c, s1 > 0 ? "a1 sin(alpha2) - a2 sin(alpha1)" : "a1 sin(alpha2) + a2 sin(alpha1)", 0, 1, s1);
+  add_bennett_product(w, c, s2 > 0 ? "a1 sin(alpha3) - a3 sin(alpha1)" : "a1 sin(alpha3) + a3 sin(alpha1)", 0, 2, s2);
+  add_offset(w, c, sigma > 0 ? "d1 - d5" : "d1 + d5", 0, 4, -sigma);
+  // The fused link's length (the dual part of the cosine rule).
+  auto length_term = [&] {
+    return w.a(4) * w.sin_alpha(1) * w.sin_alpha(4) -
+           w.a(1) * (sigma * w.cos_alpha(1) + w.cos_alpha(2)) * (1.0 - sigma * w.cos_alpha(4));
+  };
+  c.add([&] {
+          return sigma > 0 ? "a5 sin(alpha2) sin(alpha5) - a2 (cos(alpha2) + cos(alpha3)) (1 - cos(alpha5))"
+                           : "a5 sin(alpha2) sin(alpha5) - a2 (cos(alpha3) - cos(alpha2)) (1 + cos(alpha5))";
+        },
+        [&] { return length_term() / s.L; },
+        [&] {
+          const double P = sigma * w.cos_alpha(1) + w.cos_alpha(2), Q = 1.0 - sigma * w.cos_alpha(4);
+          GeometryVector g = -(length_term() / (s.L * s.L)) * s.dL;
+          g[4] += w.sin_alpha(1) * w.sin_alpha(4) / s.L;
+          g[1] += -P * Q / s.L;
+          g[n + 1] += (w.a(4) * w.cos_alpha(1) * w.sin_alpha(4) + w.a(1) * sigma * w.sin_alpha(1) * Q) / s.L;
+          g[n + 2] += w.a(1) * w.sin_alpha(2) * Q / s.L;
+          g[n + 4] += (w.a(4) * w.sin_alpha(1) * w.cos_alpha(4) - w.a(1) * P * sigma * w.sin_alpha(4)) / s.L;
+          return g;
+        });
+  // The offsets against the fusion angle: sin^2(psi) from the real cosine rule, G.
+  auto gram = [&] {
+    const double c2 = w.cos_alpha(1), c3 = w.cos_alpha(2), c5 = w.cos_alpha(4);
+    return 1.0 - c2 * c2 - c3 * c3 - c5 * c5 + 2.0 * c2 * c3 * c5;
+  };
+  auto offset_term = [&] {
+    const double k = w.sin_alpha(1) * w.d(4) * (1.0 + sigma * w.cos_alpha(4));
+    return k * k - w.a(1) * w.a(1) * gram();
+  };
+  c.add([&] {
+          return sigma > 0 ? "(sin(alpha2) d5 (1 + cos(alpha5)))^2 - a2^2 G, over L^2"
+                           : "(sin(alpha2) d5 (1 - cos(alpha5)))^2 - a2^2 G, over L^2";
+        },
+        [&] { return offset_term() / (s.L * s.L); },
+        [&] {
+          const double c2 = w.cos_alpha(1), c3 = w.cos_alpha(2), c5 = w.cos_alpha(4);
+          const double s2v = w.sin_alpha(1), s3v = w.sin_alpha(2), s5v = w.sin_alpha(4);
+          const double R = 1.0 + sigma * c5, k = s2v * w.d(4) * R, a2 = w.a(1), G = gram();
+          const double L2 = s.L * s.L;
+          GeometryVector g = -(2.0 * offset_term() / (L2 * s.L)) * s.dL;
+          // dG/dalpha_i = 2 sin(alpha_i) (cos(alpha_i) - product of the other two cosines).
+          g[n + 1] += (2.0 * k * c2 * w.d(4) * R - a2 * a2 * 2.0 * s2v * (c2 - c3 * c5)) / L2;
+          g[n + 2] += (-a2 * a2 * 2.0 * s3v * (c3 - c2 * c5)) / L2;
+          g[n + 4] += (2.0 * k * s2v * w.d(4) * (-sigma * s5v) - a2 * a2 * 2.0 * s5v * (c5 - c2 * c3)) / L2;
+          g[2 * n + 4] += 2.0 * k * s2v * R / L2;
+          g[1] += -2.0 * a2 * G / L2;
+          return g;
+        });
+}
+
 // Bricard line-symmetric 6R: a_i = a_{i+3}, alpha_i = alpha_{i+3}, d_i = d_{i+3}.
 template <class Writing, class Sink>
 void bricard_line_conditions(const Writing& w, Sink& c) {
@@ -488,6 +566,7 @@ int condition_sets(Family family, int joints) {
     case Family::trivial: return joints == 4 ? 2 : 1;
     case Family::goldberg: return 8;
     case Family::myard: return 16;
+    case Family::goldberg_bent: return 4;
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
     case Family::bricard_trihedral: return 1;
@@ -501,7 +580,8 @@ int condition_sets(Family family, int joints) {
 // Whether a family's conditions read cosines of twists (the numeric path
 // tabulates them only then).
 constexpr bool reads_cosines(Family family) {
-  return family == Family::planar || family == Family::myard || family == Family::bricard_trihedral;
+  return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
+         family == Family::bricard_trihedral;
 }
 
 template <Family F, class Writing, class Sink>
@@ -515,6 +595,8 @@ void condition_set(int set, const Writing& w, Sink& c) {
     goldberg_conditions(set, w, c);
   } else if constexpr (F == Family::myard) {
     myard_conditions(set, w, c);
+  } else if constexpr (F == Family::goldberg_bent) {
+    goldberg_bent_conditions(set, w, c);
   } else if constexpr (F == Family::bricard_line_symmetric) {
     bricard_line_conditions(w, c);
   } else if constexpr (F == Family::bricard_plane_symmetric) {
@@ -611,6 +693,7 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
     case Family::trivial: return best_over_writings<Family::trivial>(g, by_norm);
     case Family::goldberg: return best_over_writings<Family::goldberg>(g, by_norm);
     case Family::myard: return best_over_writings<Family::myard>(g, by_norm);
+    case Family::goldberg_bent: return best_over_writings<Family::goldberg_bent>(g, by_norm);
     case Family::bricard_line_symmetric: return best_over_writings<Family::bricard_line_symmetric>(g, by_norm);
     case Family::bricard_plane_symmetric: return best_over_writings<Family::bricard_plane_symmetric>(g, by_norm);
     case Family::bricard_trihedral: return best_over_writings<Family::bricard_trihedral>(g, by_norm);
@@ -634,7 +717,9 @@ FamilyCheck family_check(Family family, const LoopGeometry& g) {
   if (family == Family::bennett) {
     check.setup = best.setup_sign > 0 ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
   }
-  if (family == Family::goldberg || family == Family::myard) check.setup = BennettSetup::none;
+  if (family == Family::goldberg || family == Family::myard || family == Family::goldberg_bent) {
+    check.setup = BennettSetup::none;
+  }
   return check;
 }
 
@@ -643,7 +728,7 @@ FamilyCheck family_check(Family family, const LoopGeometry& g) {
 std::vector<Family> special_families(int n) {
   switch (n) {
     case 4: return {Family::bennett};
-    case 5: return {Family::myard, Family::goldberg};
+    case 5: return {Family::myard, Family::goldberg, Family::goldberg_bent};
     case 6: return {Family::bricard_trihedral, Family::bricard_plane_symmetric, Family::bricard_line_symmetric};
     default: return {};
   }
@@ -674,25 +759,28 @@ struct GeometricFit {
   std::string detail;
 };
 
-GeometricFit degenerate_fit(const LoopGeometry& g, FamilyCheck& check);
+GeometricFit degenerate_fit(const LoopGeometry& g, double tolerance, FamilyCheck& check);
 
 // The best-fitting movable family of a loop by its geometry alone (planar,
-// spherical, degenerate, then the n-specific ones), for a merged loop.
-GeometricFit geometric_fit(const LoopGeometry& g) {
+// spherical, degenerate, then the n-specific ones), for a merged loop: once a
+// family fits (residual <= tolerance), a later one replaces it only when it
+// fits and an earlier, more special one does not (goldberg_bent, which holds
+// every Goldberg loop, fits them to round-off too).
+GeometricFit geometric_fit(const LoopGeometry& g, double tolerance) {
   const int n = g.joints();
   GeometricFit best;
   std::vector<Family> families = {Family::planar, Family::spherical};
   for (Family f : special_families(n)) families.push_back(f);
   for (Family f : families) {
     const FamilyCheck c = family_check(f, g);
-    if (c.residual < best.residual) {
+    if (c.residual < best.residual && !(best.residual <= tolerance)) {
       best = {f, c.residual, to_string(f)};
       if (f == Family::bennett) best.detail += std::string(" (") + to_string(c.setup) + " setup)";
     }
   }
   if (n == 5) {
     FamilyCheck degenerate;
-    const GeometricFit d = degenerate_fit(g, degenerate);
+    const GeometricFit d = degenerate_fit(g, tolerance, degenerate);
     if (d.residual < best.residual) best = d;
   }
   return best;
@@ -701,7 +789,7 @@ GeometricFit geometric_fit(const LoopGeometry& g) {
 // Degenerate: over the adjacent pairs of axes, max(a_k / L, |sin alpha_k|,
 // the merged loop's best family residual), the least; only pairs that can
 // still beat the best so far are merged and classified.
-GeometricFit degenerate_fit(const LoopGeometry& g, FamilyCheck& check) {
+GeometricFit degenerate_fit(const LoopGeometry& g, double tolerance, FamilyCheck& check) {
   const int n = g.joints();
   const double L = length_scale(g);
   std::vector<std::pair<double, int>> pairs;
@@ -714,7 +802,7 @@ GeometricFit degenerate_fit(const LoopGeometry& g, FamilyCheck& check) {
   out.family = Family::degenerate;
   for (const auto& [pair_residual, k] : pairs) {
     if (!(pair_residual < out.residual)) break;
-    const GeometricFit merged = geometric_fit(merged_loop(g, k));
+    const GeometricFit merged = geometric_fit(merged_loop(g, k), tolerance);
     const double residual = std::max(pair_residual, merged.residual);
     if (residual < out.residual) {
       out.residual = residual;
@@ -731,8 +819,159 @@ GeometricFit degenerate_fit(const LoopGeometry& g, FamilyCheck& check) {
   return out;
 }
 
+// A fixed transform M between two frames whose z axes are joint axes P and
+// Q, written as one DH link between them: M = Tz(u) Rz(p) Tx(a) Rx(alpha)
+// Rz(q) Tz(v), a >= 0 the common normal, u and v where it meets P and Q.
+// Parallel axes have no unique normal: the one through P's origin (u = 0).
+struct LinkBetween {
+  double u = 0.0, p = 0.0, a = 0.0, alpha = 0.0, q = 0.0, v = 0.0;
+};
+
+LinkBetween link_between(const Eigen::Isometry3d& M) {
+  const Vector3 z = Vector3::UnitZ(), zq = M.linear().col(2), o = M.translation();
+  // Closest points s z (on P) and o + t zq (on Q).
+  const double b = z.dot(zq), du = -o.z(), dv = -zq.dot(o), den = 1.0 - b * b;
+  double s = 0.0, t = -zq.dot(o);
+  if (den > 1e-14) {
+    s = (b * dv - du) / den;
+    t = (dv - b * du) / den;
+  }
+  const Vector3 foot_p = s * z, foot_q = o + t * zq;
+  LinkBetween out;
+  Vector3 x = foot_q - foot_p;
+  out.a = x.norm();
+  if (out.a > 1e-12) {
+    x /= out.a;
+  } else {  // intersecting axes: the normal is their cross product (or any, when they coincide)
+    out.a = 0.0;
+    const Vector3 n = z.cross(zq);
+    x = n.norm() > 1e-12 ? Vector3(n.normalized()) : Vector3::UnitX();
+  }
+  out.alpha = std::atan2(z.cross(zq).dot(x), b);
+  out.u = s;
+  out.p = std::atan2(x.y(), x.x());
+  out.v = -t;
+  const Vector3 xq = M.linear().col(0);
+  out.q = std::atan2(x.cross(xq).dot(zq), x.dot(xq));
+  return out;
+}
+
+// A loop in a pose, with the original index of each of its joints.
+struct PosedLoop {
+  LoopGeometry g;
+  JointVector theta;
+  std::vector<int> original;
+};
+
+// The (n-1)R loop left when joint k is locked at its angle: links k-1 and k
+// and the joint between them become one rigid link from axis k-1 to axis k+1
+// (link_between), which moves the feet of the normals on those axes (their
+// offsets and angles change). Written with joint k+1 first.
+PosedLoop locked_loop(const PosedLoop& loop, int k) {
+  const int n = loop.g.joints();
+  const LoopGeometry w = relabelled(loop.g, k + 1);  // the locked joint last, its neighbours n - 2 and 0
+  const JointVector theta = relabelled_angles(loop.theta, k + 1);
+  const Eigen::Isometry3d M = Eigen::Translation3d(w.a[n - 2], 0.0, 0.0) *
+                              Eigen::AngleAxisd(w.alpha[n - 2], Vector3::UnitX()) *
+                              joint_transform(theta[n - 1], w.d[n - 1], w.a[n - 1], w.alpha[n - 1]);
+  const LinkBetween link = link_between(M);
+  PosedLoop out;
+  out.g.a = w.a.head(n - 1);
+  out.g.alpha = w.alpha.head(n - 1);
+  out.g.d = w.d.head(n - 1);
+  out.g.a[n - 2] = link.a;
+  out.g.alpha[n - 2] = link.alpha;
+  out.g.d[n - 2] += link.u;
+  out.g.d[0] += link.v;
+  out.theta = theta.head(n - 1);
+  out.theta[n - 2] += link.p;
+  out.theta[0] += link.q;
+  for (int j = 0; j < n - 1; ++j) out.original.push_back(loop.original[static_cast<size_t>((j + k + 1) % n)]);
+  return out;
+}
+
+// Locked joints: the best fit (geometric_fit) of the loop left by locking
+// one frozen joint, or all of them together (a 6R with two joints locked is
+// a 4R), never below 4 joints (a 4R with a joint locked is a 3R, which
+// cannot move); for n >= 5.
+GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const std::vector<int>& frozen,
+                        std::span<const double> travel, double tolerance, FamilyCheck& check) {
+  const int n = g.joints();
+  PosedLoop whole{g, pose, {}};
+  for (int j = 0; j < n; ++j) whole.original.push_back(j);
+  std::vector<std::vector<int>> choices;
+  for (int k : frozen) choices.push_back({k});
+  if (frozen.size() > 1 && n - static_cast<int>(frozen.size()) >= 4) choices.push_back(frozen);
+  GeometricFit out;
+  out.family = Family::degenerate;
+  for (const std::vector<int>& locked : choices) {
+    PosedLoop loop = whole;
+    for (int original : locked) {
+      const auto at = std::find(loop.original.begin(), loop.original.end(), original);
+      loop = locked_loop(loop, static_cast<int>(at - loop.original.begin()));
+    }
+    const GeometricFit fit = geometric_fit(loop.g, tolerance);
+    if (!(fit.residual < out.residual)) continue;
+    out.residual = fit.residual;
+    std::string joints, travels;
+    double most = 0.0;
+    for (int k : locked) {
+      joints += (joints.empty() ? "" : ", ") + std::to_string(k + 1);
+      most = std::max(most, travel[static_cast<size_t>(k)]);
+    }
+    const std::string remaining = std::to_string(loop.g.joints()) + "R";
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, " locked (travel %.2g rad); ", most);
+    out.detail = (locked.size() > 1 ? "joints " : "joint ") + joints + buffer + "locked " + remaining + ": " +
+                 fit.detail;
+    check.conditions = {{(locked.size() > 1 ? "largest travel of joints " : "joint ") + joints + " [rad]", most},
+                        {"locked " + remaining + " loop: " + to_string(fit.family) + " residual", fit.residual}};
+  }
+  check.residual = out.residual;
+  return out;
+}
+
+// Whether a loop that fits goldberg, myard or goldberg_bent does so with one
+// of its two Bennett loops equilateral and folding: (a, alpha) twice with
+// Bennett's angle relation singular, tan(t1/2) tan(t2/2) = sin((alpha2 +
+// alpha1)/2) / sin((alpha2 - alpha1)/2) (asymmetric setup) or cos(..) /
+// cos(..) (line-symmetric) with a zero denominator. Such a "Bennett loop"
+// only folds, so the 5R has no Goldberg motion (docs/discovery-5r-6r.md).
+// Checked in the family's best writing, links 1 and 2 (first loop) and 1
+// and 3 (second), to `tolerance` (lengths over L).
+bool has_folding_bennett_loop(Family family, const LoopGeometry& g, double tolerance) {
+  if (family != Family::goldberg && family != Family::myard && family != Family::goldberg_bent) return false;
+  const Best best = best_for(family, g, false);
+  const LoopGeometry w = detail::apply(*best.writing, g);
+  const double L = length_scale(w);
+  for (int loop = 0; loop < 2; ++loop) {
+    const int link = loop + 1;
+    const bool line_symmetric = ((best.set >> loop) & 1) != 0;
+    const double half = 0.5 * (w.alpha[link] - w.alpha[0]);
+    const double denominator = line_symmetric ? std::cos(half) : std::sin(half);
+    if (std::abs(w.a[link] - w.a[0]) / L <= tolerance && std::abs(denominator) <= tolerance) return true;
+  }
+  return false;
+}
+
 // The detail line of a 5R or 6R family found.
 std::string special_detail(Family family, const LoopGeometry& g) {
+  if (family == Family::goldberg_bent) {
+    // The fusion angle |psi| from the real cosine rule of the best writing:
+    // cos(alpha5) = cos(alpha2) cos(alpha3) + sin(alpha2) sin(alpha3) cos(psi).
+    const Best best = best_over_writings<Family::goldberg_bent>(g, false);
+    const LoopGeometry w = detail::apply(*best.writing, g);
+    const double cos_psi = (std::cos(w.alpha[4]) - std::cos(w.alpha[1]) * std::cos(w.alpha[2])) /
+                           (std::sin(w.alpha[1]) * std::sin(w.alpha[2]));
+    const double psi_deg = std::acos(std::clamp(cos_psi, -1.0, 1.0)) * 180.0 / kPi;
+    const bool same = ((best.set & 1) != 0) == ((best.set & 2) != 0);
+    char buffer[160];
+    std::snprintf(buffer, sizeof buffer,
+                  "links fused at %.4g deg (0: same side, 180: opposite sides), d1 = %sd5 = %.4g L, Bennett loops "
+                  "in %s setups",
+                  psi_deg, same ? "" : "-", w.d[0] / length_scale(w), same ? "the same" : "different");
+    return buffer;
+  }
   if (family != Family::goldberg && family != Family::myard) {
     switch (family) {
       case Family::bricard_line_symmetric: return "line symmetry: link i and joint i as link and joint i + 3";
@@ -978,7 +1217,7 @@ double spherical_distance(const LoopGeometry& g, GeometryVector* gradient) {
 // The 5R and 6R families' distances need their joint count.
 void require_joints(const char* where, Family family, const LoopGeometry& g) {
   int joints = 0;
-  if (family == Family::goldberg || family == Family::myard) joints = 5;
+  if (family == Family::goldberg || family == Family::myard || family == Family::goldberg_bent) joints = 5;
   if (family == Family::bricard_line_symmetric || family == Family::bricard_plane_symmetric ||
       family == Family::bricard_trihedral) {
     joints = 6;
@@ -1004,6 +1243,7 @@ const char* to_string(Family family) {
     case Family::bricard_plane_symmetric: return "bricard_plane_symmetric";
     case Family::bricard_trihedral: return "bricard_trihedral";
     case Family::degenerate: return "degenerate";
+    case Family::goldberg_bent: return "goldberg_bent";
   }
   return "unknown";
 }
@@ -1073,20 +1313,30 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 
   out.checks = {bennett, planar, spherical, trivial};
   // 5R and 6R: degenerate, then the joint count's own families.
-  GeometricFit degenerate;
+  GeometricFit degenerate, locked;
   if (n == 5 || n == 6) {
     FamilyCheck check;
-    degenerate = degenerate_fit(geometry, check);
+    degenerate = degenerate_fit(geometry, options.tolerance, check);
+    // A joint locked over the motion (no coincident axes: that is trivial):
+    // the loop moves as the (n-1)R left by locking it, a degenerate loop too.
+    // The degenerate check keeps the better of the two.
+    if (has_frozen && !(trivial.residual <= options.tolerance)) {
+      FamilyCheck locked_check;
+      locked_check.family = Family::degenerate;
+      locked = locked_fit(geometry, pose, frozen, joint_travel, options.tolerance, locked_check);
+      if (locked.residual < check.residual) check = locked_check;
+    }
     out.checks.push_back(check);
     for (Family f : special_families(n)) out.checks.push_back(family_check(f, geometry));
   }
   const double tol = options.tolerance;
-  // The first of the 5R/6R families (after degenerate) that fits, in the order tried.
+  // The first of the 5R/6R families (after degenerate) that fits, in the order
+  // tried; not a Goldberg-type loop one of whose Bennett loops only folds.
   const FamilyCheck* special = nullptr;
   for (Family f : special_families(n)) {
     if (n == 4) break;  // Bennett, handled below as before
     for (const FamilyCheck& c : out.checks) {
-      if (c.family == f && c.residual <= tol && !special) special = &c;
+      if (c.family == f && c.residual <= tol && !special && !has_folding_bennett_loop(f, geometry, tol)) special = &c;
     }
   }
   if (trivial.residual <= tol) {
@@ -1112,6 +1362,12 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
     out.family = special->family;
     out.residual = special->residual;
     out.detail = special_detail(special->family, geometry);
+    // A member whose motion found is another one (some members have several).
+    if (locked.residual <= tol) out.detail += "; the motion found: " + locked.detail;
+  } else if (locked.residual <= tol) {
+    out.family = Family::degenerate;
+    out.residual = locked.residual;
+    out.detail = locked.detail;
   } else if (bennett.residual <= tol) {
     out.family = Family::bennett;
     out.setup = bennett.setup;
@@ -1143,6 +1399,7 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
     case Family::trivial: return distance_over_writings<Family::trivial>(geometry, gradient);
     case Family::goldberg: return distance_over_writings<Family::goldberg>(geometry, gradient);
     case Family::myard: return distance_over_writings<Family::myard>(geometry, gradient);
+    case Family::goldberg_bent: return distance_over_writings<Family::goldberg_bent>(geometry, gradient);
     case Family::bricard_line_symmetric: return distance_over_writings<Family::bricard_line_symmetric>(geometry, gradient);
     case Family::bricard_plane_symmetric: return distance_over_writings<Family::bricard_plane_symmetric>(geometry, gradient);
     case Family::bricard_trihedral: return distance_over_writings<Family::bricard_trihedral>(geometry, gradient);
@@ -1170,6 +1427,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::trivial:
     case Family::goldberg:
     case Family::myard:
+    case Family::goldberg_bent:
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
     case Family::bricard_trihedral: best = best_for(family, geometry, true); break;

@@ -117,6 +117,7 @@ constexpr DeflatableFamily kDeflatable[] = {
     {"bennett", 4, "Bennett loops have 4 joints"},
     {"goldberg", 5, "Goldberg loops have 5 joints"},
     {"myard", 5, "Myard loops have 5 joints"},
+    {"goldberg_bent", 5, "Goldberg loops have 5 joints"},
     {"bricard_line_symmetric", 6, "Bricard loops have 6 joints"},
     {"bricard_plane_symmetric", 6, "Bricard loops have 6 joints"},
     {"bricard_trihedral", 6, "Bricard loops have 6 joints"},

@@ -173,6 +173,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::bricard_line_symmetric:
       case Family::bricard_plane_symmetric:
       case Family::bricard_trihedral:
+      case Family::goldberg_bent:
       case Family::degenerate:
       case Family::unclassified: break;
     }

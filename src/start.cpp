@@ -16,7 +16,7 @@ Family family_from_name(const std::string& name) {
   // Every family family_distance measures (the job parser has checked the
   // name and the joint count; family_distance checks the count again).
   for (Family f : {Family::bennett, Family::planar, Family::spherical, Family::trivial, Family::goldberg,
-                   Family::myard, Family::bricard_line_symmetric, Family::bricard_plane_symmetric,
+                   Family::myard, Family::goldberg_bent, Family::bricard_line_symmetric, Family::bricard_plane_symmetric,
                    Family::bricard_trihedral}) {
     if (name == to_string(f)) return f;
   }

@@ -150,6 +150,9 @@ TEST(ObjectiveSettings, EveryDeflatableFamilyMeasuresItsDistance) {
       {"bennett", paper_bennett_loop()},
       {"goldberg", from_degrees({2, 1, s3, 2, 1 + s3}, {90, 30, 60, 90, 90}, {0, 0, 0, 0, 0})},
       {"myard", from_degrees({2, 1, 1, 2, 2}, {90, 30, -30, 90, 0}, {0, 0, 0, 0, 0})},
+      // docs/families.md's bent Goldberg example: the Goldberg loop's links fused at 90 deg.
+      {"goldberg_bent", from_degrees({2, 1, s3, 2, 1.7185034823583989}, {90, 30, 60, 90, 64.341093726744717},
+                                     {0.60433895850392444, 0, 0, 0, 0.60433895850392444})},
       {"bricard_line_symmetric", from_degrees({1, 1.7, 0.8, 1, 1.7, 0.8}, {51.566, 120.321, -34.377, 51.566, 120.321, -34.377},
                                               {0.4, 0.3, -0.5, 0.4, 0.3, -0.5})},
       {"bricard_plane_symmetric", from_degrees({1, 1.7, 0.8, 0.8, 1.7, 1}, {51.566, 120.321, -34.377, 34.377, -120.321, -51.566},

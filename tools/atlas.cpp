@@ -197,6 +197,7 @@ std::optional<int> known_family_dimension(const std::string& family, int joints)
   if (family == "spherical") return joints;       // n twists
   if (family == "goldberg" && joints == 5) return 4;
   if (family == "myard" && joints == 5) return 2;
+  if (family == "goldberg_bent" && joints == 5) return 5;
   if (family == "bricard_line_symmetric" && joints == 6) return 9;
   if (family == "bricard_plane_symmetric" && joints == 6) return 8;
   if (family == "bricard_trihedral" && joints == 6) return 5;

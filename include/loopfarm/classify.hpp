@@ -18,10 +18,15 @@
 //   goldberg   (n = 5) two Bennett loops sharing a link, the shared link
 //              removed and the two collinear links fused
 //   myard      (n = 5) the plane-symmetric Goldberg 5R
+//   goldberg_bent (n = 5) the same two Bennett loops with the two links
+//              fused at any angle (Goldberg's collinear fusion is its
+//              special case): offsets d1 = +-d5 appear at the fused link
 //   bricard_line_symmetric, bricard_plane_symmetric, bricard_trihedral (n = 6)
 //   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
 //              or pi) and the (n-1)R loop with them merged is in a movable
-//              family (not trivial)
+//              family (not trivial); or a joint stays locked over the motion
+//              (no axes coincide) and the (n-1)R loop left by locking it is
+//              in a movable family
 //
 // docs/classification.md has the details and the tolerances.
 #pragma once
@@ -52,6 +57,8 @@ enum class Family {
   // n = 5, 6: two adjacent axes coincide and the loop with them merged is in
   // a movable family (an idle joint)
   degenerate,
+  // 5R: Goldberg's construction with the two links fused at an angle
+  goldberg_bent,
 };
 const char* to_string(Family family);
 enum class BennettSetup { none, asymmetric, line_symmetric };
@@ -80,7 +87,7 @@ struct Classification {
   double residual = 0.0;          // of the family found (of the nearest family when unclassified)
   std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
   // bennett, planar, spherical, trivial, in this order; then for n = 5
-  // degenerate, myard, goldberg and for n = 6 degenerate, bricard_trihedral,
+  // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric (the order they are tried).
   std::vector<FamilyCheck> checks;
 };
@@ -106,8 +113,8 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 //     alpha3 = alpha4, d2 = d4 = 0, d1 = -d3.
 // The numeric path, called on every evaluation of a steered search: it builds
 // no names and, after the first call for a joint count (which builds that
-// count's table of writings), allocates nothing. Also goldberg and myard
-// (n = 5) and the three Bricard families (n = 6), their conditions as
+// count's table of writings), allocates nothing. Also goldberg, myard and
+// goldberg_bent (n = 5) and the three Bricard families (n = 6), their conditions as
 // classify() lists them. Throws std::invalid_argument for an invalid
 // geometry, a family for another joint count (Bennett with n != 4, ...),
 // Family::degenerate (its conditions depend on which axes are merged) or

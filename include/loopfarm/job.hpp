@@ -131,7 +131,7 @@ struct SearchSettings {
 
 // Steering away from the known families (DESIGN.md). Families are named
 // "planar", "spherical", "trivial" (any n), "bennett" (n = 4), "goldberg",
-// "myard" (n = 5), "bricard_line_symmetric", "bricard_plane_symmetric",
+// "myard", "goldberg_bent" (n = 5), "bricard_line_symmetric", "bricard_plane_symmetric",
 // "bricard_trihedral" (n = 6): those family_distance measures.
 struct SteeringSettings {
   bool nontrivial = false;             // every joint must move over the cycle
