@@ -452,7 +452,7 @@ void solve_structured(const LoopModel& model, const EquilibriumWorkspace& ws, co
     if (k >= 0) z += (rhs[u] / (model.deformation_stiffness(k) + f.rho)) * ws.jacobian.col(u);
   }
   solve_lower_vector(f.constraint, 6, z);  // z = L_S^-1 q
-  // (YᵀY) dq = r_q - Yᵀ z.
+  // (rho I + YᵀY) dq = r_q - Yᵀ z.
   Eigen::Matrix<double, kMaxJoints - 1, 1> dq;
   for (int u = 0, i = 0; u < m; ++u) {
     if (model.unknown_deformation(u) < 0) {
