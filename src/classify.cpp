@@ -931,27 +931,78 @@ GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const st
   return out;
 }
 
-// Whether a loop that fits goldberg, myard or goldberg_bent does so with one
-// of its two Bennett loops equilateral and folding: (a, alpha) twice with
-// Bennett's angle relation singular, tan(t1/2) tan(t2/2) = sin((alpha2 +
-// alpha1)/2) / sin((alpha2 - alpha1)/2) (asymmetric setup) or cos(..) /
-// cos(..) (line-symmetric) with a zero denominator. Such a "Bennett loop"
-// only folds, so the 5R has no Goldberg motion (docs/discovery-5r-6r.md).
-// Checked in the family's best writing, links 1 and 2 (first loop) and 1
-// and 3 (second), to `tolerance` (lengths over L).
-bool has_folding_bennett_loop(Family family, const LoopGeometry& g, double tolerance) {
-  if (family != Family::goldberg && family != Family::myard && family != Family::goldberg_bent) return false;
+// A loop that fits goldberg, myard or goldberg_bent with one of its two
+// Bennett loops equilateral and folding: (a, alpha) twice with Bennett's
+// angle relation singular, tan(t1/2) tan(t2/2) = sin((alpha2 + alpha1)/2) /
+// sin((alpha2 - alpha1)/2) (asymmetric setup) or cos(..) / cos(..)
+// (line-symmetric) with a zero denominator. Such a "Bennett loop" only folds,
+// so the 5R has no Goldberg motion (docs/discovery-5r-6r.md). It folds in two
+// ways. Folded with the joint next to the fused link locked at pi (writing
+// joint 5 when the second loop folds, joint 1 when the first does), the two
+// axes at its other ends coincide with the removed axis A and the loop turns
+// about it freely: the 5R moves as the other Bennett loop with that joint
+// locked, a degenerate loop whatever motion a search followed. Folded the
+// other way it locks the other loop: two 5R axes coincide and only they turn
+// (trivial). Both motions meet where the loop folds both ways, and a walk
+// through that pose can switch or stray between them, so no joint's travel
+// need look frozen (docs/discovery-5r-6r.md, "Goldberg geometries on a
+// folding Bennett loop"). Checked in the family's best writing, links 1 and 2
+// (first loop) and 1 and 3 (second), to `tolerance` (lengths over L).
+struct FoldingGoldberg {
+  bool folds = false;
+  double residual = kInf;  // the family's residual and the fold's two conditions, the largest
+  std::string detail;
+  FamilyCheck check;
+};
+
+FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double family_residual, double tolerance) {
+  FoldingGoldberg out;
+  if (family != Family::goldberg && family != Family::myard && family != Family::goldberg_bent) return out;
   const Best best = best_for(family, g, false);
   const LoopGeometry w = detail::apply(*best.writing, g);
   const double L = length_scale(w);
-  for (int loop = 0; loop < 2; ++loop) {
+  auto fold = [&](int loop, double& length, double& denominator) {
     const int link = loop + 1;
     const bool line_symmetric = ((best.set >> loop) & 1) != 0;
     const double half = 0.5 * (w.alpha[link] - w.alpha[0]);
-    const double denominator = line_symmetric ? std::cos(half) : std::sin(half);
-    if (std::abs(w.a[link] - w.a[0]) / L <= tolerance && std::abs(denominator) <= tolerance) return true;
+    length = (w.a[link] - w.a[0]) / L;
+    denominator = line_symmetric ? std::cos(half) : std::sin(half);
+    return std::abs(length) <= tolerance && std::abs(denominator) <= tolerance;
+  };
+  for (int loop = 0; loop < 2; ++loop) {
+    double length = 0.0, denominator = 0.0;
+    if (!fold(loop, length, denominator)) continue;
+    out.folds = true;
+    out.residual = std::max({family_residual, std::abs(length), std::abs(denominator)});
+    // The links of the folding loop in the 5R (writing links 1, 2 or 3, and 4,
+    // which equals 1) and the joint it locks, in the loop's own labels; the
+    // other Bennett loop (writing links 1 and 3 or 2, twice) is the 4R left.
+    const detail::Representation& r = *best.writing;
+    const int folded_link = loop == 0 ? 1 : 2;
+    const int other_link = loop == 0 ? 2 : 1;
+    std::vector<int> links = {r.index[0], r.index[static_cast<size_t>(folded_link)], r.index[3]};
+    std::sort(links.begin(), links.end());
+    const int locked_joint = r.angle_index[loop == 1 ? 4 : 0];
+    const LoopGeometry moving = LoopGeometry{
+        (JointVector(4) << w.a[0], w.a[other_link], w.a[0], w.a[other_link]).finished(),
+        (JointVector(4) << w.alpha[0], w.alpha[other_link], w.alpha[0], w.alpha[other_link]).finished(),
+        JointVector::Zero(4)};
+    const GeometricFit fit = geometric_fit(moving, tolerance);
+    double other_length = 0.0, other_denominator = 0.0;
+    const bool both = fold(1 - loop, other_length, other_denominator);
+    std::string names;
+    for (int k : links) names += (names.empty() ? "" : ", ") + std::to_string(k + 1);
+    out.detail = std::string(to_string(family)) + "'s conditions on a folding Bennett loop (links " + names +
+                 " equal): moves with joint " + std::to_string(locked_joint + 1) + " locked; locked 4R: " +
+                 to_string(fit.family) + (both ? " (folding too)" : "");
+    out.check.family = Family::degenerate;
+    out.check.residual = out.residual;
+    out.check.conditions = {{std::string(to_string(family)) + " residual", family_residual},
+                            {"folding loop: (link - link 1) / L", length},
+                            {"folding loop: denominator of its angle relation", denominator}};
+    return out;
   }
-  return false;
+  return out;
 }
 
 // The detail line of a 5R or 6R family found.
@@ -1331,12 +1382,25 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   }
   const double tol = options.tolerance;
   // The first of the 5R/6R families (after degenerate) that fits, in the order
-  // tried; not a Goldberg-type loop one of whose Bennett loops only folds.
+  // tried; not a Goldberg-type loop one of whose Bennett loops only folds:
+  // that one is degenerate (folding_goldberg), and its check is degenerate's.
   const FamilyCheck* special = nullptr;
+  FoldingGoldberg folding;
   for (Family f : special_families(n)) {
     if (n == 4) break;  // Bennett, handled below as before
     for (const FamilyCheck& c : out.checks) {
-      if (c.family == f && c.residual <= tol && !special && !has_folding_bennett_loop(f, geometry, tol)) special = &c;
+      if (c.family != f || !(c.residual <= tol) || special) continue;
+      FoldingGoldberg fold = folding_goldberg(f, geometry, c.residual, tol);
+      if (!fold.folds) {
+        special = &c;
+      } else if (!folding.folds) {
+        folding = std::move(fold);
+      }
+    }
+  }
+  if (folding.folds && !special) {
+    for (FamilyCheck& c : out.checks) {
+      if (c.family == Family::degenerate && folding.residual < c.residual) c = folding.check;
     }
   }
   if (trivial.residual <= tol) {
@@ -1363,6 +1427,11 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
     out.residual = special->residual;
     out.detail = special_detail(special->family, geometry);
     // A member whose motion found is another one (some members have several).
+    if (locked.residual <= tol) out.detail += "; the motion found: " + locked.detail;
+  } else if (folding.folds) {
+    out.family = Family::degenerate;
+    out.residual = folding.residual;
+    out.detail = folding.detail;
     if (locked.residual <= tol) out.detail += "; the motion found: " + locked.detail;
   } else if (locked.residual <= tol) {
     out.family = Family::degenerate;

@@ -620,6 +620,115 @@ TEST(Families, GoldbergOnAnEquilateralBennettLoopMovesWithALockedJoint) {
   EXPECT_GE(moving, 3);
 }
 
+TEST(Families, GoldbergOnAFoldingBennettLoopIsDegenerateWhateverTheWalk) {
+  // docs/discovery-5r-6r.md, "Goldberg geometries on a folding Bennett loop":
+  // built from the mechanism, independently of the conditions. Bennett loop 1
+  // (a, alpha, b, beta) in its motion and loop 2 equilateral (b, beta) four
+  // times, folded with its joints F and D at pi (axes E and A then coincide
+  // and it turns freely about them), fused at A at phi; the 5R B C D E F
+  // read off the axes. It moves with joint F (5) locked as loop 1. Folded
+  // the other way (joints A and E at pi) it locks loop 1: axes D and F
+  // coincide and only joints D and F turn (trivial). The two motions meet
+  // where loop 2 folds both ways, and a walk through that pose may switch or
+  // stray between them: the joint travels the classifier is given then show
+  // no frozen joint. Degenerate whatever the travels, except a clean trivial
+  // motion, which stays trivial (tried first).
+  std::mt19937_64 rng(29);
+  int locked_walks = 0, trivial_walks = 0;
+  for (int i = 0; i < 8; ++i) {
+    const double phi = i == 6 ? 1.1 : (i % 2 == 0 ? kPi : 0.0);  // opposite sides, same side, bent
+    double a, alpha, b, beta;
+    do {
+      alpha = twist(rng);
+      beta = twist(rng);
+      a = uniform(rng, 0.5, 2.0);
+      b = a * std::abs(std::sin(beta) / std::sin(alpha));
+    } while (b < 0.3 || b > 4.0 || std::abs(a - b) < 0.2);
+    const LoopGeometry l1 = bennett(a, alpha, b, beta), l2 = bennett(b, beta, b, beta);
+    const double t = uniform(rng, 0.3, kPi - 0.3);
+    const std::string tag = "folding " + std::to_string(i);
+    // Loop 2 folded at F and D: (t + phi, pi, -(t + phi), pi) closes exactly.
+    JointVector folded(4);
+    folded << t + phi, kPi, -(t + phi), kPi;
+    ASSERT_LT(closure_residual(l2, folded).cwiseAbs().maxCoeff(), 1e-12) << tag;
+    std::vector<Axis> x1 = axes_of(l1, bennett_pose(l1, t)), x2 = axes_of(l2, folded);
+    const Posed p = dh_from_axes({x1[1], x1[2], x1[3], x2[2], x2[1]});
+    ASSERT_LT(closure_error(p), 1e-12) << tag;
+    const Family family = i == 6 ? Family::goldberg_bent : Family::goldberg;
+    for (const FamilyCheck& check : classify(p.g, p.theta, {}).checks) {
+      if (check.family == family) {
+        EXPECT_LT(check.residual, 1e-10) << tag;
+      }
+    }
+    // A random writing; where joint F (4) went.
+    const int shift = static_cast<int>(rng() % 5);
+    const bool reverse = rng() % 2 == 1;
+    const Posed w = rewritten(p, shift, reverse, static_cast<unsigned>(rng() % 32));
+    int f = (4 - shift + 5) % 5;
+    if (reverse) f = 4 - f;
+    const std::string locked = "moves with joint " + std::to_string(f + 1) + " locked; locked 4R: bennett";
+    // The classifier told that every joint turns, as after a walk that switched.
+    const std::vector<double> turning(5, 2 * kPi);
+    const Classification all = classify(w.g, w.theta, turning);
+    EXPECT_EQ(all.family, Family::degenerate) << tag << ": " << all.detail;
+    EXPECT_NE(all.detail.find(locked), std::string::npos) << tag << ": " << all.detail;
+    EXPECT_LT(all.residual, 1e-10) << tag;
+    // The walk from this pose, whatever it followed.
+    if (f != 0) {
+      const VerificationSummary v = verify_motion(w.g, w.theta);
+      ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
+      const Classification k = classified(w, v);
+      EXPECT_EQ(k.family, Family::degenerate) << tag << ": " << k.detail;
+      EXPECT_NE(k.detail.find(locked), std::string::npos) << tag << ": " << k.detail;
+      if (v.joint_travel[f] < 1e-9) ++locked_walks;
+    }
+    // Folded the other way, loop 1 locked at t = pi - phi: axes D and F (2, 4)
+    // coincide; a walk that stays on that motion is trivial.
+    JointVector other(4);
+    const double s = uniform(rng, 0.5, 2.5);
+    other << kPi, s, kPi, -s;
+    x1 = axes_of(l1, bennett_pose(l1, kPi - phi));
+    x2 = axes_of(l2, other);
+    const Posed q = rewritten(dh_from_axes({x1[1], x1[2], x1[3], x2[2], x2[1]}), 2, false, 0);  // joint D first
+    ASSERT_LT(closure_error(q), 1e-12) << tag;
+    const VerificationSummary vq = verify_motion(q.g, q.theta);
+    ASSERT_TRUE(vq.verified) << tag << ": " << vq.limit;
+    const Classification kq = classified(q, vq);
+    const bool stayed = vq.joint_travel[1] < 1e-9 && vq.joint_travel[3] < 1e-9 && vq.joint_travel[4] < 1e-9;
+    if (stayed) {
+      ++trivial_walks;
+      EXPECT_EQ(kq.family, Family::trivial) << tag << ": " << kq.detail;
+      EXPECT_NE(kq.detail.find("axes 1 and 3 coincide"), std::string::npos) << tag << ": " << kq.detail;
+    } else {
+      EXPECT_EQ(kq.family, Family::degenerate) << tag << ": " << kq.detail;
+    }
+  }
+  EXPECT_GE(locked_walks, 3);
+  EXPECT_GE(trivial_walks, 3);
+  // Loop 1 nearly folding too (alpha = beta + delta, as the search's loops):
+  // its motion passes close to the meeting pose, and walks through it stray,
+  // joint F turning more than frozen_travel (1e-6 rad) or some joints only
+  // part of the turn. Still degenerate.
+  int strayed = 0;
+  for (int i = 0; i < 16; ++i) {
+    const double beta = twist(rng), b = uniform(rng, 0.5, 2.0);
+    const double alpha = beta + std::pow(10.0, uniform(rng, -3.7, -2.9));
+    const double a = b * std::abs(std::sin(alpha) / std::sin(beta)), phi = i % 2 ? kPi : 0.0, t = uniform(rng, 0.3, 2.8);
+    const LoopGeometry l1 = bennett(a, alpha, b, beta), l2 = bennett(b, beta, b, beta);
+    JointVector folded(4);
+    folded << t + phi, kPi, -(t + phi), kPi;
+    const std::vector<Axis> x1 = axes_of(l1, bennett_pose(l1, t)), x2 = axes_of(l2, folded);
+    const Posed p = dh_from_axes({x1[1], x1[2], x1[3], x2[2], x2[1]});
+    const VerificationSummary v = verify_motion(p.g, p.theta);
+    if (!v.verified || v.joint_travel[4] <= 1e-6) continue;
+    ++strayed;
+    const Classification k = classified(p, v);
+    EXPECT_EQ(k.family, Family::degenerate) << i << ": " << k.detail;
+    EXPECT_NE(k.detail.find("moves with joint 5 locked; locked 4R: bennett"), std::string::npos) << k.detail;
+  }
+  EXPECT_GE(strayed, 2);
+}
+
 // ---------------------------------------------------------------------------
 // 6R
 
