@@ -554,6 +554,12 @@ void bricard_trihedral_conditions(const Writing& w, Sink& c) {
         });
 }
 
+// The 5R families built from two Bennett loops sharing a link: Goldberg's,
+// its symmetric case Myard's and its bent-link variant.
+constexpr bool goldberg_type(Family family) {
+  return family == Family::goldberg || family == Family::myard || family == Family::goldberg_bent;
+}
+
 // The condition sets of a writing that a family's score takes the best of,
 // numbered: for Bennett loops set 0 is the asymmetric setup and set 1 the
 // line-symmetric one; for trivial loops set 0 is axes 1 and 2 coinciding and
@@ -717,9 +723,7 @@ FamilyCheck family_check(Family family, const LoopGeometry& g) {
   if (family == Family::bennett) {
     check.setup = best.setup_sign > 0 ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
   }
-  if (family == Family::goldberg || family == Family::myard || family == Family::goldberg_bent) {
-    check.setup = BennettSetup::none;
-  }
+  if (goldberg_type(family)) check.setup = BennettSetup::none;
   return check;
 }
 
@@ -957,7 +961,7 @@ struct FoldingGoldberg {
 
 FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double family_residual, double tolerance) {
   FoldingGoldberg out;
-  if (family != Family::goldberg && family != Family::myard && family != Family::goldberg_bent) return out;
+  if (!goldberg_type(family)) return out;
   const Best best = best_for(family, g, false);
   const LoopGeometry w = detail::apply(*best.writing, g);
   const double L = length_scale(w);
@@ -1268,7 +1272,7 @@ double spherical_distance(const LoopGeometry& g, GeometryVector* gradient) {
 // The 5R and 6R families' distances need their joint count.
 void require_joints(const char* where, Family family, const LoopGeometry& g) {
   int joints = 0;
-  if (family == Family::goldberg || family == Family::myard || family == Family::goldberg_bent) joints = 5;
+  if (goldberg_type(family)) joints = 5;
   if (family == Family::bricard_line_symmetric || family == Family::bricard_plane_symmetric ||
       family == Family::bricard_trihedral) {
     joints = 6;
