@@ -633,8 +633,10 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       ws.scratch = -ws.gradient;
       solve_structured(model, ws, structured_factors, ws.scratch, -s * c, ws.step, dual);
       dual = s * (dual + sigma * c) - sigma * c;
-      // stepᵀ (W + sigma AᵀA + rho I) step, which the general path reads off its factorisation.
-      step_curvature = sigma * (ws.jacobian * ws.step).squaredNorm() + rho * ws.step.squaredNorm();
+      // stepᵀ (W + rho I) step; sigma |A step|^2 is added below, once A step
+      // is known. The general path reads the whole stepᵀ H step off its
+      // factorisation.
+      step_curvature = rho * ws.step.squaredNorm();
       for (int u = 0; u < m; ++u) {
         const int k = model.unknown_deformation(u);
         if (k >= 0) step_curvature += model.deformation_stiffness(k) * ws.step[u] * ws.step[u];
@@ -670,6 +672,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // multipliers l+ = l + dl; nu grows until the step is a descent direction.
     const Vector6 lambda_plus = x.multipliers + dual;
     Vector6 jacobian_step = ws.jacobian * ws.step;
+    if (structured) step_curvature += sigma * jacobian_step.squaredNorm();
     double energy_slope = 0.0;
     for (int u = 0; u < m; ++u) {
       const int k = model.unknown_deformation(u);
