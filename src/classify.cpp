@@ -554,6 +554,29 @@ void bricard_trihedral_conditions(const Writing& w, Sink& c) {
         });
 }
 
+// Two Bennett loops sharing a link, the shared link removed and nothing fused
+// (6R): loop 1 (A B C D) = (a, alpha, b, beta) and loop 2 (A F E D) =
+// (c, gamma, b, beta) share the link DA = (b, beta) and its axes A and D; the
+// 6R A B C D E F keeps every joint, so each loop still turns about the shared
+// link on its own: two degrees of freedom (docs/families.md). Written as
+// links 1 (a, alpha), 2 (b, beta), 3 (a, alpha), 4 (c, gamma), 5 (b, beta),
+// 6 (c, gamma), every offset zero (joints 1 and 4 are A and D). Set bits: 0
+// loop 1's setup (sin alpha/a = -sin beta/b when set), 1 loop 2's.
+template <class Writing, class Sink>
+void bennett_pair_conditions(int set, const Writing& w, Sink& c) {
+  const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0;
+  add_length(w, c, "a1 - a3", 0, 2, -1.0);
+  add_twist(w, c, "alpha1 - alpha3", 0, 2, -1.0);
+  add_length(w, c, "a4 - a6", 3, 5, -1.0);
+  add_twist(w, c, "alpha4 - alpha6", 3, 5, -1.0);
+  add_length(w, c, "a2 - a5", 1, 4, -1.0);
+  add_twist(w, c, "alpha2 - alpha5", 1, 4, -1.0);
+  static constexpr const char* kOffsets[] = {"d1", "d2", "d3", "d4", "d5", "d6"};
+  for (int k = 0; k < 6; ++k) add_offset(w, c, kOffsets[k], k, -1, 0.0);
+  add_bennett_product(w, c, s1 > 0 ? "a1 sin(alpha2) - a2 sin(alpha1)" : "a1 sin(alpha2) + a2 sin(alpha1)", 0, 1, s1);
+  add_bennett_product(w, c, s2 > 0 ? "a4 sin(alpha5) - a5 sin(alpha4)" : "a4 sin(alpha5) + a5 sin(alpha4)", 3, 4, s2);
+}
+
 // The 5R families built from two Bennett loops sharing a link: Goldberg's,
 // its symmetric case Myard's and its bent-link variant.
 constexpr bool goldberg_type(Family family) {
@@ -573,6 +596,7 @@ int condition_sets(Family family, int joints) {
     case Family::goldberg: return 8;
     case Family::myard: return 16;
     case Family::goldberg_bent: return 4;
+    case Family::bennett_pair: return 4;
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
     case Family::bricard_trihedral: return 1;
@@ -609,6 +633,8 @@ void condition_set(int set, const Writing& w, Sink& c) {
     bricard_plane_conditions(w, c);
   } else if constexpr (F == Family::bricard_trihedral) {
     bricard_trihedral_conditions(w, c);
+  } else if constexpr (F == Family::bennett_pair) {
+    bennett_pair_conditions(set, w, c);
   } else if (set == 0) {
     adjacent_coaxial_conditions(w, c);
   } else {
@@ -703,6 +729,7 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
     case Family::bricard_line_symmetric: return best_over_writings<Family::bricard_line_symmetric>(g, by_norm);
     case Family::bricard_plane_symmetric: return best_over_writings<Family::bricard_plane_symmetric>(g, by_norm);
     case Family::bricard_trihedral: return best_over_writings<Family::bricard_trihedral>(g, by_norm);
+    case Family::bennett_pair: return best_over_writings<Family::bennett_pair>(g, by_norm);
     case Family::spherical:
     case Family::degenerate:
     case Family::unclassified: break;
@@ -733,7 +760,9 @@ std::vector<Family> special_families(int n) {
   switch (n) {
     case 4: return {Family::bennett};
     case 5: return {Family::myard, Family::goldberg, Family::goldberg_bent};
-    case 6: return {Family::bricard_trihedral, Family::bricard_plane_symmetric, Family::bricard_line_symmetric};
+    case 6:
+      return {Family::bricard_trihedral, Family::bricard_plane_symmetric, Family::bricard_line_symmetric,
+              Family::bennett_pair};
     default: return {};
   }
 }
@@ -1027,6 +1056,17 @@ std::string special_detail(Family family, const LoopGeometry& g) {
                   psi_deg, same ? "" : "-", w.d[0] / length_scale(w), same ? "the same" : "different");
     return buffer;
   }
+  if (family == Family::bennett_pair) {
+    const Best best = best_over_writings<Family::bennett_pair>(g, false);
+    const LoopGeometry w = detail::apply(*best.writing, g);
+    char buffer[200];
+    std::snprintf(buffer, sizeof buffer,
+                  "two Bennett loops (links 1-3 and 4-6 of the best writing) sharing a removed link (%.4g L, "
+                  "%.4g deg) between joints 1 and 4, in %s setups; two degrees of freedom",
+                  w.a[1] / length_scale(w), w.alpha[1] * 180.0 / kPi,
+                  ((best.set & 1) != 0) == ((best.set & 2) != 0) ? "the same" : "different");
+    return buffer;
+  }
   if (family != Family::goldberg && family != Family::myard) {
     switch (family) {
       case Family::bricard_line_symmetric: return "line symmetry: link i and joint i as link and joint i + 3";
@@ -1274,7 +1314,7 @@ void require_joints(const char* where, Family family, const LoopGeometry& g) {
   int joints = 0;
   if (goldberg_type(family)) joints = 5;
   if (family == Family::bricard_line_symmetric || family == Family::bricard_plane_symmetric ||
-      family == Family::bricard_trihedral) {
+      family == Family::bricard_trihedral || family == Family::bennett_pair) {
     joints = 6;
   }
   if (joints != 0 && g.joints() != joints) {
@@ -1299,6 +1339,7 @@ const char* to_string(Family family) {
     case Family::bricard_trihedral: return "bricard_trihedral";
     case Family::degenerate: return "degenerate";
     case Family::goldberg_bent: return "goldberg_bent";
+    case Family::bennett_pair: return "bennett_pair";
   }
   return "unknown";
 }
@@ -1476,6 +1517,7 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
     case Family::bricard_line_symmetric: return distance_over_writings<Family::bricard_line_symmetric>(geometry, gradient);
     case Family::bricard_plane_symmetric: return distance_over_writings<Family::bricard_plane_symmetric>(geometry, gradient);
     case Family::bricard_trihedral: return distance_over_writings<Family::bricard_trihedral>(geometry, gradient);
+    case Family::bennett_pair: return distance_over_writings<Family::bennett_pair>(geometry, gradient);
     case Family::degenerate: throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified: break;
   }
@@ -1503,7 +1545,8 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::goldberg_bent:
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
-    case Family::bricard_trihedral: best = best_for(family, geometry, true); break;
+    case Family::bricard_trihedral:
+    case Family::bennett_pair: best = best_for(family, geometry, true); break;
     case Family::degenerate:
       throw std::invalid_argument("family_distance_report: degenerate loops have no distance");
     case Family::unclassified: throw std::invalid_argument("family_distance_report: not a family");

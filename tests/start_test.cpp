@@ -159,6 +159,8 @@ TEST(ObjectiveSettings, EveryDeflatableFamilyMeasuresItsDistance) {
                                                {0, 0.3, -0.5, 0, 0.5, -0.3})},
       {"bricard_trihedral", from_degrees({1.5, 1, 1.2, 0.8, 1, std::sqrt(1.5 * 1.5 + 1.2 * 1.2 + 1.0 - 1.0 - 0.8 * 0.8)},
                                          {90, -90, 90, -90, 90, -90}, {0, 0, 0, 0, 0, 0})},
+      // docs/families.md's example: Bennett loops (1, 30 deg, 2, 90 deg) and (sqrt 3, 60 deg, 2, 90 deg) sharing a link.
+      {"bennett_pair", from_degrees({1, 2, 1, s3, 2, s3}, {30, 90, 30, 60, 90, 60}, {0, 0, 0, 0, 0, 0})},
   };
   for (const Case& c : cases) {
     const int n = c.member.joints();

@@ -22,6 +22,8 @@
 //              fused at any angle (Goldberg's collinear fusion is its
 //              special case): offsets d1 = +-d5 appear at the fused link
 //   bricard_line_symmetric, bricard_plane_symmetric, bricard_trihedral (n = 6)
+//   bennett_pair (n = 6) two Bennett loops sharing a link, the shared link
+//              removed and nothing fused: moves with two degrees of freedom
 //   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
 //              or pi) and the (n-1)R loop with them merged is in a movable
 //              family (not trivial); or a joint stays locked over the motion
@@ -59,6 +61,8 @@ enum class Family {
   degenerate,
   // 5R: Goldberg's construction with the two links fused at an angle
   goldberg_bent,
+  // 6R: two Bennett loops sharing a link, the shared link removed (mobility 2)
+  bennett_pair,
 };
 const char* to_string(Family family);
 enum class BennettSetup { none, asymmetric, line_symmetric };
@@ -88,7 +92,7 @@ struct Classification {
   std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
-  // bricard_plane_symmetric, bricard_line_symmetric (the order they are tried).
+  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair (the order they are tried).
   std::vector<FamilyCheck> checks;
 };
 
