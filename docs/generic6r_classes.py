@@ -1,0 +1,186 @@
+#!/usr/bin/env python3
+"""The structure classes of a 6R run's unclassified loops (docs/discovery-5r-6r.md,
+"The generic 6R search's unclassified loops"). Python 3 standard library only.
+
+  docs/generic6r_classes.py classes DB            # counts per class and rigid-residual band
+  docs/generic6r_classes.py exact DB LOOPFARM JOB # the loops closing to round-off, a markdown table
+  docs/generic6r_classes.py jacobian DB START LOOPFARM
+      # singular values of the 6 x 6 closure Jacobian at the poses `loopfarm verify --theta0-deg T`
+      # assembles on the loop's motion (T = 0, 30, ..., 330; verified, E_mean < 1e-15)
+
+Classes, tested on every shift and reversal of the canonical writing, each equality to 1e-6
+(lengths in L, twists in degrees / 57.3; k_i = |sin alpha_i| / a_i, Bennett's ratio; a link
+equals another when a and the twist agree up to sign and pi):
+  pair  links 1 = 3, 4 = 6, 2 = 5, k1 = k2, k4 = k5, every d = 0 (bennett_pair's pattern)
+  P9    link 3 = link 6, k1 = k2, k4 = k5, d2 = d5 = 0, |d1| = |d3|, |d4| = |d6|
+  T7    k1 = k2 = k3, k4 = k5 = k6, d2 = d3 = d5 = d6 = 0, |d1| = |d4|
+  B8    k2 = k3, k5 = k6, d3 = d6 = 0
+"""
+import collections, json, math, re, sqlite3, subprocess, sys
+
+TOL = 1e-6
+COLS = [f'a{i}' for i in range(1, 7)] + [f'alpha{i}_deg' for i in range(1, 7)] + [f'd{i}' for i in range(1, 7)]
+
+
+def wrapd(x):
+    return (x + 180) % 360 - 180
+
+
+def same_link(a, al, i, k):
+    if abs(a[i] - a[k]) > TOL:
+        return False
+    return min(abs(wrapd(al[i] - al[k])), abs(wrapd(al[i] + al[k])), abs(wrapd(al[i] - al[k] + 180)),
+               abs(wrapd(al[i] + al[k] + 180))) < TOL * 57.3
+
+
+def kappa(a, al, i):
+    return abs(math.sin(math.radians(al[i]))) / a[i] if a[i] > 1e-12 else float('inf')
+
+
+def same_kappa(a, al, i, k):
+    return abs(kappa(a, al, i) - kappa(a, al, k)) < TOL * max(1.0, kappa(a, al, i))
+
+
+def writings(a, al, d):
+    for s in range(6):
+        A = [a[(i + s) % 6] for i in range(6)]
+        AL = [al[(i + s) % 6] for i in range(6)]
+        D = [d[(i + s) % 6] for i in range(6)]
+        yield A, AL, D
+        # reversed: link i -> link 4 - i, joint i -> joint 5 - i (0-based; signs do not matter here)
+        yield [A[(4 - i) % 6] for i in range(6)], [AL[(4 - i) % 6] for i in range(6)], [D[(5 - i) % 6] for i in range(6)]
+
+
+def is_pair(A, AL, D):
+    return (same_link(A, AL, 0, 2) and same_link(A, AL, 3, 5) and same_link(A, AL, 1, 4) and same_kappa(A, AL, 0, 1)
+            and same_kappa(A, AL, 3, 4) and max(abs(x) for x in D) < TOL)
+
+
+def is_p9(A, AL, D):
+    return (same_link(A, AL, 2, 5) and same_kappa(A, AL, 0, 1) and same_kappa(A, AL, 3, 4) and abs(D[1]) < TOL
+            and abs(D[4]) < TOL and abs(abs(D[0]) - abs(D[2])) < TOL and abs(abs(D[3]) - abs(D[5])) < TOL)
+
+
+def is_t7(A, AL, D):
+    return (same_kappa(A, AL, 0, 1) and same_kappa(A, AL, 1, 2) and same_kappa(A, AL, 3, 4) and same_kappa(A, AL, 4, 5)
+            and all(abs(D[i]) < TOL for i in (1, 2, 4, 5)) and abs(abs(D[0]) - abs(D[3])) < TOL)
+
+
+def is_b8(A, AL, D):
+    return same_kappa(A, AL, 1, 2) and same_kappa(A, AL, 4, 5) and abs(D[2]) < TOL and abs(D[5]) < TOL
+
+
+PATTERNS = [('pair', is_pair), ('P9', is_p9), ('T7', is_t7), ('B8', is_b8)]
+
+
+def classify(a, al, d):
+    for name, test in PATTERNS:
+        if any(test(*w) for w in writings(a, al, d)):
+            return name
+    return 'none'
+
+
+def rows(db, where=''):
+    con = sqlite3.connect(db)
+    q = (f"SELECT candidate_id, first_start, E_mean, local_dimension, rigid_residual, full_turn, {','.join(COLS)} "
+         f"FROM candidates WHERE family = 'unclassified' {where} ORDER BY first_start")
+    return con.execute(q).fetchall()
+
+
+def band(r):
+    if r[4] <= 1e-13 and r[2] <= 1e-24:
+        return 'rigid <= 1e-13'
+    return 'rigid <= 1e-11' if r[4] <= 1e-11 else 'rigid > 1e-11'
+
+
+def cmd_classes(db):
+    stats = collections.defaultdict(list)
+    for r in rows(db):
+        v = r[6:]
+        stats[(classify(v[0:6], v[6:12], v[12:18]), band(r))].append(r)
+    for key in sorted(stats):
+        dims = collections.Counter(x[3] for x in stats[key])
+        print(len(stats[key]), key, 'local dimensions', dict(sorted(dims.items())),
+              'starts', [x[1] for x in stats[key]])
+
+
+def travels(loopfarm, job, start):
+    out = subprocess.run([loopfarm, 'start', job, '--index', str(start)], capture_output=True, text=True).stdout
+    m = re.search(r'joint travel_deg\s+(.*)', out)
+    return ', '.join(f"{float(x):.3g}" for x in m.group(1).split(',')) if m else '?'
+
+
+def cmd_exact(db, loopfarm, job):
+    print("| start | class | E_mean | local dim. | joint travels [deg] (`loopfarm start`) | a | alpha [deg] | d |")
+    print("|---|---|---|---|---|---|---|---|")
+    fmt = lambda xs: ' '.join(f"{x:.6g}" if abs(x) > 1e-9 else '0' for x in xs)
+    for r in rows(db, 'AND rigid_residual <= 1e-13 AND E_mean <= 1e-24'):
+        v = r[6:]
+        print(f"| {r[1]} | {classify(v[0:6], v[6:12], v[12:18])} | {r[2]:.1e} | {r[3]} | {travels(loopfarm, job, r[1])} "
+              f"| {fmt(v[0:6])} | {fmt(v[6:12])} | {fmt(v[12:18])} |")
+
+
+# Rigid kinematics for the Jacobian: T_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) (DESIGN.md).
+def mat_mul(A, B):
+    return [[sum(A[i][k] * B[k][j] for k in range(4)) for j in range(4)] for i in range(4)]
+
+
+def dh(theta, d, a, alpha):
+    ct, st, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
+    return [[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]]
+
+
+def screws(a, al, d, th):
+    F = [[1.0 if i == j else 0.0 for j in range(4)] for i in range(4)]
+    out = []
+    for i in range(len(a)):
+        w = [F[0][2], F[1][2], F[2][2]]
+        p = [F[0][3], F[1][3], F[2][3]]
+        out.append(w + [p[1] * w[2] - p[2] * w[1], p[2] * w[0] - p[0] * w[2], p[0] * w[1] - p[1] * w[0]])
+        F = mat_mul(F, dh(th[i], d[i], a[i], al[i]))
+    return out
+
+
+def singular_values(S):
+    n = len(S)
+    A = [[sum(S[i][k] * S[j][k] for k in range(6)) for j in range(n)] for i in range(n)]
+    for _ in range(100):  # Jacobi eigenvalues of the Gram matrix
+        if sum(A[i][j] ** 2 for i in range(n) for j in range(n) if i != j) < 1e-30:
+            break
+        for p in range(n):
+            for q in range(p + 1, n):
+                if abs(A[p][q]) < 1e-300:
+                    continue
+                t = 0.5 * math.atan2(2 * A[p][q], A[q][q] - A[p][p])
+                c, s = math.cos(t), math.sin(t)
+                for k in range(n):
+                    A[k][p], A[k][q] = c * A[k][p] - s * A[k][q], s * A[k][p] + c * A[k][q]
+                for k in range(n):
+                    A[p][k], A[q][k] = c * A[p][k] - s * A[q][k], s * A[p][k] + c * A[q][k]
+    return sorted(math.sqrt(max(0.0, A[i][i])) for i in range(n))
+
+
+def cmd_jacobian(db, start, loopfarm):
+    con = sqlite3.connect(db)
+    v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
+                    "WHERE s.start_index = ?", (int(start),)).fetchone()
+    a, al, d = list(v[0:6]), list(v[6:12]), list(v[12:18])
+    for t in range(0, 360, 30):
+        out = subprocess.run([loopfarm, 'verify', '--a', ','.join(map(repr, a)), '--alpha-deg', ','.join(map(repr, al)),
+                              '--d', ','.join(map(repr, d)), '--theta0-deg', str(t), '--json'], capture_output=True, text=True)
+        j = json.loads(out.stdout)
+        if not (j['verified'] and j['E_mean'] is not None and j['E_mean'] < 1e-15):
+            continue
+        sv = singular_values(screws(a, [math.radians(x) for x in al], d, [math.radians(x) for x in j['theta_deg']]))
+        print(f"theta0 {t:3d} deg ({j['family']}): smallest singular values", ' '.join(f"{x:.2g}" for x in sv[:3]))
+
+
+if __name__ == '__main__':
+    if len(sys.argv) >= 3 and sys.argv[1] == 'classes':
+        cmd_classes(sys.argv[2])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'exact':
+        cmd_exact(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'jacobian':
+        cmd_jacobian(sys.argv[2], sys.argv[3], sys.argv[4])
+    else:
+        sys.exit(__doc__)
