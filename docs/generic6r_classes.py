@@ -7,6 +7,9 @@
   docs/generic6r_classes.py jacobian DB START LOOPFARM
       # singular values of the 6 x 6 closure Jacobian at the poses `loopfarm verify --theta0-deg T`
       # assembles on the loop's motion (T = 0, 30, ..., 330; verified, E_mean < 1e-15)
+  docs/generic6r_classes.py jacobian-geometry A ALPHA_DEG D LOOPFARM
+      # the same for a geometry given as comma lists, and the non-adjacent axis pairs whose
+      # distance and angle stay the same (to 1e-9) in all those poses
 
 Classes, tested on every shift and reversal of the canonical writing, each equality to 1e-6
 (lengths in L, twists in degrees / 57.3; k_i = |sin alpha_i| / a_i, Bennett's ratio; a link
@@ -160,19 +163,40 @@ def singular_values(S):
     return sorted(math.sqrt(max(0.0, A[i][i])) for i in range(n))
 
 
+def axis_pair(S1, S2):
+    """Distance and angle [deg] of two lines given as Pluecker screws (direction, moment)."""
+    w1, m1, w2, m2 = S1[:3], S1[3:], S2[:3], S2[3:]
+    cr = [w1[1] * w2[2] - w1[2] * w2[1], w1[2] * w2[0] - w1[0] * w2[2], w1[0] * w2[1] - w1[1] * w2[0]]
+    s = math.sqrt(sum(x * x for x in cr))
+    reciprocal = sum(x * y for x, y in zip(w1, m2)) + sum(x * y for x, y in zip(w2, m1))
+    return (abs(reciprocal) / s if s > 1e-12 else float('nan')), math.degrees(math.atan2(s, sum(x * y for x, y in zip(w1, w2))))
+
+
 def cmd_jacobian(db, start, loopfarm):
     con = sqlite3.connect(db)
     v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
                     "WHERE s.start_index = ?", (int(start),)).fetchone()
-    a, al, d = list(v[0:6]), list(v[6:12]), list(v[12:18])
+    jacobian(list(v[0:6]), list(v[6:12]), list(v[12:18]), loopfarm)
+
+
+def jacobian(a, al, d, loopfarm):
+    pairs = []
     for t in range(0, 360, 30):
         out = subprocess.run([loopfarm, 'verify', '--a', ','.join(map(repr, a)), '--alpha-deg', ','.join(map(repr, al)),
                               '--d', ','.join(map(repr, d)), '--theta0-deg', str(t), '--json'], capture_output=True, text=True)
         j = json.loads(out.stdout)
         if not (j['verified'] and j['E_mean'] is not None and j['E_mean'] < 1e-15):
             continue
-        sv = singular_values(screws(a, [math.radians(x) for x in al], d, [math.radians(x) for x in j['theta_deg']]))
+        S = screws(a, [math.radians(x) for x in al], d, [math.radians(x) for x in j['theta_deg']])
+        sv = singular_values(S)
         print(f"theta0 {t:3d} deg ({j['family']}): smallest singular values", ' '.join(f"{x:.2g}" for x in sv[:3]))
+        pairs.append({(i, k): axis_pair(S[i], S[k]) for i in range(6) for k in range(i + 2, 6) if (i, k) != (0, 5)})
+    for key in (pairs[0] if pairs else {}):
+        values = [p[key] for p in pairs]
+        if max(v[0] for v in values) - min(v[0] for v in values) < 1e-9 and \
+                max(v[1] for v in values) - min(v[1] for v in values) < 1e-7:
+            print(f"axes {key[0] + 1} and {key[1] + 1}: distance {values[0][0]:.6f}, angle {values[0][1]:.3f} deg in all "
+                  f"{len(values)} poses")
 
 
 if __name__ == '__main__':
@@ -180,6 +204,8 @@ if __name__ == '__main__':
         cmd_classes(sys.argv[2])
     elif len(sys.argv) >= 5 and sys.argv[1] == 'exact':
         cmd_exact(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif len(sys.argv) >= 6 and sys.argv[1] == 'jacobian-geometry':
+        jacobian(*[[float(x) for x in arg.split(',')] for arg in sys.argv[2:5]], sys.argv[5])
     elif len(sys.argv) >= 5 and sys.argv[1] == 'jacobian':
         cmd_jacobian(sys.argv[2], sys.argv[3], sys.argv[4])
     else:
