@@ -10,6 +10,15 @@
   docs/generic6r_classes.py jacobian-geometry A ALPHA_DEG D LOOPFARM
       # the same for a geometry given as comma lists, and the non-adjacent axis pairs whose
       # distance and angle stay the same (to 1e-9) in all those poses
+  docs/generic6r_classes.py normal DB START LOOPFARM
+      # a P9 loop: the direction n in which its cycle energy grows, over the ten parameters the
+      # other eight conditions leave (kappa1, alpha1, alpha2, kappa2, alpha4, alpha5, a3, alpha3,
+      # d1, d4): sqrt(E) of `loopfarm energy` with each moved by 1e-4, signs from pairs
+  docs/generic6r_classes.py invariants DB
+      # P9 loops closing to <= 1e-11: dyad invariants compared between the two dyads
+  docs/generic6r_classes.py dyads SEED N LOOPFARM
+      # N loops built from bennett_dyads' conditions (docs/families.md), each checked with
+      # `loopfarm verify --theta0-deg T`, T = 0, 5, ..., 355, until one verifies
 
 Classes, tested on every shift and reversal of the canonical writing, each equality to 1e-6
 (lengths in L, twists in degrees / 57.3; k_i = |sin alpha_i| / a_i, Bennett's ratio; a link
@@ -199,11 +208,131 @@ def jacobian(a, al, d, loopfarm):
                   f"{len(values)} poses")
 
 
+def p9_writing(a, al, d):
+    for s in range(6):
+        A = [a[(i + s) % 6] for i in range(6)]
+        AL = [al[(i + s) % 6] for i in range(6)]
+        D = [d[(i + s) % 6] for i in range(6)]
+        if is_p9(A, AL, D):
+            return A, AL, D
+    return None
+
+
+def energy(loopfarm, a, al, d):
+    out = subprocess.run([loopfarm, 'energy', '--a', ','.join(map(repr, a)), '--alpha-deg=' + ','.join(map(repr, al)),
+                          '--d=' + ','.join(map(repr, d)), '--json'], capture_output=True, text=True)
+    return json.loads(out.stdout)['E_mean']
+
+
+def cmd_normal(db, start, loopfarm, eps=1e-4):
+    con = sqlite3.connect(db)
+    v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
+                    "WHERE s.start_index = ?", (int(start),)).fetchone()
+    A, AL, D = p9_writing(list(v[0:6]), list(v[6:12]), list(v[12:18]))
+    R = math.radians
+    p = {'kappa1': math.sin(R(AL[0])) / A[0], 'alpha1': R(AL[0]), 'alpha2': R(AL[1]), 'kappa2': math.sin(R(AL[3])) / A[3],
+         'alpha4': R(AL[3]), 'alpha5': R(AL[4]), 'a3': A[2], 'alpha3': R(AL[2]), 'd1': D[0], 'd4': D[3]}
+
+    def E(q):
+        a = [math.sin(q['alpha1']) / q['kappa1'], math.sin(q['alpha2']) / q['kappa1'], q['a3'],
+             math.sin(q['alpha4']) / q['kappa2'], math.sin(q['alpha5']) / q['kappa2'], q['a3']]
+        al = [math.degrees(q[k]) for k in ('alpha1', 'alpha2', 'alpha3', 'alpha4', 'alpha5', 'alpha3')]
+        return energy(loopfarm, a, al, [q['d1'], 0.0, q['d1'], q['d4'], 0.0, q['d4']])
+
+    print('E at the loop', f"{E(p):.2g}")
+    size = {}
+    for k in p:
+        q = dict(p)
+        q[k] += eps
+        size[k] = math.sqrt(max(E(q), 0.0)) / eps
+    print('sqrt(E) / 1e-4 per parameter:', ' '.join(f"{k} {x:.2g}" for k, x in size.items()))
+    ref = max(size, key=size.get)
+    n = {}
+    for k in p:
+        if k == ref or size[k] < 1e-3 * size[ref]:
+            n[k] = size[k]
+            continue
+        q = dict(p)
+        q[ref] += eps
+        q[k] += eps
+        both = math.sqrt(E(q)) / eps
+        n[k] = size[k] if abs(both - (size[ref] + size[k])) < abs(both - abs(size[ref] - size[k])) else -size[k]
+    norm = math.sqrt(sum(x * x for x in n.values()))
+    print('n:', ' '.join(f"{k} {x / norm:+.4g}" for k, x in n.items()))
+
+
+def cmd_invariants(db):
+    R = math.radians
+    sums = []
+    for r in rows(db, 'AND rigid_residual <= 1e-11'):
+        w = p9_writing(list(r[6:12]), list(r[12:18]), list(r[18:24]))
+        if not w:
+            continue
+        A, AL, D = w
+
+        def dyad(i):
+            k, x, y = math.sin(R(AL[i])) / A[i], R(AL[i]), R(AL[i + 1])
+            return {'(cos alpha + cos beta) / kappa': (math.cos(x) + math.cos(y)) / k, 'kappa': k,
+                    'sin((b+a)/2) / sin((b-a)/2)': math.sin((y + x) / 2) / math.sin((y - x) / 2),
+                    'cos((b+a)/2) / cos((b-a)/2)': math.cos((y + x) / 2) / math.cos((y - x) / 2)}
+        sums.append((dyad(0), dyad(3)))
+    print(len(sums), 'P9 loops closing to <= 1e-11')
+    for key in sums[0][0]:
+        rel = sorted(abs(u[key] - v[key]) / max(1e-12, abs(u[key])) for u, v in sums)
+        print(f"{key}: relative difference between the dyads, median {rel[len(rel) // 2]:.2g}, largest {rel[-1]:.2g}")
+
+
+def dyads_member(rng):
+    while True:
+        k1, k2 = -rng.uniform(0.4, 1.5), -rng.uniform(0.4, 1.5)
+        t1, t2, t4 = (-rng.uniform(0.3, math.pi - 0.3) for _ in range(3))
+        c5 = (math.cos(t1) + math.cos(t2)) / k1 * k2 - math.cos(t4)
+        if abs(c5) > 0.95:
+            continue
+        t5 = -math.acos(c5)
+        a = [math.sin(t1) / k1, math.sin(t2) / k1, rng.uniform(0.5, 1.5), math.sin(t4) / k2, math.sin(t5) / k2]
+        a.append(a[2])
+        if min(a) < 0.2 or max(a) > 3:
+            continue
+        gamma = -rng.uniform(0.3, math.pi - 0.3)
+        e, f = rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3)
+        return a, [math.degrees(x) for x in (t1, t2, gamma, t4, t5, gamma)], [e, 0.0, e, f, 0.0, f]
+
+
+def cmd_dyads(seed, count, loopfarm):
+    import random
+    rng = random.Random(int(seed))
+    moved = 0
+    for i in range(int(count)):
+        a, al, d = dyads_member(rng)
+        for t in range(0, 360, 5):
+            out = subprocess.run([loopfarm, 'verify', '--a', ','.join(map(repr, a)), '--alpha-deg=' + ','.join(map(repr, al)),
+                                  '--d=' + ','.join(map(repr, d)), '--theta0-deg', str(t), '--json'],
+                                 capture_output=True, text=True)
+            j = json.loads(out.stdout)
+            if j['verified'] and j['rigid_residual'] < 1e-12:
+                moved += 1
+                lo, hi = j['input_range_deg']
+                print(f"{i}: verified from theta0 {t} deg, rigid residual {j['rigid_residual']:.1g}, input "
+                      f"{'full turn' if j['full_turn'] else f'{hi - lo:.1f} deg'}, E_mean {j['E_mean']:.2g}, "
+                      f"local dimension {j['local_dimension']}, {j['family']}")
+                break
+        else:
+            print(f"{i}: no verified assembly at theta0 = 0, 5, ..., 355 deg")
+    print(moved, 'of', count, 'moved')
+
+
 if __name__ == '__main__':
     if len(sys.argv) >= 3 and sys.argv[1] == 'classes':
         cmd_classes(sys.argv[2])
     elif len(sys.argv) >= 5 and sys.argv[1] == 'exact':
         cmd_exact(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'normal':
+        cmd_normal(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif len(sys.argv) >= 3 and sys.argv[1] == 'invariants':
+        cmd_invariants(sys.argv[2])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'dyads':
+        cmd_dyads(sys.argv[2], sys.argv[3], sys.argv[4])
     elif len(sys.argv) >= 6 and sys.argv[1] == 'jacobian-geometry':
         jacobian(*[[float(x) for x in arg.split(',')] for arg in sys.argv[2:5]], sys.argv[5])
     elif len(sys.argv) >= 5 and sys.argv[1] == 'jacobian':
