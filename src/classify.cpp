@@ -554,6 +554,68 @@ void bricard_trihedral_conditions(const Writing& w, Sink& c) {
         });
 }
 
+// Two Bennett loops sharing a link, the shared link removed and nothing fused
+// (6R): loop 1 (A B C D) = (a, alpha, b, beta) and loop 2 (A F E D) =
+// (c, gamma, b, beta) share the link DA = (b, beta) and its axes A and D; the
+// 6R A B C D E F keeps every joint, so each loop still turns about the shared
+// link on its own: two degrees of freedom (docs/families.md). Written as
+// links 1 (a, alpha), 2 (b, beta), 3 (a, alpha), 4 (c, gamma), 5 (b, beta),
+// 6 (c, gamma), every offset zero (joints 1 and 4 are A and D). Set bits: 0
+// loop 1's setup (sin alpha/a = -sin beta/b when set), 1 loop 2's.
+template <class Writing, class Sink>
+void bennett_pair_conditions(int set, const Writing& w, Sink& c) {
+  const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0;
+  add_length(w, c, "a1 - a3", 0, 2, -1.0);
+  add_twist(w, c, "alpha1 - alpha3", 0, 2, -1.0);
+  add_length(w, c, "a4 - a6", 3, 5, -1.0);
+  add_twist(w, c, "alpha4 - alpha6", 3, 5, -1.0);
+  add_length(w, c, "a2 - a5", 1, 4, -1.0);
+  add_twist(w, c, "alpha2 - alpha5", 1, 4, -1.0);
+  static constexpr const char* kOffsets[] = {"d1", "d2", "d3", "d4", "d5", "d6"};
+  for (int k = 0; k < 6; ++k) add_offset(w, c, kOffsets[k], k, -1, 0.0);
+  add_bennett_product(w, c, s1 > 0 ? "a1 sin(alpha2) - a2 sin(alpha1)" : "a1 sin(alpha2) + a2 sin(alpha1)", 0, 1, s1);
+  add_bennett_product(w, c, s2 > 0 ? "a4 sin(alpha5) - a5 sin(alpha4)" : "a4 sin(alpha5) + a5 sin(alpha4)", 3, 4, s2);
+}
+
+// Two Bennett dyads joined by two equal links (6R, docs/families.md; found
+// by the generic 6R search): links 1, 2 with Bennett's ratio kappa1 =
+// sin(alpha1)/a1 = sin(alpha2)/a2 and no offset between them (d2 = 0), links
+// 4, 5 likewise (kappa2, d5 = 0), the same (cos alpha + cos beta) / kappa for
+// both dyads, links 3 and 6 equal, and each dyad's two end joints the same
+// offset (d1 = d3, d4 = d6).
+template <class Writing, class Sink>
+void bennett_dyads_conditions(const Writing& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  add_length(w, c, "a3 - a6", 2, 5, -1.0);
+  add_twist(w, c, "alpha3 - alpha6", 2, 5, -1.0);
+  add_offset(w, c, "d2", 1, -1, 0.0);
+  add_offset(w, c, "d5", 4, -1, 0.0);
+  add_offset(w, c, "d1 - d3", 0, 2, -1.0);
+  add_offset(w, c, "d4 - d6", 3, 5, -1.0);
+  add_bennett_product(w, c, "a1 sin(alpha2) - a2 sin(alpha1)", 0, 1, 1.0);
+  add_bennett_product(w, c, "a4 sin(alpha5) - a5 sin(alpha4)", 3, 4, 1.0);
+  // (cos alpha1 + cos alpha2) / kappa1 = (cos alpha4 + cos alpha5) / kappa2,
+  // times sin(alpha1) sin(alpha4), over L.
+  auto value = [&] {
+    return (w.cos_alpha(0) + w.cos_alpha(1)) * w.a(0) * w.sin_alpha(3) -
+           (w.cos_alpha(3) + w.cos_alpha(4)) * w.a(3) * w.sin_alpha(0);
+  };
+  c.add([] { return "((cos(alpha1) + cos(alpha2)) a1 sin(alpha4) - (cos(alpha4) + cos(alpha5)) a4 sin(alpha1)) / L"; },
+        [&] { return value() / s.L; },
+        [&] {
+          GeometryVector g = -(value() / (s.L * s.L)) * s.dL;
+          const double c12 = w.cos_alpha(0) + w.cos_alpha(1), c45 = w.cos_alpha(3) + w.cos_alpha(4);
+          g[0] += c12 * w.sin_alpha(3) / s.L;
+          g[3] += -c45 * w.sin_alpha(0) / s.L;
+          g[n + 0] += (-w.sin_alpha(0) * w.a(0) * w.sin_alpha(3) - c45 * w.a(3) * w.cos_alpha(0)) / s.L;
+          g[n + 1] += -w.sin_alpha(1) * w.a(0) * w.sin_alpha(3) / s.L;
+          g[n + 3] += (c12 * w.a(0) * w.cos_alpha(3) + w.sin_alpha(3) * w.a(3) * w.sin_alpha(0)) / s.L;
+          g[n + 4] += w.sin_alpha(4) * w.a(3) * w.sin_alpha(0) / s.L;
+          return g;
+        });
+}
+
 // The 5R families built from two Bennett loops sharing a link: Goldberg's,
 // its symmetric case Myard's and its bent-link variant.
 constexpr bool goldberg_type(Family family) {
@@ -573,6 +635,8 @@ int condition_sets(Family family, int joints) {
     case Family::goldberg: return 8;
     case Family::myard: return 16;
     case Family::goldberg_bent: return 4;
+    case Family::bennett_pair: return 4;
+    case Family::bennett_dyads:
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
     case Family::bricard_trihedral: return 1;
@@ -587,7 +651,7 @@ int condition_sets(Family family, int joints) {
 // tabulates them only then).
 constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
-         family == Family::bricard_trihedral;
+         family == Family::bricard_trihedral || family == Family::bennett_dyads;
 }
 
 template <Family F, class Writing, class Sink>
@@ -609,6 +673,10 @@ void condition_set(int set, const Writing& w, Sink& c) {
     bricard_plane_conditions(w, c);
   } else if constexpr (F == Family::bricard_trihedral) {
     bricard_trihedral_conditions(w, c);
+  } else if constexpr (F == Family::bennett_pair) {
+    bennett_pair_conditions(set, w, c);
+  } else if constexpr (F == Family::bennett_dyads) {
+    bennett_dyads_conditions(w, c);
   } else if (set == 0) {
     adjacent_coaxial_conditions(w, c);
   } else {
@@ -703,6 +771,8 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
     case Family::bricard_line_symmetric: return best_over_writings<Family::bricard_line_symmetric>(g, by_norm);
     case Family::bricard_plane_symmetric: return best_over_writings<Family::bricard_plane_symmetric>(g, by_norm);
     case Family::bricard_trihedral: return best_over_writings<Family::bricard_trihedral>(g, by_norm);
+    case Family::bennett_pair: return best_over_writings<Family::bennett_pair>(g, by_norm);
+    case Family::bennett_dyads: return best_over_writings<Family::bennett_dyads>(g, by_norm);
     case Family::spherical:
     case Family::degenerate:
     case Family::unclassified: break;
@@ -733,7 +803,9 @@ std::vector<Family> special_families(int n) {
   switch (n) {
     case 4: return {Family::bennett};
     case 5: return {Family::myard, Family::goldberg, Family::goldberg_bent};
-    case 6: return {Family::bricard_trihedral, Family::bricard_plane_symmetric, Family::bricard_line_symmetric};
+    case 6:
+      return {Family::bricard_trihedral, Family::bricard_plane_symmetric, Family::bricard_line_symmetric,
+              Family::bennett_pair, Family::bennett_dyads};
     default: return {};
   }
 }
@@ -1027,6 +1099,29 @@ std::string special_detail(Family family, const LoopGeometry& g) {
                   psi_deg, same ? "" : "-", w.d[0] / length_scale(w), same ? "the same" : "different");
     return buffer;
   }
+  if (family == Family::bennett_pair) {
+    const Best best = best_over_writings<Family::bennett_pair>(g, false);
+    const LoopGeometry w = detail::apply(*best.writing, g);
+    char buffer[200];
+    std::snprintf(buffer, sizeof buffer,
+                  "two Bennett loops (links 1-3 and 4-6 of the best writing) sharing a removed link (%.4g L, "
+                  "%.4g deg) between joints 1 and 4, in %s setups; two degrees of freedom",
+                  w.a[1] / length_scale(w), w.alpha[1] * 180.0 / kPi,
+                  ((best.set & 1) != 0) == ((best.set & 2) != 0) ? "the same" : "different");
+    return buffer;
+  }
+  if (family == Family::bennett_dyads) {
+    const Best best = best_over_writings<Family::bennett_dyads>(g, false);
+    const LoopGeometry w = detail::apply(*best.writing, g);
+    const double L = length_scale(w);
+    char buffer[240];
+    std::snprintf(buffer, sizeof buffer,
+                  "Bennett dyads (links 1-2 and 4-5 of the best writing, (cos alpha + cos beta) / kappa = %.4g L) "
+                  "joined by two equal links (%.4g L, %.4g deg), offsets %.4g L and %.4g L at the dyads' ends",
+                  (std::cos(w.alpha[0]) + std::cos(w.alpha[1])) * w.a[0] / std::sin(w.alpha[0]) / L, w.a[2] / L,
+                  w.alpha[2] * 180.0 / kPi, w.d[0] / L, w.d[3] / L);
+    return buffer;
+  }
   if (family != Family::goldberg && family != Family::myard) {
     switch (family) {
       case Family::bricard_line_symmetric: return "line symmetry: link i and joint i as link and joint i + 3";
@@ -1274,7 +1369,7 @@ void require_joints(const char* where, Family family, const LoopGeometry& g) {
   int joints = 0;
   if (goldberg_type(family)) joints = 5;
   if (family == Family::bricard_line_symmetric || family == Family::bricard_plane_symmetric ||
-      family == Family::bricard_trihedral) {
+      family == Family::bricard_trihedral || family == Family::bennett_pair || family == Family::bennett_dyads) {
     joints = 6;
   }
   if (joints != 0 && g.joints() != joints) {
@@ -1299,6 +1394,8 @@ const char* to_string(Family family) {
     case Family::bricard_trihedral: return "bricard_trihedral";
     case Family::degenerate: return "degenerate";
     case Family::goldberg_bent: return "goldberg_bent";
+    case Family::bennett_pair: return "bennett_pair";
+    case Family::bennett_dyads: return "bennett_dyads";
   }
   return "unknown";
 }
@@ -1476,6 +1573,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
     case Family::bricard_line_symmetric: return distance_over_writings<Family::bricard_line_symmetric>(geometry, gradient);
     case Family::bricard_plane_symmetric: return distance_over_writings<Family::bricard_plane_symmetric>(geometry, gradient);
     case Family::bricard_trihedral: return distance_over_writings<Family::bricard_trihedral>(geometry, gradient);
+    case Family::bennett_pair: return distance_over_writings<Family::bennett_pair>(geometry, gradient);
+    case Family::bennett_dyads: return distance_over_writings<Family::bennett_dyads>(geometry, gradient);
     case Family::degenerate: throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified: break;
   }
@@ -1503,7 +1602,9 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::goldberg_bent:
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
-    case Family::bricard_trihedral: best = best_for(family, geometry, true); break;
+    case Family::bricard_trihedral:
+    case Family::bennett_pair:
+    case Family::bennett_dyads: best = best_for(family, geometry, true); break;
     case Family::degenerate:
       throw std::invalid_argument("family_distance_report: degenerate loops have no distance");
     case Family::unclassified: throw std::invalid_argument("family_distance_report: not a family");

@@ -174,6 +174,8 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::bricard_plane_symmetric:
       case Family::bricard_trihedral:
       case Family::goldberg_bent:
+      case Family::bennett_pair:
+      case Family::bennett_dyads:
       case Family::degenerate:
       case Family::unclassified: break;
     }

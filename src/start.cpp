@@ -17,7 +17,8 @@ Family family_from_name(const std::string& name) {
   // name and the joint count; family_distance checks the count again).
   for (Family f : {Family::bennett, Family::planar, Family::spherical, Family::trivial, Family::goldberg,
                    Family::myard, Family::goldberg_bent, Family::bricard_line_symmetric, Family::bricard_plane_symmetric,
-                   Family::bricard_trihedral}) {
+                   Family::bricard_trihedral, Family::bennett_pair,
+                   Family::bennett_dyads}) {
     if (name == to_string(f)) return f;
   }
   throw std::invalid_argument("unknown family \"" + name + "\" to deflate");

@@ -159,6 +159,15 @@ TEST(ObjectiveSettings, EveryDeflatableFamilyMeasuresItsDistance) {
                                                {0, 0.3, -0.5, 0, 0.5, -0.3})},
       {"bricard_trihedral", from_degrees({1.5, 1, 1.2, 0.8, 1, std::sqrt(1.5 * 1.5 + 1.2 * 1.2 + 1.0 - 1.0 - 0.8 * 0.8)},
                                          {90, -90, 90, -90, 90, -90}, {0, 0, 0, 0, 0, 0})},
+      // docs/families.md's example: Bennett loops (1, 30 deg, 2, 90 deg) and (sqrt 3, 60 deg, 2, 90 deg) sharing a link.
+      {"bennett_pair", from_degrees({1, 2, 1, s3, 2, s3}, {30, 90, 30, 60, 90, 60}, {0, 0, 0, 0, 0, 0})},
+      // docs/families.md's example of two Bennett dyads joined by equal links.
+      {"bennett_dyads",
+       from_degrees({0.29105928100629913, 0.3266234112565141, 1.1155627045785708, 2.0724378472248963, 2.112627142478364,
+                     1.1155627045785708},
+                    {-160.21822699133264, -157.67920498998612, -40.123422809296045, -112.41458911002134,
+                     -109.54549378379366, -40.123422809296045},
+                    {-0.29099955783023707, 0, -0.29099955783023707, 0.017028759702287233, 0, 0.017028759702287233})},
   };
   for (const Case& c : cases) {
     const int n = c.member.joints();

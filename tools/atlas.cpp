@@ -201,6 +201,8 @@ std::optional<int> known_family_dimension(const std::string& family, int joints)
   if (family == "bricard_line_symmetric" && joints == 6) return 9;
   if (family == "bricard_plane_symmetric" && joints == 6) return 8;
   if (family == "bricard_trihedral" && joints == 6) return 5;
+  if (family == "bennett_pair" && joints == 6) return 4;
+  if (family == "bennett_dyads" && joints == 6) return 9;
   return std::nullopt;
 }
 

@@ -408,7 +408,8 @@ int run_report(const ReportArguments& args) {
     bool known = false;
     for (Family f : {Family::bennett, Family::planar, Family::spherical, Family::trivial, Family::goldberg,
                      Family::myard, Family::bricard_line_symmetric, Family::bricard_plane_symmetric,
-                     Family::bricard_trihedral, Family::degenerate, Family::goldberg_bent, Family::unclassified}) {
+                     Family::bricard_trihedral, Family::degenerate, Family::goldberg_bent, Family::bennett_pair,
+                     Family::bennett_dyads, Family::unclassified}) {
       known = known || args.family == to_string(f);
       names += names.empty() ? "" : (f == Family::unclassified ? " or " : ", ");
       names += to_string(f);
@@ -497,7 +498,8 @@ Subcommand add_report_command(CLI::App& parent) {
   app->add_option("DB", args->database, "results database (SQLite) written by loopfarm run")->required();
   app->add_option("--family", args->family,
                   "only this family: bennett, planar, spherical, trivial, goldberg, myard, bricard_line_symmetric, "
-                  "bricard_plane_symmetric, bricard_trihedral, degenerate, goldberg_bent, unclassified");
+                  "bricard_plane_symmetric, bricard_trihedral, degenerate, goldberg_bent, bennett_pair, "
+                  "bennett_dyads, unclassified");
   app->add_option("--max-energy", args->max_energy, "only candidates with E_mean at most this")->type_name("E");
   app->add_option("--limit", args->limit, "at most this many candidates")->type_name("N")->capture_default_str();
   app->add_option("--run", args->run, "only what run ID found first (default: every run)")->type_name("ID");

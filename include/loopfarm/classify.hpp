@@ -22,6 +22,10 @@
 //              fused at any angle (Goldberg's collinear fusion is its
 //              special case): offsets d1 = +-d5 appear at the fused link
 //   bricard_line_symmetric, bricard_plane_symmetric, bricard_trihedral (n = 6)
+//   bennett_pair (n = 6) two Bennett loops sharing a link, the shared link
+//              removed and nothing fused: moves with two degrees of freedom
+//   bennett_dyads (n = 6) two Bennett dyads with equal (cos alpha + cos
+//              beta) / kappa joined by two equal links (docs/families.md)
 //   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
 //              or pi) and the (n-1)R loop with them merged is in a movable
 //              family (not trivial); or a joint stays locked over the motion
@@ -59,6 +63,10 @@ enum class Family {
   degenerate,
   // 5R: Goldberg's construction with the two links fused at an angle
   goldberg_bent,
+  // 6R: two Bennett loops sharing a link, the shared link removed (mobility 2)
+  bennett_pair,
+  // 6R: two Bennett dyads joined by two equal links (found by the generic search)
+  bennett_dyads,
 };
 const char* to_string(Family family);
 enum class BennettSetup { none, asymmetric, line_symmetric };
@@ -88,7 +96,8 @@ struct Classification {
   std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
-  // bricard_plane_symmetric, bricard_line_symmetric (the order they are tried).
+  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads (the order they
+  // are tried).
   std::vector<FamilyCheck> checks;
 };
 
