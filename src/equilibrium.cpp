@@ -580,9 +580,13 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     double step_curvature = 0.0;  // stepᵀ H step, for the merit's weight
     bool exact = true;
     double rho = 0.0;
+    // sigma's shrink factor s = 1 / (1 + sigma mu), set with the structured
+    // factorisation it belongs to and used by its step below (sigma does not
+    // change once that factorisation succeeds).
+    double shrink = 1.0;
     auto try_structured = [&](double regularization) {
-      const double s = 1.0 / (1.0 + sigma * mu);
-      return opt.structured_step && factor_structured(model, ws, mu * s, regularization, structured_factors);
+      shrink = 1.0 / (1.0 + sigma * mu);
+      return opt.structured_step && factor_structured(model, ws, mu * shrink, regularization, structured_factors);
     };
     bool structured = !curvature && try_structured(0.0);
     bool factored = structured;
@@ -629,7 +633,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
 
     if (structured) {
       ++summary.structured_steps;
-      const double s = 1.0 / (1.0 + sigma * mu);
+      const double s = shrink;
       ws.scratch = -ws.gradient;
       solve_structured(model, ws, structured_factors, ws.scratch, -s * c, ws.step, dual);
       dual = s * (dual + sigma * c) - sigma * c;
