@@ -5,7 +5,7 @@
 //
 //   build/release/bench/cycle_breakdown [--samples N] [--max-refinements D]
 //                                       [--max-iterations-per-step B] [--bennett]
-//                                       [--general-step]
+//                                       [--general-step] [--retry-failed]
 //
 // Prints one line per loop (E_mean, iterations, bisections, jumps, failures)
 // and the total iterations by sample status. --bennett drives the paper's
@@ -13,6 +13,8 @@
 // that instruction counts (valgrind --tool=callgrind) compare with the
 // generic loops'. --general-step turns EquilibriumOptions::structured_step
 // off (the same steps through the general factorisation), to compare.
+// --retry-failed turns CycleOptions::skip_failed_retries off (every bisection
+// depth retries the solve that failed at the depth above), to compare.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -59,6 +61,8 @@ int main(int argc, char** argv) {
       bennett = true;
     } else if (std::strcmp(argv[i], "--general-step") == 0) {
       solver.structured_step = false;
+    } else if (std::strcmp(argv[i], "--retry-failed") == 0) {
+      options.skip_failed_retries = false;
     } else {
       std::fprintf(stderr, "cycle_breakdown: unknown option %s\n", argv[i]);
       return 2;

@@ -131,35 +131,51 @@ class Stepper {
 
   // Steps from `from` to the input angle `target` (`before`, if given, is
   // the point before `from`, for the predictor).
-  Result step(const PathPoint& from, const PathPoint* before, double target, int depth) const {
+  //
+  // `beyond_failure`: a solve at `target` from an earlier point of this
+  // interval failed, and the first half of the interval was then reached in
+  // one step, so what made it fail (a fold of the path, as a rule) lies
+  // between `from` and `target`. The solve from `from` would fail too (on the
+  // bench's generic loops it did at every depth, after its full budget or
+  // converged to the far branch, too far to accept): with
+  // CycleOptions::skip_failed_retries it is not tried, and the step bisects
+  // straight on or, at the finest depth, lands.
+  Result step(const PathPoint& from, const PathPoint* before, double target, int depth,
+              bool beyond_failure = false) const {
     Result r;
     if (before != nullptr && before->theta == from.theta) before = nullptr;
     const double h = target - from.theta;
     const bool can_refine = depth < options_.max_refinements;
+    const bool known_failure = options_.skip_failed_retries && beyond_failure;
     const bool predicted = options_.predictor && (from.tangent != nullptr || before != nullptr);
     // Step control from the path's own shape: bisect before solving where
     // the tangent says the passive angles would move too far, or where the
     // cubic prediction leaves the tangent line by more than kMaxBend of that
     // (the path bends within the step: the prediction is not to be trusted).
-    bool too_long = can_refine && from.tangent != nullptr &&
-                    std::abs(h) * passive_rate(model_, *from.tangent) > options_.max_passive_step;
+    bool too_long = can_refine && (known_failure || (from.tangent != nullptr && std::abs(h) * passive_rate(model_, *from.tangent) >
+                                                                                    options_.max_passive_step));
     EquilibriumState guess;
-    if (!too_long && predicted) {
+    if (!too_long && !known_failure && predicted) {
       const double bend = predict(from, before, h, guess);
       too_long = can_refine && bend > kMaxBend * options_.max_passive_step;
     } else if (!too_long) {
       guess = *from.state;
     }
+    bool failed_here = false;  // a solve at `target` from `from` was tried and rejected
     if (!too_long) {
       // A warm-started solve that needs many iterations has lost the branch:
       // bisecting is cheaper than letting it wander.
-      const int budget = options_.max_iterations_per_step;
-      r.solve = solve_equilibrium(model_, ws_, target, guess, budget);
-      r.iterations += r.solve.iterations;
-      if (acceptable(r.solve, *from.state)) {
-        r.status = SampleStatus::converged;
-        return r;
+      if (known_failure) {
+        r.solve.status = SolveStatus::max_iterations;  // as the skipped solve would end
+      } else {
+        r.solve = solve_equilibrium(model_, ws_, target, guess, options_.max_iterations_per_step);
+        r.iterations += r.solve.iterations;
+        if (acceptable(r.solve, *from.state)) {
+          r.status = SampleStatus::converged;
+          return r;
+        }
       }
+      failed_here = true;
       // A step that fails from its prediction is bisected, not retried from
       // `from`: with the tangent predictor such a retry never succeeded on
       // the bench's generic loops (18 tries, 316 iterations, none accepted).
@@ -199,7 +215,8 @@ class Stepper {
     // Across a jump the point before lies on another branch: predict from
     // the landing point's own tangent only.
     const PathPoint* behind = half.status == SampleStatus::branch_jump ? nullptr : &from;
-    Result rest = step(midpoint, behind, target, depth + 1);
+    Result rest = step(midpoint, behind, target, depth + 1,
+                       (failed_here || beyond_failure) && half.status == SampleStatus::converged);
     rest.iterations += r.iterations;
     rest.refinements += r.refinements;
     if (rest.status == SampleStatus::converged) rest.status = SampleStatus::refined;

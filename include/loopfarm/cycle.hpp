@@ -35,6 +35,12 @@ struct CycleOptions {
   // alone after a jump, the secant where no tangent is known. Off: from the
   // last sample itself (and no bend control), for comparison.
   bool predictor = true;
+  // Where a step's solve failed and the first half of its interval was then
+  // reached in one step, the failure lies in the second half: the solve at
+  // the step's end is not tried again from the midpoint, which bisects
+  // straight on (down to the finest depth, where it is tried as always).
+  // Off: every depth retries it, for comparison.
+  bool skip_failed_retries = true;
 
   bool full_turn() const;
   // Throws std::invalid_argument naming the first invalid option.
