@@ -1366,12 +1366,8 @@ double spherical_distance(const LoopGeometry& g, GeometryVector* gradient) {
 
 // The 5R and 6R families' distances need their joint count.
 void require_joints(const char* where, Family family, const LoopGeometry& g) {
-  int joints = 0;
-  if (goldberg_type(family)) joints = 5;
-  if (family == Family::bricard_line_symmetric || family == Family::bricard_plane_symmetric ||
-      family == Family::bricard_trihedral || family == Family::bennett_pair || family == Family::bennett_dyads) {
-    joints = 6;
-  }
+  // Bennett (n = 4) is checked by the callers, with their own messages.
+  const int joints = family == Family::bennett ? 0 : family_joints(family);
   if (joints != 0 && g.joints() != joints) {
     throw std::invalid_argument(std::string(where) + ": " + to_string(family) + " loops have " +
                                 std::to_string(joints) + " joints, not " + std::to_string(g.joints()));
@@ -1398,6 +1394,57 @@ const char* to_string(Family family) {
     case Family::bennett_dyads: return "bennett_dyads";
   }
   return "unknown";
+}
+
+std::optional<Family> family_from_string(std::string_view name) {
+  for (Family f : kAllFamilies) {
+    if (name == to_string(f)) return f;
+  }
+  return std::nullopt;
+}
+
+int family_joints(Family family) {
+  switch (family) {
+    case Family::bennett: return 4;
+    case Family::goldberg:
+    case Family::myard:
+    case Family::goldberg_bent: return 5;
+    case Family::bricard_line_symmetric:
+    case Family::bricard_plane_symmetric:
+    case Family::bricard_trihedral:
+    case Family::bennett_pair:
+    case Family::bennett_dyads: return 6;
+    case Family::planar:
+    case Family::spherical:
+    case Family::trivial:
+    case Family::degenerate:
+    case Family::unclassified: return 0;
+  }
+  return 0;
+}
+
+bool has_family_distance(Family family) { return family != Family::degenerate && family != Family::unclassified; }
+
+std::optional<int> family_dimension(Family family, int joints) {
+  const int needs = family_joints(family);
+  if (needs != 0 && joints != needs) return std::nullopt;
+  switch (family) {
+    case Family::bennett: return 3;
+    case Family::planar: return 2 * joints - 1;  // n lengths, n - 1 independent offsets
+    case Family::spherical: return joints;       // n twists
+    case Family::goldberg: return 4;
+    case Family::myard: return 2;
+    case Family::goldberg_bent: return 5;
+    case Family::bricard_line_symmetric: return 9;
+    case Family::bricard_plane_symmetric: return 8;
+    case Family::bricard_trihedral: return 5;
+    case Family::bennett_pair: return 4;
+    case Family::bennett_dyads: return 9;
+    case Family::trivial:  // a rigid rotation: no dimension of its own
+    case Family::degenerate:
+    case Family::unclassified: return std::nullopt;
+  }
+  return std::nullopt;
 }
 
 const char* to_string(BennettSetup setup) {

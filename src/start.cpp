@@ -15,13 +15,11 @@ namespace {
 Family family_from_name(const std::string& name) {
   // Every family family_distance measures (the job parser has checked the
   // name and the joint count; family_distance checks the count again).
-  for (Family f : {Family::bennett, Family::planar, Family::spherical, Family::trivial, Family::goldberg,
-                   Family::myard, Family::goldberg_bent, Family::bricard_line_symmetric, Family::bricard_plane_symmetric,
-                   Family::bricard_trihedral, Family::bennett_pair,
-                   Family::bennett_dyads}) {
-    if (name == to_string(f)) return f;
+  const std::optional<Family> family = family_from_string(name);
+  if (!family || !has_family_distance(*family)) {
+    throw std::invalid_argument("unknown family \"" + name + "\" to deflate");
   }
-  throw std::invalid_argument("unknown family \"" + name + "\" to deflate");
+  return *family;
 }
 
 }  // namespace

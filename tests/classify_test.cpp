@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -30,6 +31,35 @@ LoopGeometry rewritten(const LoopGeometry& g, int shift, bool reverse, unsigned 
 }
 
 const std::vector<double> kMoving(4, kTwoPi);  // every joint turns
+
+// kAllFamilies is the enum, entry for entry, and nothing after it; names
+// parse back; family_joints and has_family_distance say what family_distance
+// itself accepts and refuses.
+TEST(Families, TableListsEveryFamilyAndAgreesWithFamilyDistance) {
+  const int count = static_cast<int>(std::size(kAllFamilies));
+  for (int i = 0; i < count; ++i) EXPECT_EQ(static_cast<int>(kAllFamilies[i]), i);
+  EXPECT_STREQ(to_string(static_cast<Family>(count)), "unknown");  // a new family is missing from the table
+  for (Family f : kAllFamilies) {
+    ASSERT_TRUE(family_from_string(to_string(f)).has_value()) << to_string(f);
+    EXPECT_EQ(*family_from_string(to_string(f)), f);
+    const int joints = family_joints(f);
+    for (int n = 4; n <= 6; ++n) {
+      const LoopGeometry g = random_loop(n, 3);
+      const bool applies = has_family_distance(f) && (joints == 0 || joints == n);
+      if (applies) {
+        EXPECT_GE(family_distance(f, g), 0.0) << to_string(f) << " n = " << n;
+      } else {
+        EXPECT_THROW(family_distance(f, g), std::invalid_argument) << to_string(f) << " n = " << n;
+      }
+      EXPECT_EQ(family_dimension(f, n).has_value(), applies && f != Family::trivial) << to_string(f) << " n = " << n;
+    }
+  }
+  EXPECT_FALSE(family_from_string("conic").has_value());
+  EXPECT_FALSE(family_from_string("").has_value());
+  EXPECT_EQ(family_dimension(Family::planar, 5), 9);
+  EXPECT_EQ(family_dimension(Family::bennett, 4), 3);
+  EXPECT_FALSE(family_dimension(Family::bennett, 5).has_value());
+}
 
 TEST(Classify, BennettLoopsInBothSetupsAndAnyWriting) {
   for (double a1 : {1.0, 2.0, 3.5}) {

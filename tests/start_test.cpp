@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "loopfarm/classify.hpp"
 #include "loopfarm/job.hpp"
 #include "loopfarm/sample_loops.hpp"
 #include "loopfarm/start.hpp"
@@ -182,6 +183,24 @@ TEST(ObjectiveSettings, EveryDeflatableFamilyMeasuresItsDistance) {
     const double generic = settings.deflation[0].distance(random_loop(n, 11), nullptr);
     EXPECT_GT(generic, 1e-3) << c.family;
     EXPECT_GT(settings.deflation[1].distance(c.member, nullptr), 1e-3) << c.family << ": planar";
+  }
+}
+
+// The job parser's own list of deflatable names (it stands alone for the
+// fuzzers) against classify's: a family is accepted in [steering] deflate,
+// for a loop of its joint count, exactly where family_distance measures it.
+TEST(ObjectiveSettings, DeflatableNamesAreTheFamiliesWithADistance) {
+  for (Family f : kAllFamilies) {
+    const int n = family_joints(f) != 0 ? family_joints(f) : 5;
+    const std::string text =
+        "[loop]\njoints = " + std::to_string(n) + "\n[steering]\ndeflate = [\"" + to_string(f) + "\"]\n";
+    if (has_family_distance(f)) {
+      const ObjectiveSettings settings = objective_settings(parse_job(text, "deflate.toml"));
+      ASSERT_EQ(settings.deflation.size(), 1u) << to_string(f);
+      EXPECT_EQ(settings.deflation[0].family, to_string(f));
+    } else {
+      EXPECT_ANY_THROW(parse_job(text, "deflate.toml")) << to_string(f);
+    }
   }
 }
 

@@ -14,6 +14,7 @@
 
 #include "cli_support.hpp"
 #include "loopfarm/assembly.hpp"
+#include "loopfarm/classify.hpp"
 #include "loopfarm/cycle.hpp"
 #include "loopfarm/equilibrium.hpp"
 #include "loopfarm/loop.hpp"
@@ -190,20 +191,8 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
 }  // namespace
 
 std::optional<int> known_family_dimension(const std::string& family, int joints) {
-  // docs/families.md and docs/classification.md: free real parameters of the
-  // family including the scale.
-  if (family == "bennett" && joints == 4) return 3;
-  if (family == "planar") return 2 * joints - 1;  // n lengths, n - 1 independent offsets
-  if (family == "spherical") return joints;       // n twists
-  if (family == "goldberg" && joints == 5) return 4;
-  if (family == "myard" && joints == 5) return 2;
-  if (family == "goldberg_bent" && joints == 5) return 5;
-  if (family == "bricard_line_symmetric" && joints == 6) return 9;
-  if (family == "bricard_plane_symmetric" && joints == 6) return 8;
-  if (family == "bricard_trihedral" && joints == 6) return 5;
-  if (family == "bennett_pair" && joints == 6) return 4;
-  if (family == "bennett_dyads" && joints == 6) return 9;
-  return std::nullopt;
+  const std::optional<Family> f = family_from_string(family);
+  return f ? family_dimension(*f, joints) : std::nullopt;
 }
 
 std::string atlas_stem(const std::string& family, int joints) {

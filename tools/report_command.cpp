@@ -32,6 +32,14 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+// "bennett, planar, ..., bennett_dyads": every family, for --family's help
+// and its error message.
+std::string family_names() {
+  std::string names;
+  for (Family f : kAllFamilies) names += (names.empty() ? "" : ", ") + std::string(to_string(f));
+  return names;
+}
+
 struct ReportArguments {
   std::string database;
   std::string family;
@@ -404,17 +412,9 @@ int run_report(const ReportArguments& args) {
   if (!args.run.empty()) (void)parse_integer(args.run, "--run");
   if (!args.family.empty()) {
     // Every family a classification can store (docs/families.md for n = 5, 6).
-    std::string names;
-    bool known = false;
-    for (Family f : {Family::bennett, Family::planar, Family::spherical, Family::trivial, Family::goldberg,
-                     Family::myard, Family::bricard_line_symmetric, Family::bricard_plane_symmetric,
-                     Family::bricard_trihedral, Family::degenerate, Family::goldberg_bent, Family::bennett_pair,
-                     Family::bennett_dyads, Family::unclassified}) {
-      known = known || args.family == to_string(f);
-      names += names.empty() ? "" : (f == Family::unclassified ? " or " : ", ");
-      names += to_string(f);
+    if (!family_from_string(args.family)) {
+      throw UsageError("--family", "got " + quote_text(args.family) + "; expected one of " + family_names());
     }
-    if (!known) throw UsageError("--family", "got " + quote_text(args.family) + "; expected " + names);
   }
   std::filesystem::path gnuplot;
   if (!args.plot.empty()) {
@@ -496,10 +496,7 @@ Subcommand add_report_command(CLI::App& parent) {
       "Exit codes: 0 done, 1 failure (gnuplot), 2 bad input (options, a file that is not a loopfarm database or\n"
       "is damaged: checked with PRAGMA quick_check, about 2 s per million starts; the file is never changed).\n");
   app->add_option("DB", args->database, "results database (SQLite) written by loopfarm run")->required();
-  app->add_option("--family", args->family,
-                  "only this family: bennett, planar, spherical, trivial, goldberg, myard, bricard_line_symmetric, "
-                  "bricard_plane_symmetric, bricard_trihedral, degenerate, goldberg_bent, bennett_pair, "
-                  "bennett_dyads, unclassified");
+  app->add_option("--family", args->family, "only this family: " + family_names());
   app->add_option("--max-energy", args->max_energy, "only candidates with E_mean at most this")->type_name("E");
   app->add_option("--limit", args->limit, "at most this many candidates")->type_name("N")->capture_default_str();
   app->add_option("--run", args->run, "only what run ID found first (default: every run)")->type_name("ID");

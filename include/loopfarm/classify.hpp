@@ -35,8 +35,10 @@
 // docs/classification.md has the details and the tolerances.
 #pragma once
 
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "loopfarm/loop.hpp"
@@ -69,6 +71,32 @@ enum class Family {
   bennett_dyads,
 };
 const char* to_string(Family family);
+
+// Every family, in the enum's order: the one list for loops over families
+// and lists of their names (a --family option and its message). A family
+// added to the enum is added here (classify_test fails until it is).
+inline constexpr Family kAllFamilies[] = {
+    Family::bennett,          Family::planar,
+    Family::spherical,        Family::trivial,
+    Family::unclassified,     Family::goldberg,
+    Family::myard,            Family::bricard_line_symmetric,
+    Family::bricard_plane_symmetric, Family::bricard_trihedral,
+    Family::degenerate,       Family::goldberg_bent,
+    Family::bennett_pair,     Family::bennett_dyads,
+};
+// The family whose to_string is `name`, or none.
+std::optional<Family> family_from_string(std::string_view name);
+// The joint count the family's conditions are written for; 0 for any
+// (planar, spherical, trivial, unclassified) and for degenerate (n = 5, 6).
+int family_joints(Family family);
+// Whether family_distance measures it: every family but degenerate and
+// unclassified.
+bool has_family_distance(Family family);
+// The family's dimension for `joints` joints: its free real parameters,
+// the scale included (docs/families.md, docs/classification.md); none for a
+// joint count it does not have, for degenerate and for unclassified.
+std::optional<int> family_dimension(Family family, int joints);
+
 enum class BennettSetup { none, asymmetric, line_symmetric };
 const char* to_string(BennettSetup setup);
 
