@@ -971,7 +971,7 @@ PosedLoop locked_loop(const PosedLoop& loop, int k) {
 // a 4R), never below 4 joints (a 4R with a joint locked is a 3R, which
 // cannot move); for n >= 5.
 GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const std::vector<int>& frozen,
-                        std::span<const double> travel, double tolerance, FamilyCheck& check) {
+                        std::span<const double> travel, double tolerance, double frozen_travel, FamilyCheck& check) {
   const int n = g.joints();
   PosedLoop whole{g, pose, {}};
   for (int j = 0; j < n; ++j) whole.original.push_back(j);
@@ -996,8 +996,14 @@ GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const st
       most = std::max(most, travel[static_cast<size_t>(k)]);
     }
     const std::string remaining = std::to_string(loop.g.joints()) + "R";
-    char buffer[64];
-    std::snprintf(buffer, sizeof buffer, " locked (travel %.2g rad); ", most);
+    char buffer[96];
+    // A joint that rocks by more than frozen_travel (rocking_travel) is a
+    // near-miss's: said so.
+    if (most > frozen_travel) {
+      std::snprintf(buffer, sizeof buffer, " nearly locked (rocks %.2g rad, above frozen_travel); ", most);
+    } else {
+      std::snprintf(buffer, sizeof buffer, " locked (travel %.2g rad); ", most);
+    }
     out.detail = (locked.size() > 1 ? "joints " : "joint ") + joints + buffer + "locked " + remaining + ": " +
                  fit.detail;
     check.conditions = {{(locked.size() > 1 ? "largest travel of joints " : "joint ") + joints + " [rad]", most},
@@ -1451,11 +1457,15 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   trivial.conditions.push_back({"axes " + std::to_string(pair.i + 1) + " and " + std::to_string(pair.j + 1) +
                                     " coincide (sin angle, distance / L)",
                                 pair.residual});
-  std::vector<int> frozen;
+  std::vector<int> frozen, lockable;
   double least_travel = kInf;
+  // 5R: a joint that only rocks (rocking_travel) may be locked too, for the
+  // locked-joint rule only (a near-miss of a locked-joint loop, ClassifyOptions).
+  const double lockable_travel = n == 5 ? std::max(options.frozen_travel, options.rocking_travel) : options.frozen_travel;
   for (size_t k = 0; k < joint_travel.size(); ++k) {
     least_travel = std::min(least_travel, joint_travel[k]);
     if (joint_travel[k] <= options.frozen_travel) frozen.push_back(static_cast<int>(k));
+    if (joint_travel[k] <= lockable_travel) lockable.push_back(static_cast<int>(k));
   }
   trivial.conditions.push_back({"least joint travel [rad]", least_travel});
   // A frozen joint passes when its travel is below frozen_travel; expressed
@@ -1472,10 +1482,11 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
     // A joint locked over the motion (no coincident axes: that is trivial):
     // the loop moves as the (n-1)R left by locking it, a degenerate loop too.
     // The degenerate check keeps the better of the two.
-    if (has_frozen && !(trivial.residual <= options.tolerance)) {
+    if (!lockable.empty() && !(trivial.residual <= options.tolerance)) {
       FamilyCheck locked_check;
       locked_check.family = Family::degenerate;
-      locked = locked_fit(geometry, pose, frozen, joint_travel, options.tolerance, locked_check);
+      locked = locked_fit(geometry, pose, lockable, joint_travel, options.tolerance, options.frozen_travel,
+                          locked_check);
       if (locked.residual < check.residual) check = locked_check;
     }
     out.checks.push_back(check);
