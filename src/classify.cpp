@@ -980,13 +980,52 @@ GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const st
   if (frozen.size() > 1 && n - static_cast<int>(frozen.size()) >= 4) choices.push_back(frozen);
   GeometricFit out;
   out.family = Family::degenerate;
-  for (const std::vector<int>& locked : choices) {
+  auto lock = [&](const std::vector<int>& locked, const JointVector& angles) {
     PosedLoop loop = whole;
+    loop.theta = angles;
     for (int original : locked) {
       const auto at = std::find(loop.original.begin(), loop.original.end(), original);
       loop = locked_loop(loop, static_cast<int>(at - loop.original.begin()));
     }
-    const GeometricFit fit = geometric_fit(loop.g, tolerance);
+    return loop;
+  };
+  for (const std::vector<int>& locked : choices) {
+    PosedLoop loop = lock(locked, pose);
+    GeometricFit fit = geometric_fit(loop.g, tolerance);
+    // A joint that rocks (travel above frozen_travel) has no one angle: over
+    // the motion it stays within its travel of the pose's angle, so it is
+    // locked at the best angle of that window (golden-section search on the
+    // locked loop's residual; the pose may sit where the joint rocks most).
+    const int k = locked.front();
+    const double window = travel[static_cast<size_t>(k)];
+    if (locked.size() == 1 && window > frozen_travel) {
+      const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+      double lo = pose[k] - window, hi = pose[k] + window;
+      auto residual_at = [&](double angle) {
+        JointVector angles = pose;
+        angles[k] = angle;
+        return geometric_fit(lock(locked, angles).g, tolerance).residual;
+      };
+      double x1 = hi - golden * (hi - lo), x2 = lo + golden * (hi - lo);
+      double f1 = residual_at(x1), f2 = residual_at(x2);
+      for (int it = 0; it < 60 && hi - lo > 1e-15; ++it) {
+        if (f1 <= f2) {
+          hi = x2, x2 = x1, f2 = f1;
+          x1 = hi - golden * (hi - lo), f1 = residual_at(x1);
+        } else {
+          lo = x1, x1 = x2, f1 = f2;
+          x2 = lo + golden * (hi - lo), f2 = residual_at(x2);
+        }
+      }
+      JointVector angles = pose;
+      angles[k] = f1 <= f2 ? x1 : x2;
+      const PosedLoop best = lock(locked, angles);
+      const GeometricFit best_fit = geometric_fit(best.g, tolerance);
+      if (best_fit.residual < fit.residual) {
+        loop = best;
+        fit = best_fit;
+      }
+    }
     if (!(fit.residual < out.residual)) continue;
     out.residual = fit.residual;
     std::string joints, travels;

@@ -654,37 +654,56 @@ TEST(Families, AJointThatRocksNearALockedBennettLoopIsLockedOnlyWithinTolerance)
       ClassifyOptions strict;
       strict.rocking_travel = strict.frozen_travel;
       EXPECT_EQ(classify(m.g, m.theta, travel, strict).family, Family::unclassified) << tag << " " << rock;
+      // The pose taken where the joint has rocked away by half its travel: the
+      // 4R locked at the pose's angle has offsets of that order, but the joint's
+      // angle over the motion lies within its travel of the pose's, and locked
+      // at the best angle of that window it is the Bennett loop again. Two
+      // travels away the window misses the locked angle: not degenerate.
+      JointVector off = m.theta;
+      off[k + 1] += 0.5 * rock;
+      const Classification shifted = classify(m.g, off, travel);
+      EXPECT_EQ(shifted.family, Family::degenerate) << tag << " " << rock << ": " << shifted.detail;
+      EXPECT_LT(shifted.residual, 1e-10) << tag << " " << rock;
+      off[k + 1] = m.theta[k + 1] + 2.0 * rock;
+      EXPECT_NE(classify(m.g, off, travel).family, Family::degenerate) << tag << " " << rock;
     }
     // A joint that turns more than rocking_travel moves: not locked.
     travel[static_cast<size_t>(k + 1)] = 2.0 * defaults.rocking_travel;
     EXPECT_EQ(classify(m.g, m.theta, travel).family, Family::unclassified) << tag;
     // Near-misses: a Bennett link of the 4R off by eps L, the joint rocking by
-    // 1e-4 rad. Not degenerate at the tolerance; and the locked 4R's residual
-    // that classify reads off the 5R's axes (link_between) equals the Bennett
-    // residual of the test's own 4R perturbed alike, a second method.
+    // 1e-4 rad. Not degenerate at the tolerance. With the joint frozen (no
+    // window), the locked 4R's residual that classify reads off the 5R's axes
+    // (link_between) equals the Bennett residual of the test's own 4R
+    // perturbed alike, a second method; rocking, the window's best angle can
+    // only lower it.
     const int link5 = k == 0 ? 2 : 0;  // a 5R link the extra joint did not split
     const int link4 = k == 0 ? 1 : 0;  // the same link in the 4R
-    travel[static_cast<size_t>(k + 1)] = 1e-4;
+    auto locked_residual = [](const Classification& c) {
+      for (const FamilyCheck& check : c.checks) {
+        if (check.family == Family::degenerate && check.conditions.size() == 2) return check.conditions[1].residual;
+      }
+      return -1.0;
+    };
     for (double eps : {1e-7, 1e-6, 1e-5}) {
       Posed near = m;
       near.g.a[link5] += eps * length_scale(m.g);
       Posed near4 = bennett4;
       near4.g.a[link4] += eps * length_scale(m.g);
-      const Classification c = classify(near.g, near.theta, travel);
-      EXPECT_NE(c.family, Family::degenerate) << tag << " " << eps << ": " << c.detail;
-      double locked_residual = -1.0;
-      for (const FamilyCheck& check : c.checks) {
-        if (check.family == Family::degenerate && check.conditions.size() == 2) {
-          locked_residual = check.conditions[1].residual;
-        }
-      }
       const double own = classify(near4.g, near4.theta, std::span<const double>()).checks.front().residual;
       EXPECT_GT(own, 0.1 * eps) << tag;
-      EXPECT_NEAR(locked_residual, own, 1e-6 * own) << tag << " " << eps;
+      travel[static_cast<size_t>(k + 1)] = 0.5 * defaults.frozen_travel;
+      const Classification frozen = classify(near.g, near.theta, travel);
+      EXPECT_NE(frozen.family, Family::degenerate) << tag << " " << eps << ": " << frozen.detail;
+      EXPECT_NEAR(locked_residual(frozen), own, 1e-6 * own) << tag << " " << eps;
+      travel[static_cast<size_t>(k + 1)] = 1e-4;
+      const Classification c = classify(near.g, near.theta, travel);
+      EXPECT_NE(c.family, Family::degenerate) << tag << " " << eps << ": " << c.detail;
+      EXPECT_LE(locked_residual(c), own * (1.0 + 1e-6)) << tag << " " << eps;
+      EXPECT_GT(locked_residual(c), defaults.tolerance) << tag << " " << eps;
       // On a loose pass whose tolerance covers it (analyse_candidate's second
       // pass), it is labelled with that nearest description.
       ClassifyOptions loose;
-      loose.tolerance = 2.0 * own;
+      loose.tolerance = 2.0 * own;  // at least the rocking residual
       EXPECT_EQ(classify(near.g, near.theta, travel, loose).family, Family::degenerate) << tag << " " << eps;
     }
   }
