@@ -24,6 +24,7 @@
 #include "loopfarm/job.hpp"
 #include "loopfarm/objective.hpp"
 #include "loopfarm/classify.hpp"
+#include "loopfarm/local_dimension.hpp"
 using namespace loopfarm;
 Job job;
 int K; double S;
@@ -77,6 +78,24 @@ int main(int argc, char** argv) {
   { Eigen::VectorXd dx = x0 - xL; std::printf("x (search labels, a1..a5 then alpha1..alpha5 [rad]):"); for (int j = 0; j < x.size(); ++j) std::printf(" %.5f", x0[j]); std::printf("\ndx/|dx|:"); for (int j = 0; j < x.size(); ++j) std::printf(" %+.3f", dx[j] / dx.norm()); std::printf("\n"); }
   ObjectiveSettings plain = ObjectiveSettings::from_loop(job.loop);
   plain.measure = CycleMeasure::mean;
+  // The singular values of the cycle's deformation Jacobian (local_dimension's
+  // input, lengths times L) at the search's point and at its projection.
+  std::vector<bool> is_length;
+  for (int index : job.space.free_indices()) {
+    const int kind = index / job.space.joints;
+    is_length.push_back(kind == static_cast<int>(ParameterKind::a) || kind == static_cast<int>(ParameterKind::d));
+  }
+  for (const Eigen::VectorXd* at : {&x0, &xL}) {
+    CycleObjective obj(job.space, plain, s.final_angles);
+    Eigen::VectorXd r;
+    Eigen::MatrixXd J;
+    obj.evaluate_residuals(*at, r, &J);
+    const LocalDimension ld =
+        local_dimension(dimensionless_columns(J, is_length, length_scale(job.space.geometry(*at))));
+    std::printf("%s: local dimension %d, singular values", at == &x0 ? "search's point" : "projection", ld.dimension);
+    for (int j = 0; j < ld.singular_values.size(); ++j) std::printf(" %.2g", ld.singular_values[j]);
+    std::printf("\n");
+  }
   std::printf("%8s %10s %10s %10s %10s %10s %8s %s\n", "t", "|dx|", "bennett", "E_mean", "worst_res", "travel_k", "verified", "family");
   if (argc > 3) {
     for (double t : {1.0, 10.0}) for (int steps : {720, 7200, 72000, 720000}) {
