@@ -971,7 +971,7 @@ PosedLoop locked_loop(const PosedLoop& loop, int k) {
 // a 4R), never below 4 joints (a 4R with a joint locked is a 3R, which
 // cannot move); for n >= 5.
 GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const std::vector<int>& frozen,
-                        std::span<const double> travel, double tolerance, FamilyCheck& check) {
+                        std::span<const double> travel, double tolerance, double frozen_travel, FamilyCheck& check) {
   const int n = g.joints();
   PosedLoop whole{g, pose, {}};
   for (int j = 0; j < n; ++j) whole.original.push_back(j);
@@ -980,13 +980,52 @@ GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const st
   if (frozen.size() > 1 && n - static_cast<int>(frozen.size()) >= 4) choices.push_back(frozen);
   GeometricFit out;
   out.family = Family::degenerate;
-  for (const std::vector<int>& locked : choices) {
+  auto lock = [&](const std::vector<int>& locked, const JointVector& angles) {
     PosedLoop loop = whole;
+    loop.theta = angles;
     for (int original : locked) {
       const auto at = std::find(loop.original.begin(), loop.original.end(), original);
       loop = locked_loop(loop, static_cast<int>(at - loop.original.begin()));
     }
-    const GeometricFit fit = geometric_fit(loop.g, tolerance);
+    return loop;
+  };
+  for (const std::vector<int>& locked : choices) {
+    PosedLoop loop = lock(locked, pose);
+    GeometricFit fit = geometric_fit(loop.g, tolerance);
+    // A joint that rocks (travel above frozen_travel) has no one angle: over
+    // the motion it stays within its travel of the pose's angle, so it is
+    // locked at the best angle of that window (golden-section search on the
+    // locked loop's residual; the pose may sit where the joint rocks most).
+    const int k = locked.front();
+    const double window = travel[static_cast<size_t>(k)];
+    if (locked.size() == 1 && window > frozen_travel) {
+      const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+      double lo = pose[k] - window, hi = pose[k] + window;
+      auto residual_at = [&](double angle) {
+        JointVector angles = pose;
+        angles[k] = angle;
+        return geometric_fit(lock(locked, angles).g, tolerance).residual;
+      };
+      double x1 = hi - golden * (hi - lo), x2 = lo + golden * (hi - lo);
+      double f1 = residual_at(x1), f2 = residual_at(x2);
+      for (int it = 0; it < 60 && hi - lo > 1e-15; ++it) {
+        if (f1 <= f2) {
+          hi = x2, x2 = x1, f2 = f1;
+          x1 = hi - golden * (hi - lo), f1 = residual_at(x1);
+        } else {
+          lo = x1, x1 = x2, f1 = f2;
+          x2 = lo + golden * (hi - lo), f2 = residual_at(x2);
+        }
+      }
+      JointVector angles = pose;
+      angles[k] = f1 <= f2 ? x1 : x2;
+      const PosedLoop best = lock(locked, angles);
+      const GeometricFit best_fit = geometric_fit(best.g, tolerance);
+      if (best_fit.residual < fit.residual) {
+        loop = best;
+        fit = best_fit;
+      }
+    }
     if (!(fit.residual < out.residual)) continue;
     out.residual = fit.residual;
     std::string joints, travels;
@@ -996,8 +1035,14 @@ GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const st
       most = std::max(most, travel[static_cast<size_t>(k)]);
     }
     const std::string remaining = std::to_string(loop.g.joints()) + "R";
-    char buffer[64];
-    std::snprintf(buffer, sizeof buffer, " locked (travel %.2g rad); ", most);
+    char buffer[96];
+    // A joint that rocks by more than frozen_travel (rocking_travel) is a
+    // near-miss's: said so.
+    if (most > frozen_travel) {
+      std::snprintf(buffer, sizeof buffer, " nearly locked (rocks %.2g rad, above frozen_travel); ", most);
+    } else {
+      std::snprintf(buffer, sizeof buffer, " locked (travel %.2g rad); ", most);
+    }
     out.detail = (locked.size() > 1 ? "joints " : "joint ") + joints + buffer + "locked " + remaining + ": " +
                  fit.detail;
     check.conditions = {{(locked.size() > 1 ? "largest travel of joints " : "joint ") + joints + " [rad]", most},
@@ -1498,11 +1543,15 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   trivial.conditions.push_back({"axes " + std::to_string(pair.i + 1) + " and " + std::to_string(pair.j + 1) +
                                     " coincide (sin angle, distance / L)",
                                 pair.residual});
-  std::vector<int> frozen;
+  std::vector<int> frozen, lockable;
   double least_travel = kInf;
+  // 5R: a joint that only rocks (rocking_travel) may be locked too, for the
+  // locked-joint rule only (a near-miss of a locked-joint loop, ClassifyOptions).
+  const double lockable_travel = n == 5 ? std::max(options.frozen_travel, options.rocking_travel) : options.frozen_travel;
   for (size_t k = 0; k < joint_travel.size(); ++k) {
     least_travel = std::min(least_travel, joint_travel[k]);
     if (joint_travel[k] <= options.frozen_travel) frozen.push_back(static_cast<int>(k));
+    if (joint_travel[k] <= lockable_travel) lockable.push_back(static_cast<int>(k));
   }
   trivial.conditions.push_back({"least joint travel [rad]", least_travel});
   // A frozen joint passes when its travel is below frozen_travel; expressed
@@ -1519,10 +1568,11 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
     // A joint locked over the motion (no coincident axes: that is trivial):
     // the loop moves as the (n-1)R left by locking it, a degenerate loop too.
     // The degenerate check keeps the better of the two.
-    if (has_frozen && !(trivial.residual <= options.tolerance)) {
+    if (!lockable.empty() && !(trivial.residual <= options.tolerance)) {
       FamilyCheck locked_check;
       locked_check.family = Family::degenerate;
-      locked = locked_fit(geometry, pose, frozen, joint_travel, options.tolerance, locked_check);
+      locked = locked_fit(geometry, pose, lockable, joint_travel, options.tolerance, options.frozen_travel,
+                          locked_check);
       if (locked.residual < check.residual) check = locked_check;
     }
     out.checks.push_back(check);

@@ -624,6 +624,91 @@ TEST(Families, ALockedJointOnABennettLoopIsADegenerate5R) {
   }
 }
 
+TEST(Families, AJointThatRocksNearALockedBennettLoopIsLockedOnlyWithinTolerance) {
+  // The searches' near-misses of a locked-joint Bennett loop close along the
+  // walk with the locked joint rocking by 1e-6 ... 1e-4 rad, above
+  // frozen_travel (docs/discovery-5r-6r.md, "The rocking joint"). Up to
+  // rocking_travel such a joint is locked for the rule, and the 4R left still
+  // decides: exact members pass, a Bennett link off by eps does not, and a
+  // joint that turns more than rocking_travel is never locked.
+  std::mt19937_64 rng(29);
+  const ClassifyOptions defaults;
+  for (int i = 0; i < 6; ++i) {
+    const int k = i % 4;
+    const Posed bennett4 = random_bennett_member(rng);
+    const Posed m = with_locked_joint(bennett4, k, rng);
+    const std::string tag = "rocking " + std::to_string(i);
+    // The rigid walk (independent of classify): the extra joint is frozen.
+    const VerificationSummary v = verify_motion(m.g, m.theta);
+    ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
+    ASSERT_LT(v.joint_travel[k + 1], 1e-9) << tag;
+    std::vector<double> travel(v.joint_travel.data(), v.joint_travel.data() + 5);
+    for (double rock : {3e-6, 1e-4, 0.9 * defaults.rocking_travel}) {
+      travel[static_cast<size_t>(k + 1)] = rock;
+      const Classification c = classify(m.g, m.theta, travel);
+      EXPECT_EQ(c.family, Family::degenerate) << tag << " " << rock << ": " << c.detail;
+      EXPECT_NE(c.detail.find("joint " + std::to_string(k + 2) + " nearly locked"), std::string::npos) << c.detail;
+      EXPECT_NE(c.detail.find("locked 4R: bennett"), std::string::npos) << c.detail;
+      EXPECT_LT(c.residual, 1e-10) << tag;
+      // Without the allowance (rocking_travel at frozen_travel) it is not locked.
+      ClassifyOptions strict;
+      strict.rocking_travel = strict.frozen_travel;
+      EXPECT_EQ(classify(m.g, m.theta, travel, strict).family, Family::unclassified) << tag << " " << rock;
+      // The pose taken where the joint has rocked away by half its travel: the
+      // 4R locked at the pose's angle has offsets of that order, but the joint's
+      // angle over the motion lies within its travel of the pose's, and locked
+      // at the best angle of that window it is the Bennett loop again. Two
+      // travels away the window misses the locked angle: not degenerate.
+      JointVector off = m.theta;
+      off[k + 1] += 0.5 * rock;
+      const Classification shifted = classify(m.g, off, travel);
+      EXPECT_EQ(shifted.family, Family::degenerate) << tag << " " << rock << ": " << shifted.detail;
+      EXPECT_LT(shifted.residual, 1e-10) << tag << " " << rock;
+      off[k + 1] = m.theta[k + 1] + 2.0 * rock;
+      EXPECT_NE(classify(m.g, off, travel).family, Family::degenerate) << tag << " " << rock;
+    }
+    // A joint that turns more than rocking_travel moves: not locked.
+    travel[static_cast<size_t>(k + 1)] = 2.0 * defaults.rocking_travel;
+    EXPECT_EQ(classify(m.g, m.theta, travel).family, Family::unclassified) << tag;
+    // Near-misses: a Bennett link of the 4R off by eps L, the joint rocking by
+    // 1e-4 rad. Not degenerate at the tolerance. With the joint frozen (no
+    // window), the locked 4R's residual that classify reads off the 5R's axes
+    // (link_between) equals the Bennett residual of the test's own 4R
+    // perturbed alike, a second method; rocking, the window's best angle can
+    // only lower it.
+    const int link5 = k == 0 ? 2 : 0;  // a 5R link the extra joint did not split
+    const int link4 = k == 0 ? 1 : 0;  // the same link in the 4R
+    auto locked_residual = [](const Classification& c) {
+      for (const FamilyCheck& check : c.checks) {
+        if (check.family == Family::degenerate && check.conditions.size() == 2) return check.conditions[1].residual;
+      }
+      return -1.0;
+    };
+    for (double eps : {1e-7, 1e-6, 1e-5}) {
+      Posed near = m;
+      near.g.a[link5] += eps * length_scale(m.g);
+      Posed near4 = bennett4;
+      near4.g.a[link4] += eps * length_scale(m.g);
+      const double own = classify(near4.g, near4.theta, std::span<const double>()).checks.front().residual;
+      EXPECT_GT(own, 0.1 * eps) << tag;
+      travel[static_cast<size_t>(k + 1)] = 0.5 * defaults.frozen_travel;
+      const Classification frozen = classify(near.g, near.theta, travel);
+      EXPECT_NE(frozen.family, Family::degenerate) << tag << " " << eps << ": " << frozen.detail;
+      EXPECT_NEAR(locked_residual(frozen), own, 1e-6 * own) << tag << " " << eps;
+      travel[static_cast<size_t>(k + 1)] = 1e-4;
+      const Classification c = classify(near.g, near.theta, travel);
+      EXPECT_NE(c.family, Family::degenerate) << tag << " " << eps << ": " << c.detail;
+      EXPECT_LE(locked_residual(c), own * (1.0 + 1e-6)) << tag << " " << eps;
+      EXPECT_GT(locked_residual(c), defaults.tolerance) << tag << " " << eps;
+      // On a loose pass whose tolerance covers it (analyse_candidate's second
+      // pass), it is labelled with that nearest description.
+      ClassifyOptions loose;
+      loose.tolerance = 2.0 * own;  // at least the rocking residual
+      EXPECT_EQ(classify(near.g, near.theta, travel, loose).family, Family::degenerate) << tag << " " << eps;
+    }
+  }
+}
+
 TEST(Families, GoldbergOnAnEquilateralBennettLoopMovesWithALockedJoint) {
   // docs/discovery-5r-6r.md: Goldberg's conditions with the second Bennett
   // loop equilateral, (c, gamma) = (b, beta): links (b, beta), (a, alpha),

@@ -115,6 +115,13 @@ struct FamilyCheck {
 struct ClassifyOptions {
   double tolerance = 1e-8;        // a family fits when its residual is at most this
   double frozen_travel = 1e-6;    // [rad] a joint turning less than this over the motion is frozen
+  // [rad] 5R only: a joint that rocks by more than frozen_travel but at most
+  // this may still be locked for the locked-joint rule (degenerate), where the
+  // 4R left must then fit to `tolerance` as for a frozen joint: a loop a
+  // distance eps off a locked-joint Bennett loop can close along the walk to
+  // order eps^2 with its locked joint rocking by order eps (up to 1e3 eps
+  // measured), docs/discovery-5r-6r.md, "The rocking joint". Not for trivial.
+  double rocking_travel = 1e-3;
 };
 
 struct Classification {
