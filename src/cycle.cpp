@@ -152,8 +152,9 @@ class Stepper {
     // the tangent says the passive angles would move too far, or where the
     // cubic prediction leaves the tangent line by more than kMaxBend of that
     // (the path bends within the step: the prediction is not to be trusted).
-    bool too_long = can_refine && (known_failure || (from.tangent != nullptr && std::abs(h) * passive_rate(model_, *from.tangent) >
-                                                                                    options_.max_passive_step));
+    const bool tangent_too_long =
+        from.tangent != nullptr && std::abs(h) * passive_rate(model_, *from.tangent) > options_.max_passive_step;
+    bool too_long = can_refine && (known_failure || tangent_too_long);
     EquilibriumState guess;
     if (!too_long && !known_failure && predicted) {
       const double bend = predict(from, before, h, guess);

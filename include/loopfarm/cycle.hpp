@@ -38,8 +38,9 @@ struct CycleOptions {
   // Where a step's solve failed and the first half of its interval was then
   // reached in one step, the failure lies in the second half: the solve at
   // the step's end is not tried again from the midpoint, which bisects
-  // straight on (down to the finest depth, where it is tried as always).
-  // Off: every depth retries it, for comparison.
+  // straight on, and at the finest depth goes to the landing (whose first
+  // solve is from the last point). Off: every depth retries it, for
+  // comparison.
   bool skip_failed_retries = true;
 
   bool full_turn() const;
