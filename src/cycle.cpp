@@ -156,11 +156,13 @@ class Stepper {
         from.tangent != nullptr && std::abs(h) * passive_rate(model_, *from.tangent) > options_.max_passive_step;
     bool too_long = can_refine && (known_failure || tangent_too_long);
     EquilibriumState guess;
-    if (!too_long && !known_failure && predicted) {
-      const double bend = predict(from, before, h, guess);
-      too_long = can_refine && bend > kMaxBend * options_.max_passive_step;
-    } else if (!too_long) {
-      guess = *from.state;
+    if (!too_long && !known_failure) {  // a solve will be tried: its start
+      if (predicted) {
+        const double bend = predict(from, before, h, guess);
+        too_long = can_refine && bend > kMaxBend * options_.max_passive_step;
+      } else {
+        guess = *from.state;
+      }
     }
     bool failed_here = false;  // a solve at `target` from `from` was tried and rejected
     if (!too_long) {
