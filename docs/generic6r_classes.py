@@ -177,22 +177,10 @@ def screws(a, al, d, th):
 
 
 def singular_values(S):
+    """Ascending singular values of S (rows of 6), from the eigenvalues of its Gram matrix."""
     n = len(S)
-    A = [[sum(S[i][k] * S[j][k] for k in range(6)) for j in range(n)] for i in range(n)]
-    for _ in range(100):  # Jacobi eigenvalues of the Gram matrix
-        if sum(A[i][j] ** 2 for i in range(n) for j in range(n) if i != j) < 1e-30:
-            break
-        for p in range(n):
-            for q in range(p + 1, n):
-                if abs(A[p][q]) < 1e-300:
-                    continue
-                t = 0.5 * math.atan2(2 * A[p][q], A[q][q] - A[p][p])
-                c, s = math.cos(t), math.sin(t)
-                for k in range(n):
-                    A[k][p], A[k][q] = c * A[k][p] - s * A[k][q], s * A[k][p] + c * A[k][q]
-                for k in range(n):
-                    A[p][k], A[q][k] = c * A[p][k] - s * A[q][k], s * A[p][k] + c * A[q][k]
-    return sorted(math.sqrt(max(0.0, A[i][i])) for i in range(n))
+    gram = [[sum(S[i][k] * S[j][k] for k in range(6)) for j in range(n)] for i in range(n)]
+    return [math.sqrt(max(0.0, e)) for e in sym_eig(gram)[0]]
 
 
 def axis_pair(S1, S2):
