@@ -5,11 +5,53 @@
 // instructions there), so the few operations the solver needs are written out,
 // column-oriented so that every inner loop runs down one contiguous column.
 // Matrices are column-major (Eigen's default). Private to src/.
+//
+// Each kernel is compiled once for every size the solver uses (the unknown
+// counts of every loop size and compliance, and the 6 x 6 Schur complement)
+// with the size and the leading dimension as constants, and once for any
+// size: with constant loop bounds the compiler unrolls and vectorises the
+// short inner loops that the general version runs with a loop counter. The
+// arithmetic, and its order, is the same in all versions, so their results
+// are identical to the bit (tests/small_dense_test.cpp).
 #pragma once
 
 #include <cmath>
+#include <type_traits>
+#include <utility>
 
 namespace loopfarm::dense {
+namespace detail {
+
+// The sizes with their own compiled kernels: 3n - 1 (paper compliance) and
+// 4n - 1 (full) unknowns for n = 4..8 joints, and 6 (the Schur complement).
+using SpecializedSizes = std::integer_sequence<int, 6, 11, 14, 15, 17, 19, 20, 23, 27, 31>;
+
+// Calls kernel(std::integral_constant<int, N>) where n and the leading
+// dimension are both one of the specialised sizes N, else
+// kernel(std::integral_constant<int, 0>) (size and stride at run time).
+template <class Kernel, int... Sizes>
+decltype(auto) with_size(int n, long stride, std::integer_sequence<int, Sizes...>, Kernel&& kernel) {
+  using Result = decltype(kernel(std::integral_constant<int, 0>{}));
+  if constexpr (std::is_void_v<Result>) {
+    const bool done = ((n == Sizes && stride == Sizes ? (kernel(std::integral_constant<int, Sizes>{}), true) : false) ||
+                       ...);
+    if (!done) kernel(std::integral_constant<int, 0>{});
+  } else {
+    Result result{};
+    const bool done =
+        ((n == Sizes && stride == Sizes ? (result = kernel(std::integral_constant<int, Sizes>{}), true) : false) ||
+         ...);
+    if (!done) result = kernel(std::integral_constant<int, 0>{});
+    return result;
+  }
+}
+
+template <class Kernel>
+decltype(auto) with_size(int n, long stride, Kernel&& kernel) {
+  return with_size(n, stride, SpecializedSizes{}, static_cast<Kernel&&>(kernel));
+}
+
+}  // namespace detail
 
 // Cholesky factorisation in place (right-looking): on success the strictly
 // lower triangle of `a` (n x n, only its lower triangle read) holds L with
@@ -19,70 +61,82 @@ namespace loopfarm::dense {
 // as a pivot is not positive (or not a number): the matrix is then not
 // positive definite, which is what the solver uses this test for.
 template <class Matrix>
-bool cholesky_in_place(Matrix& matrix, int n) {
-  double* __restrict a = matrix.data();
-  const long lda = matrix.outerStride();
-  for (int j = 0; j < n; ++j) {
-    double* __restrict column = a + j * lda;
-    const double pivot = column[j];
-    if (!(pivot > 0.0)) return false;
-    const double root = std::sqrt(pivot);
-    const double inverse = 1.0 / root;
-    column[j] = inverse;
-    for (int i = j + 1; i < n; ++i) column[i] *= inverse;
-    // Rank-one update of the trailing lower triangle.
-    for (int k = j + 1; k < n; ++k) {
-      double* __restrict target = a + k * lda;
-      const double factor = column[k];
-      for (int i = k; i < n; ++i) target[i] -= column[i] * factor;
+bool cholesky_in_place(Matrix& matrix, int size) {
+  return detail::with_size(size, matrix.outerStride(), [&](auto fixed) {
+    constexpr int N = decltype(fixed)::value;  // 0: size and stride at run time
+    const int n = N > 0 ? N : size;
+    const long lda = N > 0 ? N : matrix.outerStride();
+    double* __restrict a = matrix.data();
+    for (int j = 0; j < n; ++j) {
+      double* __restrict column = a + j * lda;
+      const double pivot = column[j];
+      if (!(pivot > 0.0)) return false;
+      const double root = std::sqrt(pivot);
+      const double inverse = 1.0 / root;
+      column[j] = inverse;
+      for (int i = j + 1; i < n; ++i) column[i] *= inverse;
+      // Rank-one update of the trailing lower triangle.
+      for (int k = j + 1; k < n; ++k) {
+        double* __restrict target = a + k * lda;
+        const double factor = column[k];
+        for (int i = k; i < n; ++i) target[i] -= column[i] * factor;
+      }
     }
-  }
-  return true;
+    return true;
+  });
 }
 
 // B <- L^-1 B for a row-major B of n rows and a fixed number of columns,
 // L from cholesky_in_place (inverted diagonal): row i of B is updated by
 // whole rows, which the compiler unrolls and vectorises.
 template <class Matrix, class Rows>
-void solve_lower_rows(const Matrix& lower, int n, Rows& b) {
+void solve_lower_rows(const Matrix& lower, int size, Rows& b) {
   static_assert(Rows::IsRowMajor && Rows::ColsAtCompileTime > 0, "row-major, fixed width");
   constexpr int width = Rows::ColsAtCompileTime;
-  const double* __restrict l = lower.data();
-  const long ldl = lower.outerStride();
-  double* __restrict rows = b.data();
-  for (int j = 0; j < n; ++j) {
-    const double* __restrict column = l + j * ldl;
-    double* __restrict pivot_row = rows + j * width;
-    const double inverse = column[j];
-    for (int c = 0; c < width; ++c) pivot_row[c] *= inverse;
-    for (int i = j + 1; i < n; ++i) {
-      double* __restrict row = rows + i * width;
-      const double factor = column[i];
-      for (int c = 0; c < width; ++c) row[c] -= factor * pivot_row[c];
+  detail::with_size(size, lower.outerStride(), [&](auto fixed) {
+    constexpr int N = decltype(fixed)::value;
+    const int n = N > 0 ? N : size;
+    const long ldl = N > 0 ? N : lower.outerStride();
+    const double* __restrict l = lower.data();
+    double* __restrict rows = b.data();
+    for (int j = 0; j < n; ++j) {
+      const double* __restrict column = l + j * ldl;
+      double* __restrict pivot_row = rows + j * width;
+      const double inverse = column[j];
+      for (int c = 0; c < width; ++c) pivot_row[c] *= inverse;
+      for (int i = j + 1; i < n; ++i) {
+        double* __restrict row = rows + i * width;
+        const double factor = column[i];
+        for (int c = 0; c < width; ++c) row[c] -= factor * pivot_row[c];
+      }
     }
-  }
+  });
 }
 
 // b <- L^-ᵀ b for every column of b, L from cholesky_in_place (inverted diagonal).
 template <class Matrix, class Rhs>
-void solve_lower_transposed(const Matrix& lower, int n, Rhs& rhs) {
-  const double* __restrict l = lower.data();
-  const long ldl = lower.outerStride();
-  for (long c = 0; c < rhs.cols(); ++c) {
-    double* __restrict b = rhs.data() + c * rhs.outerStride();
-    for (int i = n - 1; i >= 0; --i) {
-      const double* __restrict column = l + i * ldl;
-      // Two partial sums halve the dependency chain of the dot product.
-      double s0 = b[i], s1 = 0.0;
-      int k = i + 1;
-      for (; k + 1 < n; k += 2) {
-        s0 -= column[k] * b[k];
-        s1 -= column[k + 1] * b[k + 1];
+void solve_lower_transposed(const Matrix& lower, int size, Rhs& rhs) {
+  detail::with_size(size, lower.outerStride(), [&](auto fixed) {
+    constexpr int N = decltype(fixed)::value;
+    const int n = N > 0 ? N : size;
+    const long ldl = N > 0 ? N : lower.outerStride();
+    const double* __restrict l = lower.data();
+    for (long c = 0; c < rhs.cols(); ++c) {
+      double* __restrict b = rhs.data() + c * rhs.outerStride();
+      for (int i = n - 1; i >= 0; --i) {
+        const double* __restrict column = l + i * ldl;
+        // Two partial sums halve the dependency chain of the dot product.
+        double s0 = b[i], s1 = 0.0;
+        int k = i + 1;
+        for (; k + 1 < n; k += 2) {
+          s0 -= column[k] * b[k];
+          s1 -= column[k + 1] * b[k + 1];
+        }
+        if (k < n) s0 -= column[k] * b[k];
+        b[i] = (s0 + s1) * column[i];
       }
-      if (k < n) s0 -= column[k] * b[k];
-      b[i] = (s0 + s1) * column[i];
     }
-  }
+  });
 }
 
 }  // namespace loopfarm::dense
