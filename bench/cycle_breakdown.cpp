@@ -6,6 +6,7 @@
 //   build/release/bench/cycle_breakdown [--samples N] [--max-refinements D]
 //                                       [--max-iterations-per-step B] [--bennett]
 //                                       [--general-step] [--retry-failed]
+//                                       [--full-newton]
 //
 // Prints one line per loop (E_mean, iterations, bisections, jumps, failures)
 // and the total iterations by sample status. --bennett drives the paper's
@@ -15,6 +16,8 @@
 // off (the same steps through the general factorisation), to compare.
 // --retry-failed turns CycleOptions::skip_failed_retries off (every bisection
 // depth retries the solve that failed at the depth above), to compare.
+// --full-newton turns EquilibriumOptions::simplified_newton off (a full
+// Newton step at every iteration), to compare.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -61,6 +64,8 @@ int main(int argc, char** argv) {
       bennett = true;
     } else if (std::strcmp(argv[i], "--general-step") == 0) {
       solver.structured_step = false;
+    } else if (std::strcmp(argv[i], "--full-newton") == 0) {
+      solver.simplified_newton = false;
     } else if (std::strcmp(argv[i], "--retry-failed") == 0) {
       options.skip_failed_retries = false;
     } else {

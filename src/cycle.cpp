@@ -46,6 +46,22 @@ constexpr double kMaxBend = 0.1;
 // land() does, 2021.
 constexpr double kLandingReach = 2.0;
 
+// Gauss-Newton steps a solve may take before it is given up (see
+// solve_equilibrium): such steps mean the exact Hessian is not positive
+// definite on the constraints' null space, which is where a solve that has
+// left its branch creeps (10-20 iterations, mostly failing). A continuation
+// step's solve gives up after kStepGaussNewtonSteps (the step is then
+// bisected or lands), the landing's solve from the last point at its first
+// (kLandingGaussNewtonSteps: where it converged on the paper's flat-folded
+// loop it took none; the landing along the tangent follows). Over the
+// bench's 8 generic 4R cycles at N = 32 (bench/cycle_breakdown): no limits
+// 1,947 Newton iterations, the landing's limit alone 1,833, both 1,728 with
+// a step limit of 8 (6: 1,746, 7: 1,766, 10: 1,750), every E_mean unchanged;
+// step limits of 1-5 moved one loop's cycle to another branch (E_mean 1.01
+// to 2.33).
+constexpr int kStepGaussNewtonSteps = 8;
+constexpr int kLandingGaussNewtonSteps = 0;
+
 // Largest rate of change of a passive angle along a path tangent.
 double passive_rate(const LoopModel& model, const EquilibriumState& tangent) {
   double rate = 0.0;
@@ -171,7 +187,7 @@ class Stepper {
       if (known_failure) {
         r.solve.status = SolveStatus::max_iterations;  // as the skipped solve would end
       } else {
-        r.solve = solve_equilibrium(model_, ws_, target, guess, options_.max_iterations_per_step);
+        r.solve = solve_equilibrium(model_, ws_, target, guess, options_.max_iterations_per_step, kStepGaussNewtonSteps);
         r.iterations += r.solve.iterations;
         if (acceptable(r.solve, *from.state)) {
           r.status = SampleStatus::converged;
@@ -247,7 +263,8 @@ class Stepper {
   // the tangent is missing or that solve fails too, the creeping solve with
   // the full iteration limit.
   EquilibriumSummary land(const PathPoint& from, double target) const {
-    EquilibriumSummary summary = solve_equilibrium(model_, ws_, target, *from.state, options_.max_iterations_per_step);
+    EquilibriumSummary summary = solve_equilibrium(model_, ws_, target, *from.state, options_.max_iterations_per_step,
+                                                   kLandingGaussNewtonSteps);
     if (summary.status == SolveStatus::converged) return summary;
     int iterations = summary.iterations, evaluations = summary.residual_evaluations;
     auto count = [&](const EquilibriumSummary& s) {

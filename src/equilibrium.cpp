@@ -36,6 +36,16 @@ constexpr double kNegligibleMultiplier = 1e-6;
 // of the six directions of a deformation; a flat-folded pose) the general
 // factorisation, regularised as it is, takes over.
 constexpr double kStructuredPivotRatio = 1e-8;
+// Simplified Newton: where the KKT residual is at most this, the step reuses
+// the last exact factorisation (see solve_equilibrium), as long as each such
+// step shrinks the residual by at least kSimplifiedContraction. Over the
+// bench's 8 generic 4R cycles at N = 32 (bench/cycle_breakdown under
+// valgrind --tool=callgrind, instructions in cycle_energy): without it 1,895
+// Newton iterations and 47.4 M instructions; from 1e-6 2,241 iterations (more,
+// but cheap ones) and 44.3 M; from 1e-8 1,947 and 43.5 M, every E_mean the
+// same to the 10 digits printed.
+constexpr double kSimplifiedResidual = 1e-8;
+constexpr double kSimplifiedContraction = 1e-2;
 
 double max_abs(const Vector6& v) { return v.cwiseAbs().maxCoeff(); }
 
@@ -486,10 +496,33 @@ bool structured_path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, c
   return tangent_from_unknowns(model, x, ws.scratch, dual, t);
 }
 
+// The simplified Newton step: the KKT system of the last exact general step
+// (its factor L of H in ws.hessian, Y = L^-1 Aᵀ in ws.solved, the Schur
+// complement's factor) solved for the current gradient g (ws.gradient) and
+// residual c, the same elimination as the full step. From an iterate within
+// e of the solution whose factorisation is d away, the error falls to about
+// d e instead of e^2: one such step after a full one takes a continuation
+// solve from 1e-10 to round-off, at the cost of three triangular solves.
+void simplified_step(const LoopModel& model, EquilibriumWorkspace& ws, const Eigen::LLT<Matrix6>& schur_llt,
+                     double sigma, const Vector6& c, Vector6& dual, double& step_curvature) {
+  const int m = model.unknown_count();
+  ws.scratch = ws.gradient;
+  solve_lower_vector(ws.hessian, m, ws.scratch);  // z = L^-1 g
+  Vector6 yz = Vector6::Zero();                   // Yᵀ z
+  for (int u = 0; u < m; ++u) yz += ws.scratch[u] * ws.solved.row(u).head<6>().transpose();
+  dual = schur_llt.solve(c - yz);
+  for (int u = 0; u < m; ++u) ws.scratch[u] += ws.solved.row(u).head<6>().dot(dual);
+  step_curvature = ws.scratch.squaredNorm();
+  ws.step = -ws.scratch;
+  dense::solve_lower_transposed(ws.hessian, m, ws.step);
+  dual -= sigma * c;  // the augmentation's shift, as in the full step
+}
+
 }  // namespace
 
 EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& ws, double theta_in,
-                                     const EquilibriumState& guess, int iteration_limit) {
+                                     const EquilibriumState& guess, int iteration_limit,
+                                     int gauss_newton_limit) {
   const int m = model.unknown_count();
   const EquilibriumOptions& opt = model.options();
   EquilibriumSummary summary;
@@ -514,6 +547,9 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
   bool last_step_gauss_newton = false;  // the last step fell back to the Gauss-Newton model
   bool last_step_structured = false;    // the last step was the structured one (factors below)
   StructuredFactors structured_factors;
+  bool reusable_factorization = false;  // a simplified step may reuse the last factorisation
+  bool last_step_simplified = false;
+  double last_kkt_residual = 0.0;       // at the start of the last iteration
 
   for (;;) {
     const Vector6 c = ws.chain.residual;
@@ -540,132 +576,159 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     }
     ++summary.iterations;
 
-    // Hessian of the Lagrangian: constraint curvature weighted by the
-    // multipliers, plus the springs' stiffness on the deformations.
-    // Where the multipliers are negligible (a loop that closes without
-    // deforming, as every movable one does) so is the curvature term: the
-    // Hessian is K alone, to a relative 1e-9 that leaves the convergence
-    // quadratic at these tolerances, and the chain's second derivatives
-    // are skipped.
-    const bool curvature = max_abs(x.multipliers) > kNegligibleMultiplier;
-    if (curvature) residual_hessian(ws.chain, x.multipliers, model.hessian_elements(), ws.chain_hessian);
     const double kkt_residual = std::max(summary.closure_residual, summary.stationarity);
-    // Stabilised SQP: a dual regularisation proportional to the KKT residual
-    // keeps the step defined where the closure Jacobian loses rank, and
-    // vanishes at the solution so that convergence stays quadratic.
-    const double mu = std::clamp(kkt_residual * kkt_residual, kMinDualRegularization, kMaxDualRegularization);
-
-    // Solve [H Aᵀ; A -mu I] [dx; dl] = -[g; c] with H = W + sigma AᵀA + rho I.
-    // First choice, rho = 0: the exact Newton step. Adding sigma AᵀA leaves dx
-    // unchanged (A dx = -c) and makes H positive definite wherever W is so on
-    // the null space of A (the second-order condition); Cholesky then
-    // certifies it, sigma growing a little where needed. Far from a minimum W
-    // is indefinite on that null space and no sigma helps; then the
-    // Gauss-Newton model, which keeps only the springs' stiffness K, gives a
-    // least-norm projection step towards closure, defined once a small rho
-    // covers the passive angles (K has no block for them).
-    //
-    // Where W is the springs' alone, W = blockdiag(0, K) (negligible
-    // multipliers: every movable loop) or blockdiag(rho I, K + rho I) (a
-    // Gauss-Newton step), the structured step (above) gives the same step
-    // through two small systems, where they are well conditioned. It
-    // reproduces sigma's shift of the multipliers too: the general path takes
-    // dl = dl' - sigma c from the augmented system, which is the solution of
-    // the unaugmented [W Aᵀ; A -mu' I] [dx; nu] = -[g; c s], s = 1 / (1 +
-    // sigma mu), mu' = mu s, as dl = s (nu + sigma c) - sigma c. (Solving the
-    // plain system with mu instead changes the iterates by O(mu); where a
-    // solve is far from converging, mu = 1e-6, that sent the stability tests'
-    // kite at an unreachable input angle elsewhere.)
     Vector6 dual;
     double step_curvature = 0.0;  // stepᵀ H step, for the merit's weight
-    bool exact = true;
-    double rho = 0.0;
-    // sigma's shrink factor s = 1 / (1 + sigma mu), set with the structured
-    // factorisation it belongs to and used by its step below (sigma does not
-    // change once that factorisation succeeds).
-    double shrink = 1.0;
-    auto try_structured = [&](double regularization) {
-      shrink = 1.0 / (1.0 + sigma * mu);
-      return opt.structured_step && factor_structured(model, ws, mu * shrink, regularization, structured_factors);
-    };
-    bool structured = !curvature && try_structured(0.0);
-    bool factored = structured;
-    if (!structured) {
-      normal_matrix(model, ws);
-      // H is positive definite for a sigma only if it is so for every larger
-      // one (sigma AᵀA is positive semidefinite). After a Gauss-Newton step the
-      // exact Hessian was indefinite on the null space of A, which no sigma
-      // cures, and usually still is (a landing after a fold takes tens of such
-      // steps): one factorisation at the largest sigma tells, where the ladder
-      // would fail at every rung. The sigma chosen is the one the ladder alone
-      // would choose, so the iterates do not change; over the bench's generic
-      // cycles this saves a third of the factorisations.
-      const bool hopeless = last_step_gauss_newton && sigma < kMaxAugmentation &&
-                            !factor_hessian(model, ws, kMaxAugmentation, curvature, 0.0);
-      for (double trial_sigma = sigma; !hopeless && trial_sigma <= kMaxAugmentation && !factored;
-           trial_sigma *= 10.0) {
-        sigma = trial_sigma;
-        factored = factor_hessian(model, ws, sigma, curvature, 0.0);
-      }
-    }
-    if (!factored) {
-      sigma = kInitialAugmentation;
-      exact = false;
-      ++summary.gauss_newton_steps;
-      rho = std::max(kMinRegularization, rho_last / 4.0);
-      structured = try_structured(rho);
-      factored = structured;
-      for (; !structured && rho <= kMaxRegularization && !factored; rho *= 10.0) {
-        factored = factor_hessian(model, ws, sigma, false, rho);
-        if (factored) break;
-      }
-    }
-    if (!factored) {
-      summary.status = SolveStatus::singular;
-      break;
-    }
-    rho_last = rho;
-    last_step_gauss_newton = !exact;
-    last_step_exact = exact;
-    last_step_structured = structured;
-    sigma_last = sigma;
-    summary.max_regularization = std::max(summary.max_regularization, rho);
-
-    if (structured) {
-      ++summary.structured_steps;
-      const double s = shrink;
-      ws.scratch = -ws.gradient;
-      solve_structured(model, ws, structured_factors, ws.scratch, -s * c, ws.step, dual);
-      dual = s * (dual + sigma * c) - sigma * c;
-      // stepᵀ (W + rho I) step; sigma |A step|^2 is added below, once A step
-      // is known. The general path reads the whole stepᵀ H step off its
-      // factorisation.
-      step_curvature = rho * ws.step.squaredNorm();
-      for (int u = 0; u < m; ++u) {
-        const int k = model.unknown_deformation(u);
-        if (k >= 0) step_curvature += model.deformation_stiffness(k) * ws.step[u] * ws.step[u];
-      }
+    bool structured = false;
+    // Simplified Newton: close to the solution the last exact factorisation
+    // still gives a step that gains many digits (simplified_step), without
+    // the constraint curvature, the factorisation and the solves for Y. Used
+    // while the residual is small and each such step shrinks it by
+    // kSimplifiedContraction; a step that fails that, or the line search,
+    // hands back to the full step.
+    // Not where the multipliers are negligible: there the structured step is
+    // as cheap and converges quadratically (on the Bennett cycle simplified
+    // steps took 776 iterations instead of 504).
+    const bool simplified = opt.simplified_newton && reusable_factorization && kkt_residual <= kSimplifiedResidual &&
+                            max_abs(x.multipliers) > kNegligibleMultiplier &&
+                            !(last_step_simplified && kkt_residual > kSimplifiedContraction * last_kkt_residual);
+    last_kkt_residual = kkt_residual;
+    last_step_simplified = simplified;
+    if (simplified) {
+      ++summary.simplified_steps;
+      simplified_step(model, ws, schur_llt, sigma_last, c, dual, step_curvature);
     } else {
-      // With H = L Lᵀ, Y = L^-1 Aᵀ and z = L^-1 g: the Schur complement
-      // A H^-1 Aᵀ is YᵀY, and the step -H^-1 (g + Aᵀ dl) is -L^-ᵀ (z + Y dl).
-      solve_columns(model, ws, ws.gradient, exact && curvature, gram);
-      ws.schur = gram.topLeftCorner<6, 6>();
-      ws.schur.diagonal().array() += mu;
-      schur_llt.compute(ws.schur);  // fixed 6 x 6: Eigen unrolls it
-      if (schur_llt.info() != Eigen::Success) {
+      // Hessian of the Lagrangian: constraint curvature weighted by the
+      // multipliers, plus the springs' stiffness on the deformations.
+      // Where the multipliers are negligible (a loop that closes without
+      // deforming, as every movable one does) so is the curvature term: the
+      // Hessian is K alone, to a relative 1e-9 that leaves the convergence
+      // quadratic at these tolerances, and the chain's second derivatives
+      // are skipped.
+      const bool curvature = max_abs(x.multipliers) > kNegligibleMultiplier;
+      if (curvature) residual_hessian(ws.chain, x.multipliers, model.hessian_elements(), ws.chain_hessian);
+      // Stabilised SQP: a dual regularisation proportional to the KKT residual
+      // keeps the step defined where the closure Jacobian loses rank, and
+      // vanishes at the solution so that convergence stays quadratic.
+      const double mu = std::clamp(kkt_residual * kkt_residual, kMinDualRegularization, kMaxDualRegularization);
+
+      // Solve [H Aᵀ; A -mu I] [dx; dl] = -[g; c] with H = W + sigma AᵀA + rho I.
+      // First choice, rho = 0: the exact Newton step. Adding sigma AᵀA leaves dx
+      // unchanged (A dx = -c) and makes H positive definite wherever W is so on
+      // the null space of A (the second-order condition); Cholesky then
+      // certifies it, sigma growing a little where needed. Far from a minimum W
+      // is indefinite on that null space and no sigma helps; then the
+      // Gauss-Newton model, which keeps only the springs' stiffness K, gives a
+      // least-norm projection step towards closure, defined once a small rho
+      // covers the passive angles (K has no block for them).
+      //
+      // Where W is the springs' alone, W = blockdiag(0, K) (negligible
+      // multipliers: every movable loop) or blockdiag(rho I, K + rho I) (a
+      // Gauss-Newton step), the structured step (above) gives the same step
+      // through two small systems, where they are well conditioned. It
+      // reproduces sigma's shift of the multipliers too: the general path takes
+      // dl = dl' - sigma c from the augmented system, which is the solution of
+      // the unaugmented [W Aᵀ; A -mu' I] [dx; nu] = -[g; c s], s = 1 / (1 +
+      // sigma mu), mu' = mu s, as dl = s (nu + sigma c) - sigma c. (Solving the
+      // plain system with mu instead changes the iterates by O(mu); where a
+      // solve is far from converging, mu = 1e-6, that sent the stability tests'
+      // kite at an unreachable input angle elsewhere.)
+      bool exact = true;
+      double rho = 0.0;
+      // sigma's shrink factor s = 1 / (1 + sigma mu), set with the structured
+      // factorisation it belongs to and used by its step below (sigma does not
+      // change once that factorisation succeeds).
+      double shrink = 1.0;
+      auto try_structured = [&](double regularization) {
+        shrink = 1.0 / (1.0 + sigma * mu);
+        return opt.structured_step && factor_structured(model, ws, mu * shrink, regularization, structured_factors);
+      };
+      structured = !curvature && try_structured(0.0);
+      bool factored = structured;
+      if (!structured) {
+        normal_matrix(model, ws);
+        // H is positive definite for a sigma only if it is so for every larger
+        // one (sigma AᵀA is positive semidefinite). After a Gauss-Newton step the
+        // exact Hessian was indefinite on the null space of A, which no sigma
+        // cures, and usually still is (a landing after a fold takes tens of such
+        // steps): one factorisation at the largest sigma tells, where the ladder
+        // would fail at every rung. The sigma chosen is the one the ladder alone
+        // would choose, so the iterates do not change; over the bench's generic
+        // cycles this saves a third of the factorisations.
+        const bool hopeless = last_step_gauss_newton && sigma < kMaxAugmentation &&
+                              !factor_hessian(model, ws, kMaxAugmentation, curvature, 0.0);
+        for (double trial_sigma = sigma; !hopeless && trial_sigma <= kMaxAugmentation && !factored;
+             trial_sigma *= 10.0) {
+          sigma = trial_sigma;
+          factored = factor_hessian(model, ws, sigma, curvature, 0.0);
+        }
+      }
+      if (!factored) {
+        sigma = kInitialAugmentation;
+        exact = false;
+        if (gauss_newton_limit >= 0 && summary.gauss_newton_steps >= gauss_newton_limit) {
+          summary.status = SolveStatus::max_iterations;
+          break;
+        }
+        ++summary.gauss_newton_steps;
+        rho = std::max(kMinRegularization, rho_last / 4.0);
+        structured = try_structured(rho);
+        factored = structured;
+        for (; !structured && rho <= kMaxRegularization && !factored; rho *= 10.0) {
+          factored = factor_hessian(model, ws, sigma, false, rho);
+          if (factored) break;
+        }
+      }
+      if (!factored) {
         summary.status = SolveStatus::singular;
         break;
       }
-      dual = schur_llt.solve(c - gram.row(6).transpose());
-      for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 6) + ws.solved.row(u).head<6>().dot(dual);
-      step_curvature = ws.scratch.squaredNorm();
-      ws.step = -ws.scratch;
-      dense::solve_lower_transposed(ws.hessian, m, ws.step);
-      // The sigma AᵀA term leaves dx the Newton step but shifts the multiplier
-      // step: W dx + Aᵀ(dl - sigma c) = -g when A dx = -c (exactly so for mu = 0).
-      // Undo the shift, or the multipliers (and with them x) converge only
-      // linearly.
-      dual -= sigma * c;
+      rho_last = rho;
+      last_step_gauss_newton = !exact;
+      last_step_exact = exact;
+      last_step_structured = structured;
+      sigma_last = sigma;
+      summary.max_regularization = std::max(summary.max_regularization, rho);
+
+      if (structured) {
+        ++summary.structured_steps;
+        const double s = shrink;
+        ws.scratch = -ws.gradient;
+        solve_structured(model, ws, structured_factors, ws.scratch, -s * c, ws.step, dual);
+        dual = s * (dual + sigma * c) - sigma * c;
+        // stepᵀ (W + rho I) step; sigma |A step|^2 is added below, once A step
+        // is known. The general path reads the whole stepᵀ H step off its
+        // factorisation.
+        step_curvature = rho * ws.step.squaredNorm();
+        for (int u = 0; u < m; ++u) {
+          const int k = model.unknown_deformation(u);
+          if (k >= 0) step_curvature += model.deformation_stiffness(k) * ws.step[u] * ws.step[u];
+        }
+      } else {
+        // With H = L Lᵀ, Y = L^-1 Aᵀ and z = L^-1 g: the Schur complement
+        // A H^-1 Aᵀ is YᵀY, and the step -H^-1 (g + Aᵀ dl) is -L^-ᵀ (z + Y dl).
+        solve_columns(model, ws, ws.gradient, exact && curvature, gram);
+        ws.schur = gram.topLeftCorner<6, 6>();
+        ws.schur.diagonal().array() += mu;
+        schur_llt.compute(ws.schur);  // fixed 6 x 6: Eigen unrolls it
+        if (schur_llt.info() != Eigen::Success) {
+          summary.status = SolveStatus::singular;
+          break;
+        }
+        dual = schur_llt.solve(c - gram.row(6).transpose());
+        for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 6) + ws.solved.row(u).head<6>().dot(dual);
+        step_curvature = ws.scratch.squaredNorm();
+        ws.step = -ws.scratch;
+        dense::solve_lower_transposed(ws.hessian, m, ws.step);
+        // The sigma AᵀA term leaves dx the Newton step but shifts the multiplier
+        // step: W dx + Aᵀ(dl - sigma c) = -g when A dx = -c (exactly so for mu = 0).
+        // Undo the shift, or the multipliers (and with them x) converge only
+        // linearly.
+        dual -= sigma * c;
+      }
+      // The next step may reuse this factorisation if it is the exact
+      // Hessian's, with Y and the Schur complement's factor (the general path).
+      reusable_factorization = exact && !structured;
     }
     if (!ws.step.allFinite() || !dual.allFinite()) {
       summary.status = SolveStatus::non_finite;
@@ -715,9 +778,15 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       alpha *= 0.5;
     }
     if (!accepted) {
-      // Restore the chain at x, then stop: no step along this direction helps.
+      // Restore the chain at x. A simplified step's direction is only as
+      // good as its old factorisation: the full step takes over. Otherwise
+      // stop: no step along this direction helps.
       energy = evaluate(model, ws, x, true);
       ++summary.residual_evaluations;
+      if (simplified) {
+        reusable_factorization = false;
+        continue;
+      }
       lagrangian_gradient(model, ws, x);
       summary.energy = energy;
       summary.status = SolveStatus::line_search_failed;

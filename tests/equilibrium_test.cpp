@@ -360,6 +360,77 @@ TEST(Equilibrium, StructuredGaussNewtonStepIsTheGeneralOne) {
   EXPECT_GT(structured_gauss_newton, 0);
 }
 
+// Simplified Newton steps (the last exact factorisation reused near the
+// solution) against full Newton steps throughout: continuation-like solves
+// of generic loops, 0.1 rad on from an assembled pose, reach the same
+// equilibrium to the tolerances, in at most one more iteration, and give the
+// same path tangent to a predictor's accuracy.
+TEST(Equilibrium, SimplifiedNewtonStepsReachTheSameEquilibrium) {
+  int simplified = 0;
+  for (Compliance compliance : {Compliance::paper, Compliance::full}) {
+    for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+      const LoopGeometry g = random_loop(seed == 6 ? 5 : 4, seed);
+      EquilibriumOptions on, off;
+      on.compliance = off.compliance = compliance;
+      off.simplified_newton = false;
+      const LoopModel model_on(g, on), model_off(g, off);
+      EquilibriumWorkspace ws_on(model_on), ws_off(model_off);
+      const EquilibriumSummary start = assemble(model_off, ws_off, 0.3);
+      ASSERT_EQ(start.status, SolveStatus::converged) << "seed " << seed;
+      const EquilibriumSummary a = solve_equilibrium(model_on, ws_on, 0.4, start.state);
+      const EquilibriumSummary b = solve_equilibrium(model_off, ws_off, 0.4, start.state);
+      ASSERT_EQ(a.status, SolveStatus::converged) << "seed " << seed;
+      ASSERT_EQ(b.status, SolveStatus::converged) << "seed " << seed;
+      EXPECT_EQ(b.simplified_steps, 0);
+      EXPECT_LE(a.iterations, b.iterations + 1) << "seed " << seed;
+      // Both within the solver's tolerances of the same KKT point.
+      EXPECT_LE(a.closure_residual, 1e-13);
+      EXPECT_LE(a.stationarity, 1e-11);
+      EXPECT_NEAR(a.energy, b.energy, 1e-11 * std::max(1.0, b.energy)) << "seed " << seed;
+      for (int i = 0; i < g.joints(); ++i) {
+        EXPECT_NEAR(wrap_angle(a.state.theta[i] - b.state.theta[i]), 0.0, 1e-10) << "seed " << seed;
+      }
+      EXPECT_LE((a.state.deformations - b.state.deformations).cwiseAbs().maxCoeff(), 1e-10) << "seed " << seed;
+      ASSERT_TRUE(a.has_tangent && b.has_tangent) << "seed " << seed;
+      for (int i = 0; i < g.joints(); ++i) {
+        EXPECT_NEAR(a.tangent.theta[i], b.tangent.theta[i], 1e-4 * std::max(1.0, std::abs(b.tangent.theta[i])))
+            << "seed " << seed;
+      }
+      simplified += a.simplified_steps;
+    }
+  }
+  // The comparison is not empty: simplified steps were taken.
+  EXPECT_GT(simplified, 0);
+}
+
+// A solve given a limit on its Gauss-Newton steps stops (max_iterations)
+// instead of taking one more, and is otherwise the unlimited solve: cold
+// solves of generic loops from random angles, which fall back to such steps.
+TEST(Equilibrium, GaussNewtonLimitStopsBeforeTheNextGaussNewtonStep) {
+  int limited = 0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    const LoopGeometry g = random_loop(4, seed);
+    const LoopModel model(g);
+    EquilibriumWorkspace ws(model);
+    const EquilibriumState guess = EquilibriumState::at_angles(model, random_angles(4, 100 + seed));
+    const EquilibriumSummary free = solve_equilibrium(model, ws, 0.4, guess);
+    if (free.gauss_newton_steps == 0) continue;
+    ++limited;
+    for (int limit = 0; limit < std::min(free.gauss_newton_steps, 3); ++limit) {
+      const EquilibriumSummary s = solve_equilibrium(model, ws, 0.4, guess, 0, limit);
+      EXPECT_EQ(s.status, SolveStatus::max_iterations) << "seed " << seed << " limit " << limit;
+      EXPECT_EQ(s.gauss_newton_steps, limit) << "seed " << seed;
+      EXPECT_LT(s.iterations, free.iterations) << "seed " << seed;
+    }
+    // A limit the solve does not reach changes nothing.
+    const EquilibriumSummary same = solve_equilibrium(model, ws, 0.4, guess, 0, free.gauss_newton_steps);
+    EXPECT_EQ(same.status, free.status) << "seed " << seed;
+    EXPECT_EQ(same.iterations, free.iterations) << "seed " << seed;
+    EXPECT_EQ(same.energy, free.energy) << "seed " << seed;
+  }
+  EXPECT_GT(limited, 2);
+}
+
 TEST(Equilibrium, SolveDoesNotAllocate) {
   if (!testing::kCountsAllocations) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
   for (int n : {4, 6, 8}) {
