@@ -250,7 +250,8 @@ class Stepper {
   // of the elastic path, or a hard step at the finest refinement): whatever
   // it converges to is the equilibrium the loop snaps to. First from `from`
   // itself with the step budget, which near a singular pose (the paper's
-  // flat-folded loop) stays on the branch. Where that does not converge,
+  // flat-folded loop) stays on the branch, given up at its first
+  // Gauss-Newton step (kLandingGaussNewtonSteps). Where that does not converge,
   // `from` is a near-degenerate saddle of the energy on the constraint
   // manifold (the fold): the gradient there is tiny and the exact Hessian
   // indefinite, and the Gauss-Newton steps that replace it creep (they took
