@@ -9,8 +9,9 @@
 // Each kernel is compiled once for every size the solver uses (the unknown
 // counts of every loop size and compliance, and the 6 x 6 Schur complement)
 // with the size and the leading dimension as constants, and once for any
-// size: with constant loop bounds the compiler unrolls and vectorises the
-// short inner loops that the general version runs with a loop counter. The
+// size: with constant loop bounds the compiler specialises the short inner
+// loops (the 11 x 11 Cholesky: 3,470 -> 2,550 instructions a call over the
+// bench's generic cycles, valgrind --tool=callgrind bench/cycle_breakdown). The
 // arithmetic, and its order, is the same in all versions, so their results
 // are identical to the bit (tests/small_dense_test.cpp).
 #pragma once
