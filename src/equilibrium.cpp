@@ -577,6 +577,14 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     ++summary.iterations;
 
     const double kkt_residual = std::max(summary.closure_residual, summary.stationarity);
+    // Hessian of the Lagrangian: constraint curvature weighted by the
+    // multipliers, plus the springs' stiffness on the deformations.
+    // Where the multipliers are negligible (a loop that closes without
+    // deforming, as every movable one does) so is the curvature term: the
+    // Hessian is K alone, to a relative 1e-9 that leaves the convergence
+    // quadratic at these tolerances, and the chain's second derivatives
+    // are skipped.
+    const bool curvature = max_abs(x.multipliers) > kNegligibleMultiplier;
     Vector6 dual;
     double step_curvature = 0.0;  // stepᵀ H step, for the merit's weight
     bool structured = false;
@@ -590,7 +598,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     // as cheap and converges quadratically (on the Bennett cycle simplified
     // steps took 776 iterations instead of 504).
     const bool simplified = opt.simplified_newton && reusable_factorization && kkt_residual <= kSimplifiedResidual &&
-                            max_abs(x.multipliers) > kNegligibleMultiplier &&
+                            curvature &&
                             !(last_step_simplified && kkt_residual > kSimplifiedContraction * last_kkt_residual);
     last_kkt_residual = kkt_residual;
     last_step_simplified = simplified;
@@ -598,14 +606,6 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       ++summary.simplified_steps;
       simplified_step(model, ws, schur_llt, sigma_last, c, dual, step_curvature);
     } else {
-      // Hessian of the Lagrangian: constraint curvature weighted by the
-      // multipliers, plus the springs' stiffness on the deformations.
-      // Where the multipliers are negligible (a loop that closes without
-      // deforming, as every movable one does) so is the curvature term: the
-      // Hessian is K alone, to a relative 1e-9 that leaves the convergence
-      // quadratic at these tolerances, and the chain's second derivatives
-      // are skipped.
-      const bool curvature = max_abs(x.multipliers) > kNegligibleMultiplier;
       if (curvature) residual_hessian(ws.chain, x.multipliers, model.hessian_elements(), ws.chain_hessian);
       // Stabilised SQP: a dual regularisation proportional to the KKT residual
       // keeps the step defined where the closure Jacobian loses rank, and
