@@ -6,7 +6,7 @@
 //   build/release/bench/cycle_breakdown [--samples N] [--max-refinements D]
 //                                       [--max-iterations-per-step B] [--bennett]
 //                                       [--general-step] [--retry-failed]
-//                                       [--full-newton]
+//                                       [--full-newton] [--exact-midpoints]
 //
 // Prints one line per loop (E_mean, iterations, bisections, jumps, failures)
 // and the total iterations by sample status. --bennett drives the paper's
@@ -17,7 +17,9 @@
 // --retry-failed turns CycleOptions::skip_failed_retries off (every bisection
 // depth retries the solve that failed at the depth above), to compare.
 // --full-newton turns EquilibriumOptions::simplified_newton off (a full
-// Newton step at every iteration), to compare.
+// Newton step at every iteration), to compare. --exact-midpoints sets
+// CycleOptions::stepping_tolerance to 0 (bisection midpoints solved to the
+// model's tolerances, as samples are), to compare.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -66,6 +68,8 @@ int main(int argc, char** argv) {
       solver.structured_step = false;
     } else if (std::strcmp(argv[i], "--full-newton") == 0) {
       solver.simplified_newton = false;
+    } else if (std::strcmp(argv[i], "--exact-midpoints") == 0) {
+      options.stepping_tolerance = 0.0;
     } else if (std::strcmp(argv[i], "--retry-failed") == 0) {
       options.skip_failed_retries = false;
     } else {

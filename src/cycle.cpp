@@ -156,8 +156,11 @@ class Stepper {
   // converged to the far branch, too far to accept): with
   // CycleOptions::skip_failed_retries it is not tried, and the step bisects
   // straight on or, at the finest depth, lands.
+  //
+  // `stepping_stone`: `target` is a bisection's midpoint, not a sample: its
+  // solve may end at CycleOptions::stepping_tolerance.
   Result step(const PathPoint& from, const PathPoint* before, double target, int depth,
-              bool beyond_failure = false) const {
+              bool beyond_failure = false, bool stepping_stone = false) const {
     Result r;
     if (before != nullptr && before->theta == from.theta) before = nullptr;
     const double h = target - from.theta;
@@ -187,7 +190,11 @@ class Stepper {
       if (known_failure) {
         r.solve.status = SolveStatus::max_iterations;  // as the skipped solve would end
       } else {
-        r.solve = solve_equilibrium(model_, ws_, target, guess, options_.max_iterations_per_step, kStepGaussNewtonSteps);
+        SolveLimits limits;
+        limits.max_iterations = options_.max_iterations_per_step;
+        limits.max_gauss_newton_steps = kStepGaussNewtonSteps;
+        if (stepping_stone) limits.stepping_tolerance = options_.stepping_tolerance;
+        r.solve = solve_equilibrium(model_, ws_, target, guess, limits);
         r.iterations += r.solve.iterations;
         if (acceptable(r.solve, *from.state)) {
           r.status = SampleStatus::converged;
@@ -222,7 +229,7 @@ class Stepper {
     }
     // Bisect: reach the midpoint, then the target from there.
     const double mid = 0.5 * (from.theta + target);
-    Result half = step(from, before, mid, depth + 1);
+    Result half = step(from, before, mid, depth + 1, false, true);
     r.iterations += half.iterations;
     r.refinements += 1 + half.refinements;
     if (half.status == SampleStatus::failed) {
@@ -235,7 +242,7 @@ class Stepper {
     // the landing point's own tangent only.
     const PathPoint* behind = half.status == SampleStatus::branch_jump ? nullptr : &from;
     Result rest = step(midpoint, behind, target, depth + 1,
-                       (failed_here || beyond_failure) && half.status == SampleStatus::converged);
+                       (failed_here || beyond_failure) && half.status == SampleStatus::converged, stepping_stone);
     rest.iterations += r.iterations;
     rest.refinements += r.refinements;
     if (rest.status == SampleStatus::converged) rest.status = SampleStatus::refined;
@@ -264,8 +271,10 @@ class Stepper {
   // the tangent is missing or that solve fails too, the creeping solve with
   // the full iteration limit.
   EquilibriumSummary land(const PathPoint& from, double target) const {
-    EquilibriumSummary summary = solve_equilibrium(model_, ws_, target, *from.state, options_.max_iterations_per_step,
-                                                   kLandingGaussNewtonSteps);
+    SolveLimits limits;
+    limits.max_iterations = options_.max_iterations_per_step;
+    limits.max_gauss_newton_steps = kLandingGaussNewtonSteps;
+    EquilibriumSummary summary = solve_equilibrium(model_, ws_, target, *from.state, limits);
     if (summary.status == SolveStatus::converged) return summary;
     int iterations = summary.iterations, evaluations = summary.residual_evaluations;
     auto count = [&](const EquilibriumSummary& s) {
@@ -579,6 +588,9 @@ void CycleOptions::validate() const {
   if (max_iterations_per_step < 1) {
     fail("max_iterations_per_step: must be >= 1, got " + std::to_string(max_iterations_per_step));
   }
+  if (!(stepping_tolerance >= 0.0) || !std::isfinite(stepping_tolerance)) {
+    fail("stepping_tolerance: must be a finite number >= 0, got " + std::to_string(stepping_tolerance));
+  }
 }
 
 const char* to_string(SampleStatus status) {
@@ -689,7 +701,7 @@ bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& ws, 
       return false;  // another model's cycle
     }
     const EquilibriumSummary solve =
-        solve_equilibrium(model, ws, from.theta_in, from.state, options.max_iterations_per_step);
+        solve_equilibrium(model, ws, from.theta_in, from.state, {.max_iterations = options.max_iterations_per_step});
     summary.total_iterations += solve.iterations;
     // A sample that needs the continuation's help, or that moved far enough
     // to have crossed onto another branch, sends the caller back to the walk.

@@ -521,8 +521,7 @@ void simplified_step(const LoopModel& model, EquilibriumWorkspace& ws, const Eig
 }  // namespace
 
 EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& ws, double theta_in,
-                                     const EquilibriumState& guess, int iteration_limit,
-                                     int gauss_newton_limit) {
+                                     const EquilibriumState& guess, const SolveLimits& limits) {
   const int m = model.unknown_count();
   const EquilibriumOptions& opt = model.options();
   EquilibriumSummary summary;
@@ -561,7 +560,11 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       summary.status = SolveStatus::non_finite;
       break;
     }
-    if (summary.closure_residual <= opt.closure_tolerance && summary.stationarity <= opt.stationarity_tolerance) {
+    const bool at_tolerance =
+        summary.closure_residual <= opt.closure_tolerance && summary.stationarity <= opt.stationarity_tolerance;
+    const bool at_stepping_tolerance = summary.iterations > 0 && summary.closure_residual <= limits.stepping_tolerance &&
+                                       summary.stationarity <= limits.stepping_tolerance;
+    if (at_tolerance || at_stepping_tolerance) {
       summary.status = SolveStatus::converged;
       if (summary.iterations > 0 && last_step_exact) {
         summary.has_tangent = last_step_structured
@@ -570,7 +573,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       }
       break;
     }
-    if (summary.iterations >= (iteration_limit > 0 ? iteration_limit : opt.max_iterations)) {
+    if (summary.iterations >= (limits.max_iterations > 0 ? limits.max_iterations : opt.max_iterations)) {
       summary.status = SolveStatus::max_iterations;
       break;
     }
@@ -666,7 +669,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       if (!factored) {
         sigma = kInitialAugmentation;
         exact = false;
-        if (gauss_newton_limit >= 0 && summary.gauss_newton_steps >= gauss_newton_limit) {
+        if (limits.max_gauss_newton_steps >= 0 && summary.gauss_newton_steps >= limits.max_gauss_newton_steps) {
           summary.status = SolveStatus::max_iterations;
           break;
         }

@@ -93,7 +93,7 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
       return std::isfinite(cycle_.E_mean);
     }
     const EquilibriumSummary anchor = solve_equilibrium(*model_, *workspace_, initial_angles_[0], nearby_start_,
-                                                        settings_.cycle.max_iterations_per_step);
+                                                        {.max_iterations = settings_.cycle.max_iterations_per_step});
     if (anchor.status == SolveStatus::converged) {
       start_ = anchor.state;
       return std::isfinite(cycle_.E_mean);

@@ -297,8 +297,8 @@ TEST(Equilibrium, StructuredStepIsTheGeneralNewtonStep) {
     }
     const double theta_in = c.start[c.input_joint];
     for (int limit : {1, 2, 3, 0}) {
-      const EquilibriumSummary s = solve_equilibrium(structured, ws_structured, theta_in, guess, limit);
-      const EquilibriumSummary g = solve_equilibrium(general, ws_general, theta_in, guess, limit);
+      const EquilibriumSummary s = solve_equilibrium(structured, ws_structured, theta_in, guess, {.max_iterations = limit});
+      const EquilibriumSummary g = solve_equilibrium(general, ws_general, theta_in, guess, {.max_iterations = limit});
       // The first step always is one (the guess's multipliers are zero); in
       // between, the multipliers of a guess off the closure curve can grow
       // past the negligible level, and such steps are general on both sides.
@@ -403,6 +403,46 @@ TEST(Equilibrium, SimplifiedNewtonStepsReachTheSameEquilibrium) {
   EXPECT_GT(simplified, 0);
 }
 
+// SolveLimits::stepping_tolerance ends a solve at its first iterate within
+// it, after at least one step, with a tangent; a full solve from there reaches
+// the equilibrium the full solve from the start reaches. Warm solves of
+// generic loops 0.1 rad from an assembled state, as a continuation's are.
+TEST(Equilibrium, SteppingToleranceEndsAtTheFirstIterateWithinIt) {
+  constexpr double kStepping = 1e-6;
+  int saved = 0;
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    const LoopGeometry g = random_loop(4, seed);
+    const LoopModel model(g);
+    EquilibriumWorkspace ws(model);
+    const EquilibriumSummary start = assemble(model, ws, 0.3);
+    ASSERT_EQ(start.status, SolveStatus::converged) << "seed " << seed;
+    const EquilibriumSummary full = solve_equilibrium(model, ws, 0.4, start.state);
+    const EquilibriumSummary loose = solve_equilibrium(model, ws, 0.4, start.state, {.stepping_tolerance = kStepping});
+    ASSERT_EQ(full.status, SolveStatus::converged) << "seed " << seed;
+    ASSERT_EQ(loose.status, SolveStatus::converged) << "seed " << seed;
+    EXPECT_GE(loose.iterations, 1) << "seed " << seed;
+    EXPECT_LE(loose.iterations, full.iterations) << "seed " << seed;
+    EXPECT_LE(loose.closure_residual, kStepping) << "seed " << seed;
+    EXPECT_LE(loose.stationarity, kStepping) << "seed " << seed;
+    EXPECT_TRUE(loose.has_tangent) << "seed " << seed;
+    // Not a step later than needed: one iteration fewer is not yet within it.
+    if (loose.iterations > 1) {
+      const EquilibriumSummary before =
+          solve_equilibrium(model, ws, 0.4, start.state, {.max_iterations = loose.iterations - 1});
+      EXPECT_GT(std::max(before.closure_residual, before.stationarity), kStepping) << "seed " << seed;
+    }
+    saved += full.iterations - loose.iterations;
+    // The stepping stone leads to the same equilibrium.
+    const EquilibriumSummary on = solve_equilibrium(model, ws, 0.4, loose.state);
+    ASSERT_EQ(on.status, SolveStatus::converged) << "seed " << seed;
+    EXPECT_NEAR(on.energy, full.energy, 1e-11 * std::max(1.0, full.energy)) << "seed " << seed;
+    for (int i = 0; i < g.joints(); ++i) {
+      EXPECT_NEAR(wrap_angle(on.state.theta[i] - full.state.theta[i]), 0.0, 1e-10) << "seed " << seed;
+    }
+  }
+  EXPECT_GT(saved, 0);  // the loose solves did end earlier
+}
+
 // A solve given a limit on its Gauss-Newton steps stops (max_iterations)
 // instead of taking one more, and is otherwise the unlimited solve: cold
 // solves of generic loops from random angles, which fall back to such steps.
@@ -417,13 +457,13 @@ TEST(Equilibrium, GaussNewtonLimitStopsBeforeTheNextGaussNewtonStep) {
     if (free.gauss_newton_steps == 0) continue;
     ++limited;
     for (int limit = 0; limit < std::min(free.gauss_newton_steps, 3); ++limit) {
-      const EquilibriumSummary s = solve_equilibrium(model, ws, 0.4, guess, 0, limit);
+      const EquilibriumSummary s = solve_equilibrium(model, ws, 0.4, guess, {.max_gauss_newton_steps = limit});
       EXPECT_EQ(s.status, SolveStatus::max_iterations) << "seed " << seed << " limit " << limit;
       EXPECT_EQ(s.gauss_newton_steps, limit) << "seed " << seed;
       EXPECT_LT(s.iterations, free.iterations) << "seed " << seed;
     }
     // A limit the solve does not reach changes nothing.
-    const EquilibriumSummary same = solve_equilibrium(model, ws, 0.4, guess, 0, free.gauss_newton_steps);
+    const EquilibriumSummary same = solve_equilibrium(model, ws, 0.4, guess, {.max_gauss_newton_steps = free.gauss_newton_steps});
     EXPECT_EQ(same.status, free.status) << "seed " << seed;
     EXPECT_EQ(same.iterations, free.iterations) << "seed " << seed;
     EXPECT_EQ(same.energy, free.energy) << "seed " << seed;

@@ -68,7 +68,19 @@ TEST(PaperTable1, EveryZeroIsABennettLoopAndTheZerosFormAFamily) {
     EXPECT_TRUE(s.candidate.verification.verified) << "start " << index;
     EXPECT_TRUE(s.candidate.verification.full_turn) << "start " << index;
     // The Bennett family inside these 4 free parameters has dimension 3.
-    EXPECT_EQ(s.candidate.local_dimension.dimension, 3) << "start " << index;
+    // Its planar member, the parallelogram, is where the Bennett family meets
+    // the planar one and the zero set is no manifold: there the count is that
+    // of the branches the final cycle's samples lie on, 3 where they all lie
+    // on the one the Bennett motions continue and 2 where the cycle changes
+    // branch at a change point (docs/local-dimension.md, Limits; start 1,
+    // whose cycle the search followed from nearby geometries, since the
+    // continuation's midpoints are solved to CycleOptions::stepping_tolerance).
+    if (family == Family::planar) {
+      EXPECT_GE(s.candidate.local_dimension.dimension, 2) << "start " << index;
+      EXPECT_LE(s.candidate.local_dimension.dimension, 3) << "start " << index;
+    } else {
+      EXPECT_EQ(s.candidate.local_dimension.dimension, 3) << "start " << index;
+    }
     zeros.push_back(s);
     if (family == Family::planar) continue;  // eqs. (2a), (4a) divide by sin((alpha2 -+ alpha1)/2)
     // The assembled pose obeys the closed-form pose equation (2a) or (4a).

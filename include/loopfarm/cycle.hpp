@@ -42,6 +42,11 @@ struct CycleOptions {
   // solve is from the last point). Off: every depth retries it, for
   // comparison.
   bool skip_failed_retries = true;
+  // A bisection's midpoints are no samples, only stepping stones to the next
+  // solve: their solves end once closure and stationarity are both at most
+  // this (see SolveLimits::stepping_tolerance); samples are always solved to
+  // the model's tolerances. 0: midpoints too, for comparison.
+  double stepping_tolerance = 1e-6;
 
   bool full_turn() const;
   // Throws std::invalid_argument naming the first invalid option.

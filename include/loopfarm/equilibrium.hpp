@@ -186,18 +186,32 @@ struct EquilibriumWorkspace {
   LoopGeometry deformed;
 };
 
+// Limits of one solve, beyond the model's options.
+struct SolveLimits {
+  // > 0: overrides the model's iteration limit (EquilibriumOptions::max_iterations).
+  int max_iterations = 0;
+  // >= 0: the solve gives up (status max_iterations) instead of taking one
+  // Gauss-Newton step more than this: a caller with a cheaper way on (the
+  // continuation bisects, or lands) uses it to stop a solve that has left the
+  // region where the exact Hessian is positive definite on the constraints'
+  // null space, from which such solves creep.
+  int max_gauss_newton_steps = -1;
+  // > 0: the solve also ends as converged once, after at least one Newton
+  // step (so that it has a tangent), the closure residual and the
+  // stationarity are both at most this. For a point that is only a stepping
+  // stone of a continuation (a bisection's midpoint, which is no sample): the
+  // next solve starts from it anyway, and its last Newton steps would buy
+  // digits nobody reads. The summary's closure_residual and stationarity say
+  // how far it got.
+  double stepping_tolerance = 0.0;
+};
+
 // Solves the stiff-limit equilibrium at input angle theta_in from `guess`
 // (whose input-joint angle is ignored). Never throws for a failed solve: the
-// status says what happened. No heap allocation. `max_iterations` > 0
-// overrides the model's iteration limit for this solve. With
-// `max_gauss_newton_steps` >= 0 the solve gives up (status max_iterations)
-// instead of taking one Gauss-Newton step more than that: a caller with a
-// cheaper way on (the continuation's landing) uses it to stop a solve that
-// has left the region where the exact Hessian is positive definite on the
-// constraints' null space, from which such solves creep.
+// status says what happened. No heap allocation.
 EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& workspace,
                                      double theta_in, const EquilibriumState& guess,
-                                     int max_iterations = 0, int max_gauss_newton_steps = -1);
+                                     const SolveLimits& limits = {});
 
 // d state / d theta_in at a solved equilibrium `solution` (as
 // EquilibriumSummary::tangent, but from a factorisation at `solution` itself).
