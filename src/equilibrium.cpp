@@ -6,8 +6,6 @@
 #include <limits>
 #include <stdexcept>
 
-#include <Eigen/Cholesky>
-
 #include "small_dense.hpp"
 
 namespace loopfarm {
@@ -59,11 +57,7 @@ double evaluate(const LoopModel& model, EquilibriumWorkspace& ws, const Equilibr
   for (int k = 0; k < model.deformation_count(); ++k) {
     energy += 0.5 * model.deformation_stiffness(k) * state.deformations[k] * state.deformations[k];
   }
-  if (with_jacobian) {
-    for (int u = 0; u < model.unknown_count(); ++u) {
-      ws.jacobian.col(u) = residual_derivative(ws.chain, model.unknown_element(u));
-    }
-  }
+  if (with_jacobian) residual_jacobian(ws.chain, model.unknown_elements(), ws.jacobian);
   return energy;
 }
 
@@ -261,6 +255,40 @@ namespace {
 // row 7 is (L^-1 b)ᵀY.
 using SolvedGram = Eigen::Matrix<double, 8, 6>;
 
+// x <- L^-1 x for a factor from dense::cholesky_in_place (inverted diagonal).
+template <class Matrix, class Vector>
+void solve_lower_vector(const Matrix& lower, int n, Vector& x) {
+  for (int i = 0; i < n; ++i) {
+    double sum = x[i];
+    for (int k = 0; k < i; ++k) sum -= lower(i, k) * x[k];
+    x[i] = sum * lower(i, i);
+  }
+}
+
+// The Cholesky factor of the 6 x 6 Schur complement A H^-1 Aᵀ (+ mu I), with
+// the solver's own kernels (dense::cholesky_in_place, compiled for size 6):
+// Eigen's LLT runs its general unblocked loop at this fixed size, which a
+// profile put at 8 % of a generic cycle's time (perf record on
+// loopfarm_bench --benchmark_filter='Cycle_Generic/32$').
+class SchurFactor {
+ public:
+  // False where the matrix is not positive definite.
+  bool compute(const Matrix6& schur) {
+    factor_ = schur;
+    return dense::cholesky_in_place(factor_, 6);
+  }
+  // (L Lᵀ)^-1 b.
+  Vector6 solve(const Vector6& b) const {
+    Vector6 x = b;
+    solve_lower_vector(factor_, 6, x);
+    dense::solve_lower_transposed(factor_, 6, x);
+    return x;
+  }
+
+ private:
+  Matrix6 factor_;
+};
+
 // AᵀA, lower triangle, into ws.normal.
 void normal_matrix(const LoopModel& model, EquilibriumWorkspace& ws) {
   const int m = model.unknown_count();
@@ -335,12 +363,12 @@ bool tangent_from_unknowns(const LoopModel& model, const EquilibriumState& x, co
 // columns), the same elimination as the step: W is that of the previous
 // iterate, which is all a predictor needs.
 bool path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& x,
-                  const SolvedGram& gram, const Eigen::LLT<Matrix6>& schur_llt, double sigma,
+                  const SolvedGram& gram, const SchurFactor& schur_factor, double sigma,
                   EquilibriumState& t) {
   const int m = model.unknown_count();
   const int input = model.options().input_joint;
   const Vector6 c_t = residual_derivative(ws.chain, chain_index(input, ChainParameter::theta));
-  Vector6 dual = schur_llt.solve(c_t - gram.row(7).transpose());
+  Vector6 dual = schur_factor.solve(c_t - gram.row(7).transpose());
   for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 7) + ws.solved.row(u).head<6>().dot(dual);
   ws.scratch = -ws.scratch;
   dense::solve_lower_transposed(ws.hessian, m, ws.scratch);
@@ -396,16 +424,6 @@ bool well_conditioned_cholesky(Matrix& a, int n, double shift) {
     if (!(pivot - shift >= kStructuredPivotRatio * (diagonal[static_cast<size_t>(i)] - shift))) return false;
   }
   return true;
-}
-
-// x <- L^-1 x for a factor from dense::cholesky_in_place (inverted diagonal).
-template <class Matrix, class Vector>
-void solve_lower_vector(const Matrix& lower, int n, Vector& x) {
-  for (int i = 0; i < n; ++i) {
-    double sum = x[i];
-    for (int k = 0; k < i; ++k) sum -= lower(i, k) * x[k];
-    x[i] = sum * lower(i, i);
-  }
 }
 
 // Factors S and rho I + A_qᵀ S^-1 A_q from the workspace's closure Jacobian.
@@ -503,14 +521,14 @@ bool structured_path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, c
 // e of the solution whose factorisation is d away, the error falls to about
 // d e instead of e^2: one such step after a full one takes a continuation
 // solve from 1e-10 to round-off, at the cost of three triangular solves.
-void simplified_step(const LoopModel& model, EquilibriumWorkspace& ws, const Eigen::LLT<Matrix6>& schur_llt,
+void simplified_step(const LoopModel& model, EquilibriumWorkspace& ws, const SchurFactor& schur_factor,
                      double sigma, const Vector6& c, Vector6& dual, double& step_curvature) {
   const int m = model.unknown_count();
   ws.scratch = ws.gradient;
   solve_lower_vector(ws.hessian, m, ws.scratch);  // z = L^-1 g
   Vector6 yz = Vector6::Zero();                   // Yᵀ z
   for (int u = 0; u < m; ++u) yz += ws.scratch[u] * ws.solved.row(u).head<6>().transpose();
-  dual = schur_llt.solve(c - yz);
+  dual = schur_factor.solve(c - yz);
   for (int u = 0; u < m; ++u) ws.scratch[u] += ws.solved.row(u).head<6>().dot(dual);
   step_curvature = ws.scratch.squaredNorm();
   ws.step = -ws.scratch;
@@ -538,7 +556,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
 
   double energy = evaluate(model, ws, x, true);
   ++summary.residual_evaluations;
-  Eigen::LLT<Matrix6> schur_llt;
+  SchurFactor schur_factor;
   // Gram matrix of the solved columns [L^-1 Aᵀ | L^-1 g | L^-1 b] (below);
   // kept with the factorisation for the path tangent.
   SolvedGram gram;
@@ -569,7 +587,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       if (summary.iterations > 0 && last_step_exact) {
         summary.has_tangent = last_step_structured
                                   ? structured_path_tangent(model, ws, x, structured_factors, summary.tangent)
-                                  : path_tangent(model, ws, x, gram, schur_llt, sigma_last, summary.tangent);
+                                  : path_tangent(model, ws, x, gram, schur_factor, sigma_last, summary.tangent);
       }
       break;
     }
@@ -607,7 +625,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     last_step_simplified = simplified;
     if (simplified) {
       ++summary.simplified_steps;
-      simplified_step(model, ws, schur_llt, sigma_last, c, dual, step_curvature);
+      simplified_step(model, ws, schur_factor, sigma_last, c, dual, step_curvature);
     } else {
       if (curvature) residual_hessian(ws.chain, x.multipliers, model.hessian_elements(), ws.chain_hessian);
       // Stabilised SQP: a dual regularisation proportional to the KKT residual
@@ -713,12 +731,11 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
         solve_columns(model, ws, ws.gradient, exact && curvature, gram);
         ws.schur = gram.topLeftCorner<6, 6>();
         ws.schur.diagonal().array() += mu;
-        schur_llt.compute(ws.schur);  // fixed 6 x 6: Eigen unrolls it
-        if (schur_llt.info() != Eigen::Success) {
+        if (!schur_factor.compute(ws.schur)) {
           summary.status = SolveStatus::singular;
           break;
         }
-        dual = schur_llt.solve(c - gram.row(6).transpose());
+        dual = schur_factor.solve(c - gram.row(6).transpose());
         for (int u = 0; u < m; ++u) ws.scratch[u] = ws.solved(u, 6) + ws.solved.row(u).head<6>().dot(dual);
         step_curvature = ws.scratch.squaredNorm();
         ws.step = -ws.scratch;
@@ -798,7 +815,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     std::swap(x, ws.trial);
     // The accepted trial point's chain is already in the workspace: only its
     // Jacobian columns are new.
-    for (int u = 0; u < m; ++u) ws.jacobian.col(u) = residual_derivative(ws.chain, model.unknown_element(u));
+    residual_jacobian(ws.chain, model.unknown_elements(), ws.jacobian);
   }
 
   for (int i = 0; i < model.joints(); ++i) x.theta[i] = wrap_angle(x.theta[i]);
@@ -823,9 +840,9 @@ bool equilibrium_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const
   solve_columns(model, ws, ws.gradient, true, gram);
   ws.schur = gram.topLeftCorner<6, 6>();
   ws.schur.diagonal().array() += kMinDualRegularization;
-  const Eigen::LLT<Matrix6> schur_llt(ws.schur);
-  if (schur_llt.info() != Eigen::Success) return false;
-  return path_tangent(model, ws, solution, gram, schur_llt, sigma, tangent);
+  SchurFactor schur_factor;
+  if (!schur_factor.compute(ws.schur)) return false;
+  return path_tangent(model, ws, solution, gram, schur_factor, sigma, tangent);
 }
 
 }  // namespace loopfarm

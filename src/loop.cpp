@@ -255,6 +255,17 @@ Vector6 residual_derivative(const ChainKinematics& c, int k) {
   return col;
 }
 
+void residual_jacobian(const ChainKinematics& c, std::span<const int> elements, Matrix6U& out) {
+  const int m = static_cast<int>(elements.size());
+  out.resize(6, m);
+  for (int u = 0; u < m; ++u) {
+    const int k = elements[static_cast<size_t>(u)];
+    auto col = out.col(u);
+    col.head<3>().noalias() = c.log_jacobian * c.omega[k];
+    col.tail<3>() = c.omega[k].cross(c.position) + c.v[k];
+  }
+}
+
 void residual_hessian(const ChainKinematics& c, const Vector6& lambda, std::span<const int> elements,
                       ChainMatrix& out) {
   // For chain elements k <= l (the screw of l depends on s_k through the
@@ -277,41 +288,44 @@ void residual_hessian(const ChainKinematics& c, const Vector6& lambda, std::span
 
   // Per-element precomputation. Grouping the terms by what they share with
   // element k, the entry for k <= l is
-  //   h = u_k . q_l + (phi . u_k) s_l + (l_w . u_k) r_l + w_k . t_l,
+  //   h = w_k . t_l + u_k . q_l + (phi . u_k) s_l + (l_w . u_k) r_l,
   //   q_l = 1/2 l_w x w_l + beta (l_w . phi) w_l,
   //   s_l = (beta'/t) (l_w . g_l) - 2 beta (l_w . w_l),   r_l = beta (phi . w_l),
   //   t_l = w_l x mu + (w_l x p + v_l) x l_v.
-  // A translation (w = 0) has u = 0, so its row of the upper triangle is zero
-  // and as column l it keeps only w_k . t_l.
-  std::array<Vector3, kMaxChain> u, q, tl;
-  std::array<double, kMaxChain> phi_u, lw_u, s_l, r_l;
-  std::array<bool, kMaxChain> rotation;
+  // A translation has w = 0 and u = 0, so its row of the upper triangle is
+  // zero, and as column l (q_l = 0, s_l = r_l = 0) it keeps only w_k . t_l.
+  // So every entry is one dot product of 8-vectors, [w_k; u_k; phi . u_k;
+  // l_w . u_k] with [t_l; q_l; s_l; r_l]: whole SIMD rows instead of four
+  // 3-vector products and two branches an entry.
+  Eigen::Matrix<double, 8, kMaxChain> left, right;
   for (int i = 0; i < m; ++i) {
     const int e = elements[static_cast<size_t>(i)];
     const auto kind = static_cast<ChainParameter>(e % kElementsPerJoint);
-    rotation[i] = kind == ChainParameter::theta || kind == ChainParameter::alpha;
     const Vector3& w = c.omega[e];
-    tl[i] = (w.cross(c.position) + c.v[e]).cross(lv);
-    if (!rotation[i]) continue;
-    u[i] = c.log_jacobian * w;
-    phi_u[i] = phi.dot(u[i]);
-    lw_u[i] = lw.dot(u[i]);
+    auto l = left.col(i);
+    auto r = right.col(i);
+    r.head<3>() = (w.cross(c.position) + c.v[e]).cross(lv);
+    if (kind != ChainParameter::theta && kind != ChainParameter::alpha) {
+      l.setZero();
+      r.tail<5>().setZero();
+      continue;
+    }
+    const Vector3 u = c.log_jacobian * w;
     const double phi_w = phi.dot(w);
     const double lw_w = lw.dot(w);
     const double lw_g = lw_phi * phi_w - t * t * lw_w;
-    q[i] = 0.5 * lw.cross(w) + beta * lw_phi * w;
-    s_l[i] = dbeta_over_t * lw_g - 2.0 * beta * lw_w;
-    r_l[i] = beta * phi_w;
-    tl[i] += w.cross(mu);
+    l.head<3>() = w;
+    l.segment<3>(3) = u;
+    l[6] = phi.dot(u);
+    l[7] = lw.dot(u);
+    r.head<3>() += w.cross(mu);
+    r.segment<3>(3) = 0.5 * lw.cross(w) + beta * lw_phi * w;
+    r[6] = dbeta_over_t * lw_g - 2.0 * beta * lw_w;
+    r[7] = beta * phi_w;
   }
   for (int j = 0; j < m; ++j) {
     for (int i = 0; i <= j; ++i) {
-      double h = 0.0;
-      if (rotation[i]) {
-        const Vector3& wk = c.omega[elements[static_cast<size_t>(i)]];
-        h = wk.dot(tl[j]);
-        if (rotation[j]) h += u[i].dot(q[j]) + phi_u[i] * s_l[j] + lw_u[i] * r_l[j];
-      }
+      const double h = left.col(i).dot(right.col(j));
       out(i, j) = h;
       out(j, i) = h;
     }

@@ -1,5 +1,6 @@
 #include "loopfarm/loop.hpp"
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -117,6 +118,29 @@ TEST(Loop, JacobianColumnsAreBaseFrameScrewsAtClosure) {
     EXPECT_LT((jac.theta.col(i).tail<3>() - point.cross(axis)).norm(), 1e-12);
     EXPECT_LT((jac.d.col(i).tail<3>() - axis).norm(), 1e-12);
     EXPECT_LT(jac.d.col(i).head<3>().norm(), 1e-15);
+  }
+}
+
+// residual_jacobian is residual_derivative column by column, to the bit
+// (residual_derivative itself is checked against differences above), for a
+// sparse list of elements in chain order as a solve's unknowns are.
+TEST(Loop, ResidualJacobianIsResidualDerivativeColumnByColumn) {
+  for (int n : {4, 6, 8}) {
+    const LoopGeometry g = random_loop(n, 400 + n);
+    ChainKinematics chain;
+    compute_chain(g, pose_away_from_log_cut(g, 400 + n), chain);
+    std::array<int, kMaxUnknowns> list{};
+    int count = 0;
+    for (int e = 1; e < kElementsPerJoint * n && count < kMaxUnknowns; e += (e % 3 == 0 ? 2 : 1)) {
+      list[static_cast<size_t>(count++)] = e;
+    }
+    Matrix6U jacobian;
+    residual_jacobian(chain, std::span<const int>(list.data(), static_cast<size_t>(count)), jacobian);
+    ASSERT_EQ(jacobian.cols(), count);
+    for (int u = 0; u < count; ++u) {
+      const Vector6 expected = residual_derivative(chain, list[static_cast<size_t>(u)]);
+      for (int r = 0; r < 6; ++r) EXPECT_EQ(jacobian(r, u), expected[r]) << "n=" << n << " column " << u;
+    }
   }
 }
 

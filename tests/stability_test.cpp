@@ -20,6 +20,7 @@
 // the behaviour is pinned in a StabilityKnownLimit test, so that a fix makes
 // it fail and docs/stability.md (the table of all of this, with the commands)
 // changes with it.
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -431,40 +432,48 @@ TEST(Stability, PlanarFourBarsWithChangePointsReadZeroAndVerify) {
   }
 }
 
-// At a change point two zero-energy branches cross, and which one the
-// continuation leaves on is not chosen: it passes to the other one or not
-// depending on details of the walk, never with a jump to flag. Energy and
-// verification are right (both branches move); the joint angles of the
-// cycle may not be those of one branch. Here the same walk with its
-// bisections' midpoints solved to full tolerance (stepping_tolerance 0) goes
-// on along the anti-parallelogram, and with the default stepping tolerance
-// stays on the parallelogram.
+// At a change point two zero-energy branches cross, and which one the walk
+// leaves on is not chosen: it depends on details of the walk (the bisections'
+// midpoints solved to full tolerance or not, the round-off of the
+// factorisations), and a change of branch is never flagged as a jump. Energy
+// and verification are right (both branches move); the joint angles of the
+// cycle may not be those of one branch. Pinned here: within each half-turn
+// between the change points at 0 and 180 deg the samples keep to one branch,
+// and at 180 deg the walk changes branch, unflagged, with at least one of two
+// settings (with both since the sixth session of 2026-11-24; with exact
+// midpoints only before its factorisation changes).
 TEST(StabilityKnownLimit, ParallelogramCycleBranchAfterItsChangePointIsNotChosen) {
   Case exact{"parallelogram from 0, exact midpoints", planar_four_bar(1, 2, 1, 2), JointVector(), 0.0};
   exact.cycle.stepping_tolerance = 0.0;
   Case loose = exact;
   loose.name = "parallelogram from 0";
   loose.cycle = CycleOptions{};
+  int changes = 0;
   for (const Case& c : {exact, loose}) {
     const Methods m = run_methods(c);
     ASSERT_EQ(m.cycle.samples.size(), 32u) << c.name;
     EXPECT_EQ(m.cycle.branch_jumps, 0) << c.name;
     EXPECT_LE(m.cycle.E_max, kZero) << c.name;
-    const bool stays = c.cycle.stepping_tolerance > 0.0;
+    // Per half-turn: how many samples lie on the parallelogram branch
+    // (theta3 = theta1, theta4 = theta2) and on the anti-parallelogram
+    // (theta3 = -theta1, theta4 = -theta2).
+    std::array<std::array<int, 2>, 2> on{};
     for (const CycleSample& s : m.cycle.samples) {
+      const bool first = s.theta_in > 0.01 && s.theta_in < kPi - 0.01;
+      const bool second = s.theta_in > kPi + 0.01;
+      if (!first && !second) continue;
       const JointVector& t = s.state.theta;
-      // Parallelogram branch: theta3 = theta1, theta4 = theta2; the
-      // anti-parallelogram: theta3 = -theta1, theta4 = -theta2.
-      const double parallelogram = angle_gap(t[2], t[0]) + angle_gap(t[3], t[1]);
-      const double anti = angle_gap(t[2], -t[0]) + angle_gap(t[3], -t[1]);
-      if (s.theta_in > 0.01 && s.theta_in < kPi - 0.01) {
-        EXPECT_LT(parallelogram, 1e-8) << c.name << " at " << s.theta_in;
-      } else if (s.theta_in > kPi + 0.01) {
-        // After the change point at 180 deg.
-        EXPECT_LT(stays ? parallelogram : anti, 1e-8) << c.name << " at " << s.theta_in;
-      }
+      const bool parallelogram = angle_gap(t[2], t[0]) + angle_gap(t[3], t[1]) < 1e-8;
+      const bool anti = angle_gap(t[2], -t[0]) + angle_gap(t[3], -t[1]) < 1e-8;
+      EXPECT_TRUE(parallelogram || anti) << c.name << " at " << s.theta_in;
+      ++on[second ? 1 : 0][parallelogram ? 0 : 1];
     }
+    for (int half : {0, 1}) {
+      EXPECT_TRUE(on[half][0] == 0 || on[half][1] == 0) << c.name << ": half-turn " << half << " mixes the branches";
+    }
+    changes += (on[0][0] > 0) != (on[1][0] > 0);
   }
+  EXPECT_GE(changes, 1);
 }
 
 // A planar rocker (the kite 2,1,1,2 driven between its two long links) turns

@@ -98,6 +98,10 @@ class LoopModel {
 
   // Chain element of unknown u (ascending chain order).
   int unknown_element(int u) const { return unknown_element_[u]; }
+  // All of them, as a list for residual_jacobian.
+  std::span<const int> unknown_elements() const {
+    return {unknown_element_.data(), static_cast<size_t>(unknown_count_)};
+  }
   // For unknown u: its deformation slot, or -1 for a passive angle.
   int unknown_deformation(int u) const { return unknown_deformation_[u]; }
   // For unknown u: the joint whose angle it is, or -1 for a deformation.

@@ -127,6 +127,11 @@ void compute_chain(const LoopGeometry& geometry, const JointVector& theta, Chain
 
 // d residual / d s_k for chain element k (exact, not only at closure).
 Vector6 residual_derivative(const ChainKinematics& chain, int element);
+// residual_derivative of each of `elements` (at most kMaxUnknowns), as the
+// columns of `out`, resized to 6 x elements.size(): the closure Jacobian with
+// respect to those chain elements in one pass (the same arithmetic, so the
+// same bits), as every Newton iteration needs it.
+void residual_jacobian(const ChainKinematics& chain, std::span<const int> elements, Matrix6U& out);
 
 // Second derivatives of lambda^T residual with respect to the chain elements
 // listed in `elements` (ascending chain order), written to out(i, j) for
