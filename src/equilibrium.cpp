@@ -215,19 +215,16 @@ EquilibriumWorkspace::EquilibriumWorkspace(const LoopModel& model) {
 }
 
 void deformed_geometry(const LoopModel& model, const DeformationVector& deformations, LoopGeometry& out) {
+  // The slots are grouped by kind (LoopModel's constructor): a_1..a_n, then
+  // alpha_1..alpha_n, then, for the full set, d_1..d_n.
   const LoopGeometry& g = model.normalized_geometry();
-  out.a = g.a;
-  out.alpha = g.alpha;
-  out.d = g.d;
-  for (int k = 0; k < model.deformation_count(); ++k) {
-    const int e = model.deformation_element(k);
-    const int joint = e / kElementsPerJoint;
-    switch (static_cast<ChainParameter>(e % kElementsPerJoint)) {
-      case ChainParameter::a: out.a[joint] += deformations[k]; break;
-      case ChainParameter::alpha: out.alpha[joint] += deformations[k]; break;
-      case ChainParameter::d: out.d[joint] += deformations[k]; break;
-      case ChainParameter::theta: break;
-    }
+  const int n = model.joints();
+  out.a = g.a + deformations.head(n);
+  out.alpha = g.alpha + deformations.segment(n, n);
+  if (model.deformation_count() == 3 * n) {
+    out.d = g.d + deformations.segment(2 * n, n);
+  } else {
+    out.d = g.d;
   }
 }
 

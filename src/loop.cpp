@@ -34,12 +34,6 @@ void log_jacobian_coefficients(double t, double& beta, double& dbeta_over_t) {
   dbeta_over_t = -2.0 / (t * t * t * t) + csc2_half / (4.0 * t * t) + cot_half / (2.0 * t * t * t);
 }
 
-Matrix3 skew(const Vector3& w) {
-  Matrix3 m;
-  m << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
-  return m;
-}
-
 }  // namespace
 
 LoopGeometry LoopGeometry::from_degrees(std::span<const double> a, std::span<const double> alpha_deg,
@@ -237,11 +231,23 @@ void compute_chain(const LoopGeometry& g, const JointVector& theta, ChainKinemat
   out.rotation = R;
   out.position = p;
   out.phi = so3_log(R);
-  // Inverse left Jacobian: J^-1(phi) = I - phi^/2 + beta(|phi|) phi^2.
+  // Inverse left Jacobian: J^-1(phi) = I - phi^/2 + beta(|phi|) phi^2, with
+  // phi^2 = phi phiᵀ - |phi|^2 I written out (Eigen's 3 x 3 product of the
+  // skew matrices was a call of its own, 3 % of a generic cycle's
+  // instructions).
+  const double t = out.phi.norm();
   double beta = 0.0, dbeta_over_t = 0.0;
-  log_jacobian_coefficients(out.phi.norm(), beta, dbeta_over_t);
-  const Matrix3 phi_hat = skew(out.phi);
-  out.log_jacobian = Matrix3::Identity() - 0.5 * phi_hat + beta * phi_hat * phi_hat;
+  log_jacobian_coefficients(t, beta, dbeta_over_t);
+  const Vector3 half = 0.5 * out.phi;
+  Matrix3& J = out.log_jacobian;
+  J.noalias() = (beta * out.phi) * out.phi.transpose();
+  J.diagonal().array() += 1.0 - beta * t * t;
+  J(0, 1) += half.z();
+  J(0, 2) -= half.y();
+  J(1, 0) -= half.z();
+  J(1, 2) += half.x();
+  J(2, 0) += half.y();
+  J(2, 1) -= half.x();
   out.residual.head<3>() = out.phi;
   out.residual.tail<3>() = p;
 }
