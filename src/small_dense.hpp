@@ -100,7 +100,7 @@ bool cholesky_in_place(Matrix& matrix, int size) {
 
 // B <- L^-1 B for a row-major B of n rows and a fixed number of columns,
 // L from cholesky_in_place (inverted diagonal): row i of B is updated by
-// whole rows, which the compiler unrolls and vectorises.
+// whole rows, in SIMD packets (below).
 template <class Matrix, class Rows>
 void solve_lower_rows(const Matrix& lower, int size, Rows& b) {
   static_assert(Rows::IsRowMajor && Rows::ColsAtCompileTime > 0, "row-major, fixed width");
