@@ -42,15 +42,25 @@ ObjectiveSettings objective_settings(const Job& job) {
 
 CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
                                     const Eigen::MatrixXd& jacobian, const StartOptions& options) {
+  return analyse_candidate(geometry, pose, verify_motion(geometry, pose, options.verification), jacobian, options);
+}
+
+CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
+                                    VerificationSummary verification, const Eigen::MatrixXd& jacobian,
+                                    const StartOptions& options) {
   CandidateAnalysis out;
-  out.verification = verify_motion(geometry, pose, options.verification);
+  out.verification = std::move(verification);
+  // The family is read on the verified motion: from the given pose when it
+  // lies on it, else from a pose of the circuit that moves.
+  const JointVector classified_pose =
+      out.verification.verified && !out.verification.on_motion ? out.verification.pose() : pose;
   const JointVector& travel = out.verification.joint_travel;
   // The joint travel is over the verified motion; a loop that could not be
   // followed has none (every joint would look frozen and the loop trivial).
   const std::span<const double> travel_span =
       out.verification.verified ? std::span<const double>(travel.data(), static_cast<size_t>(travel.size()))
                                 : std::span<const double>();
-  out.classification = classify(geometry, pose, travel_span, options.classification);
+  out.classification = classify(geometry, classified_pose, travel_span, options.classification);
   // Near the meeting of two families (a Bennett loop with tiny twists, a
   // parallelogram) a loop a distance eps off both closes to about eps^2, the
   // product of the two distances: a local search stops on such loops, and
@@ -61,7 +71,7 @@ CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVec
   if (out.classification.family == Family::unclassified && out.verification.verified) {
     ClassifyOptions loose = options.classification;
     loose.tolerance = std::max(loose.tolerance, 10.0 * std::sqrt(out.verification.worst_residual));
-    out.classification = classify(geometry, pose, travel_span, loose);
+    out.classification = classify(geometry, classified_pose, travel_span, loose);
   }
   out.canonical = canonical_form(geometry);
   out.local_dimension = local_dimension(jacobian, options.rank_tolerance);
@@ -136,9 +146,13 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
     const int kind = index / job.space.joints;
     is_length.push_back(kind == static_cast<int>(ParameterKind::a) || kind == static_cast<int>(ParameterKind::d));
   }
+  // A zero's pose is on its motion (the cycle went through it with no
+  // energy): only the circuit through it is traced.
+  StartOptions analysis = options;
+  analysis.verification.all_circuits = false;
   out.candidate = analyse_candidate(out.final_geometry, out.final_angles,
                                     dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry)),
-                                    options);
+                                    analysis);
   return out;
 }
 

@@ -1,6 +1,7 @@
 #include "loopfarm/verify.hpp"
 
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -39,7 +40,8 @@ TEST(Verify, BennettLoopsTurnFullyOnTheirClosedFormPath) {
     EXPECT_TRUE(v.full_turn);
     EXPECT_TRUE(v.limit.empty()) << v.limit;
     EXPECT_LT(v.worst_residual, 1e-12);
-    EXPECT_EQ(v.poses, 721);
+    EXPECT_TRUE(v.on_motion);
+    EXPECT_GT(v.poses, 360);
     // Independent: the closed-form Bennett angles (eqs. 2a, 4a).
     for (size_t i = 0; i < v.input_angles.size(); i += 37) {
       const JointVector expected = c.angles(c.g, v.input_angles[i]);
@@ -74,19 +76,78 @@ TEST(Verify, PlanarRockerStopsAtItsClosedFormDeadPoints) {
   const LoopGeometry g = planar_four_bar(3.0, 1.0, 2.5, 2.0);
   const VerificationSummary v = verify_motion(g, assembled_at(g, rad(120)));
   EXPECT_TRUE(v.verified);
+  EXPECT_TRUE(v.on_motion);
   EXPECT_FALSE(v.full_turn);
   EXPECT_FALSE(v.limit.empty());
   const double lo = std::acos((12.25 - 13.0) / 12.0);  // delta = 3.5
   const double hi = std::acos((2.25 - 13.0) / 12.0);   // delta = 1.5
-  // The walk resolves a limit to the finest bisected step, 0.5 deg / 2^12;
-  // near a dead point the closure residual grows only as the square of the
-  // overshoot, so allow a few finest steps more.
-  const double resolution = rad(0.5) / 4096 * 8;
-  EXPECT_NEAR(v.range_lo, lo, std::max(resolution, 1e-4)) << deg(v.range_lo) << " vs " << deg(lo);
-  EXPECT_NEAR(v.range_hi, hi, std::max(resolution, 1e-4)) << deg(v.range_hi) << " vs " << deg(hi);
+  // The dead points are solved for on the curve: exact to 1e-6 deg.
+  EXPECT_NEAR(v.range_lo, lo, rad(1e-6)) << deg(v.range_lo) << " vs " << deg(lo);
+  EXPECT_NEAR(v.range_hi, hi, rad(1e-6)) << deg(v.range_hi) << " vs " << deg(hi);
   for (size_t i = 0; i < v.joint_angles.size(); i += 7) {
     EXPECT_NEAR(diagonal_from_input(g, v.joint_angles[i][0]), diagonal_from_coupler(g, v.joint_angles[i][2]), 1e-9) << i;
   }
+}
+
+TEST(Verify, ARockerIsVerifiedWhateverTheta0ItIsGivenOrNone) {
+  const LoopGeometry g = planar_four_bar(3.0, 1.0, 2.5, 2.0);
+  const double lo = std::acos((12.25 - 13.0) / 12.0), hi = std::acos((2.25 - 13.0) / 12.0);
+  // No pose at all.
+  const VerificationSummary none = verify_motion(g, nullptr);
+  EXPECT_TRUE(none.verified);
+  EXPECT_FALSE(none.full_turn);
+  // A pose at theta0 = 0, outside the input's range: the elastic assembly
+  // there does not close the rigid loop, and the motion is found elsewhere.
+  const VerificationSummary outside = verify_motion(g, assembled_at(g, 0.0));
+  EXPECT_TRUE(outside.verified);
+  EXPECT_FALSE(outside.assembled);
+  EXPECT_FALSE(outside.on_motion);
+  EXPECT_NEAR(std::abs(wrap_angle(0.5 * (outside.range_lo + outside.range_hi))), 0.5 * (lo + hi), rad(1e-6));
+  // Only the circuit through the pose (the farm's way): not verified there.
+  VerificationOptions farm;
+  farm.all_circuits = false;
+  EXPECT_FALSE(verify_motion(g, assembled_at(g, 0.0), farm).verified);
+  EXPECT_THROW(verify_motion(g, nullptr, farm), std::invalid_argument);
+  // theta0 picks the circuit whose input reaches it: the mirror image.
+  for (const double theta0 : {rad(120), rad(-120)}) {
+    VerificationOptions o;
+    o.theta0 = theta0;
+    const VerificationSummary v = verify_motion(g, nullptr, o);
+    ASSERT_TRUE(v.verified);
+    const double image = v.range_lo + std::fmod(std::fmod(theta0 - v.range_lo, 2 * kPi) + 2 * kPi, 2 * kPi);
+    EXPECT_LE(image, v.range_hi) << deg(theta0);
+  }
+}
+
+TEST(Verify, MotionWindowIsAFullTurnForACrankAndInsideTheRangeForARocker) {
+  const LoopGeometry crank = planar_four_bar(1.0, 3.0, 2.5, 3.5);
+  const VerificationSummary c = verify_motion(crank, nullptr);
+  const std::optional<MotionWindow> wc = motion_window(crank, c, rad(40));
+  ASSERT_TRUE(wc.has_value());
+  EXPECT_DOUBLE_EQ(wc->range, 2 * kPi);
+  EXPECT_NEAR(wrap_angle(wc->theta0 - rad(40)), 0.0, 1e-12);
+  EXPECT_NEAR(wrap_angle(wc->pose[0] - rad(40)), 0.0, 1e-12);
+  EXPECT_LT(closure_residual(crank, wc->pose).cwiseAbs().maxCoeff(), 1e-12);
+
+  const LoopGeometry rocker = planar_four_bar(3.0, 1.0, 2.5, 2.0);
+  const double lo = std::acos((12.25 - 13.0) / 12.0), hi = std::acos((2.25 - 13.0) / 12.0);
+  VerificationOptions o;
+  o.theta0 = rad(100);
+  const VerificationSummary r = verify_motion(rocker, nullptr, o);
+  // theta0 inside the range: centred there, 90 % of the way to the nearer dead point.
+  const std::optional<MotionWindow> inside = motion_window(rocker, r, rad(100), o);
+  ASSERT_TRUE(inside.has_value());
+  EXPECT_NEAR(inside->theta0, rad(100), 1e-12);
+  EXPECT_NEAR(inside->range, 1.8 * (rad(100) - lo), 1e-9);
+  // theta0 outside: the middle of the range.
+  const std::optional<MotionWindow> outside = motion_window(rocker, r, 0.0, o);
+  ASSERT_TRUE(outside.has_value());
+  EXPECT_NEAR(outside->theta0, 0.5 * (lo + hi), 1e-9);
+  EXPECT_NEAR(outside->range, 0.9 * (hi - lo), 1e-9);
+  EXPECT_LT(closure_residual(rocker, outside->pose).cwiseAbs().maxCoeff(), 1e-12);
+  // Not verified: no window.
+  const LoopGeometry rigid = random_loop(4, 1);
+  EXPECT_FALSE(motion_window(rigid, verify_motion(rigid, nullptr), 0.0).has_value());
 }
 
 TEST(Verify, SphericalCrankTurnsFully) {

@@ -21,6 +21,9 @@ inline constexpr int kExitUsage = 2;
 // loopfarm run stopped by a signal: everything finished is committed, and
 // running the same command again resumes.
 inline constexpr int kExitStopped = 3;
+// loopfarm verify and loopfarm motion: the geometry was read and analysed,
+// and no circuit of its rigid loop moves (not verified).
+inline constexpr int kExitNotVerified = 4;
 
 // Bad input: an option value, a geometry file, an output path. `where` names
 // the flag ("--a") or the file position ("geom.toml:3 key \"a\"") so the user

@@ -14,6 +14,7 @@
 #include "cli_support.hpp"
 #include "energy_command.hpp"
 #include "groundtruth_command.hpp"
+#include "motion_command.hpp"
 #include "report_command.hpp"
 #include "run_command.hpp"
 #include "start_command.hpp"
@@ -67,6 +68,7 @@ int main(int argc, char** argv) {
   const std::vector<loopfarm::cli::Subcommand> commands{
       loopfarm::cli::add_energy_command(app),
       loopfarm::cli::add_verify_command(app),
+      loopfarm::cli::add_motion_command(app),
       loopfarm::cli::add_start_command(app),
       loopfarm::cli::add_run_command(app),
       loopfarm::cli::add_report_command(app),

@@ -173,6 +173,49 @@ void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary&
   render_gnuplot_script(gnuplot, script.path(), png, "--plot");
 }
 
+void plot_motion(const std::filesystem::path& gnuplot, const MotionAnalysis& motion, const std::string& title,
+                 const std::filesystem::path& png) {
+  if (motion.circuits.empty() || motion.circuits.front().points.empty()) {
+    throw EnvironmentError("--plot: the loop has no circuit; nothing to plot");
+  }
+  const int n = static_cast<int>(motion.circuits.front().points.front().size());
+  // One block per circuit (two blank lines apart: gnuplot's index).
+  ScratchFile data(".dat");
+  for (const Circuit& c : motion.circuits) {
+    for (size_t p = 0; p < c.points.size(); ++p) {
+      std::fprintf(data.stream(), "%.17g", c.arclength[p]);
+      for (int j = 0; j < n; ++j) std::fprintf(data.stream(), " %.17g", c.points[p][j] * kDegreesPerRadian);
+      std::fputs("\n", data.stream());
+    }
+    std::fputs("\n\n", data.stream());
+  }
+  data.close();
+
+  ScratchFile script(".gp");
+  std::FILE* gp = script.stream();
+  const std::string data_name = gnuplot_string(data.path().string());
+  const int input = motion.input_joint + 2;  // the input's column
+  std::fputs(
+      "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
+      "  set terminal pngcairo size 1400,600 enhanced\n"
+      "} else {\n"
+      "  set terminal png size 1400,600 enhanced\n"
+      "}\n",
+      gp);
+  std::fprintf(gp, "set output %s\n", gnuplot_string(png.string()).c_str());
+  std::fprintf(gp, "set multiplot layout 1,2 title %s noenhanced\n", gnuplot_string(title).c_str());
+  std::fputs("set grid\nset key outside right\nset ylabel 'joint angle [deg]'\n", gp);
+  std::fprintf(gp, "set xlabel 'input angle theta_%d [deg]'\n", motion.input_joint + 1);
+  std::fprintf(gp, "plot for [j=2:%d] %s using %d:j with lines lw 1.5 lt (j-1) title sprintf('theta_%%d', j-1)\n",
+               n + 1, data_name.c_str(), input);
+  std::fputs("set xlabel 'arclength in joint space [rad]'\n", gp);
+  std::fprintf(gp, "plot for [j=2:%d] %s using 1:j with lines lw 1.5 lt (j-1) title sprintf('theta_%%d', j-1)\n",
+               n + 1, data_name.c_str());
+  std::fputs("unset multiplot\nunset output\n", gp);
+  script.close();
+  render_gnuplot_script(gnuplot, script.path(), png, "--plot");
+}
+
 void render_gnuplot_script(const std::filesystem::path& gnuplot, const std::filesystem::path& script,
                            const std::filesystem::path& png, const std::string& flag) {
   ScratchFile log(".log");

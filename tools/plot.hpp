@@ -1,5 +1,5 @@
 // Plots through gnuplot, run as a separate program: the energy curve of a
-// cycle as a PNG.
+// cycle, and the input-output curves of a loop's motion, as PNGs.
 #pragma once
 
 #include <filesystem>
@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "loopfarm/cycle.hpp"
+#include "loopfarm/motion.hpp"
 
 namespace loopfarm::cli {
 
@@ -38,6 +39,12 @@ struct EnergyPlotStyle {
 inline constexpr double kLogFloor = 1e-32;
 void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary& summary,
                        const EnergyPlotStyle& style, const std::filesystem::path& png);
+
+// Draws every circuit's joint angles [deg, unwrapped along the circuit]
+// against the input angle (left) and against arclength (right) into `png`.
+// Throws EnvironmentError as plot_energy_curve does.
+void plot_motion(const std::filesystem::path& gnuplot, const MotionAnalysis& motion, const std::string& title,
+                 const std::filesystem::path& png);
 
 // Runs gnuplot on a finished script that writes `png`. Throws
 // EnvironmentError naming `flag` if gnuplot fails (with its first error line)

@@ -55,7 +55,10 @@ void print_story(const Job& job, const StartSummary& s) {
   std::printf("  failed samples        %d, branch jumps %d\n", s.failed_samples, s.branch_jumps);
   std::printf("zero                    %s (threshold %s)\n", s.zero ? "yes" : "no",
               readable(job.search.zero_threshold).c_str());
-  if (s.zero) print_candidate(s.candidate);
+  if (s.zero) {
+    print_candidate(s.candidate);
+    if (s.candidate.verification.verified) print_local_dimension(s.candidate.local_dimension);
+  }
 }
 
 void print_json(const StartSummary& s) {

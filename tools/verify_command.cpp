@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,7 +20,7 @@ constexpr double kDegreesPerRadian = 180.0 / 3.14159265358979323846;
 
 struct VerifyArguments {
   GeometryOptions geometry;
-  std::string theta0_deg = "0";
+  std::string theta0_deg;
   std::string samples = "32";
   std::string steps = "720";
   bool json = false;
@@ -33,7 +34,8 @@ std::string readable(double value) {
 
 int run_verify(const VerifyArguments& args) {
   const GeometryRequest request = read_geometry(args.geometry);
-  const double theta0_deg = request.theta0_deg ? *request.theta0_deg : parse_number(args.theta0_deg, "--theta0-deg");
+  std::optional<double> theta0_deg = request.theta0_deg;
+  if (!args.theta0_deg.empty()) theta0_deg = parse_number(args.theta0_deg, "--theta0-deg");
   const long long samples = parse_integer(args.samples, "--samples");
   if (samples < 4 || samples > 4096) {
     throw UsageError("--samples", "got " + std::to_string(samples) + "; must be in [4, 4096]");
@@ -42,61 +44,84 @@ int run_verify(const VerifyArguments& args) {
   if (steps < 360 || steps > 1000000) {
     throw UsageError("--steps", "got " + std::to_string(steps) + "; must be in [360, 1000000]");
   }
+  const LoopGeometry& geometry = request.geometry;
+  const int n = geometry.joints();
 
-  // The pose to verify from: the elastic assembly at theta0 (from --theta-deg
-  // when given), which for a movable loop is a closed pose.
-  const LoopModel model(request.geometry);
-  EquilibriumWorkspace workspace(model);
-  const double theta0 = theta0_deg / kDegreesPerRadian;
-  const EquilibriumSummary assembly =
-      request.theta ? assemble_from_angles(model, workspace, *request.theta) : assemble(model, workspace, theta0);
-  const bool assembled = assembly.status == SolveStatus::converged;
-  CycleOptions cycle_options;
-  cycle_options.samples = static_cast<int>(samples);
-  CycleSummary cycle;
-  cycle_energy(model, workspace, assembly.state.theta[0], assembly.state, cycle_options, cycle);
-  // Every geometric parameter free: the local dimension of the zero set in
-  // the full (a, alpha, d) space.
-  const int n = request.geometry.joints();
-  std::vector<bool> is_length(static_cast<size_t>(3 * n), true);
-  for (int i = n; i < 2 * n; ++i) is_length[static_cast<size_t>(i)] = false;  // the twists
-  const Eigen::MatrixXd jacobian =
-      dimensionless_columns(cycle_deformation_jacobian(model, workspace, cycle), is_length, model.length_scale());
-
+  // The rigid loop's motion first: every circuit, from the given pose (if
+  // any) and from assemblies over the whole turn.
   StartOptions options;
   options.verification.steps_per_turn = static_cast<int>(steps);
-  const CandidateAnalysis candidate = analyse_candidate(request.geometry, assembly.state.theta, jacobian, options);
+  if (theta0_deg) options.verification.theta0 = *theta0_deg / kDegreesPerRadian;
+  const JointVector* pose = request.theta ? &*request.theta : nullptr;
+  VerificationSummary verification = verify_motion(geometry, pose, options.verification);
+
+  // The cycle energy, only where it means something: driven along the
+  // verified motion, from a pose on it (motion_window says where and over
+  // what input range).
+  const std::optional<MotionWindow> window = motion_window(geometry, verification, options.verification.theta0,
+                                                           options.verification);
+  const LoopModel model(geometry);
+  EquilibriumWorkspace workspace(model);
+  CycleSummary cycle;
+  EquilibriumSummary assembly;
+  Eigen::MatrixXd jacobian;
+  if (window) {
+    assembly = assemble_from_angles(model, workspace, window->pose);
+    CycleOptions cycle_options;
+    cycle_options.samples = static_cast<int>(samples);
+    cycle_options.range = window->range;
+    cycle_energy(model, workspace, window->theta0, assembly.state, cycle_options, cycle);
+    // Every geometric parameter free: the local dimension of the zero set in
+    // the full (a, alpha, d) space.
+    std::vector<bool> is_length(static_cast<size_t>(3 * n), true);
+    for (int i = n; i < 2 * n; ++i) is_length[static_cast<size_t>(i)] = false;  // the twists
+    jacobian = dimensionless_columns(cycle_deformation_jacobian(model, workspace, cycle), is_length,
+                                     model.length_scale());
+  }
+  const JointVector classified_pose =
+      window ? window->pose : (request.theta ? *request.theta : JointVector(JointVector::Zero(n)));
+  const CandidateAnalysis candidate =
+      analyse_candidate(geometry, classified_pose, std::move(verification), jacobian, options);
+  const VerificationSummary& v = candidate.verification;
+  const int status = v.verified ? kExitSuccess : kExitNotVerified;
 
   if (args.json) {
     std::string json = "{";
-    json += "\"status\":" + json_string(assembled ? to_string(assembly.status) : "assembly_failed");
-    json += ",\"E_mean\":" + json_number(cycle.E_mean);
-    json += ",\"E_max\":" + json_number(cycle.E_max);
-    json += ",\"failed_samples\":" + std::to_string(cycle.failed_samples);
-    json += ",\"geometry\":" + geometry_json(request.geometry);
-    json += ",\"theta_deg\":[";
-    for (int i = 0; i < assembly.state.theta.size(); ++i) {
-      if (i) json += ',';
-      json += json_number(assembly.state.theta[i] * kDegreesPerRadian);
+    json += "\"geometry\":" + geometry_json(geometry);
+    if (window) {
+      json += ",\"theta0_deg\":" + json_number(window->theta0 * kDegreesPerRadian);
+      json += ",\"cycle_range_deg\":" + json_number(window->range * kDegreesPerRadian);
+      json += ",\"status\":" + json_string(to_string(assembly.status));
+      json += ",\"E_mean\":" + json_number(cycle.E_mean);
+      json += ",\"E_max\":" + json_number(cycle.E_max);
+      json += ",\"failed_samples\":" + std::to_string(cycle.failed_samples);
+      json += ",\"theta_deg\":" + degrees_json(window->pose);
+    } else {
+      json += ",\"theta0_deg\":null,\"cycle_range_deg\":null,\"status\":null,\"E_mean\":null,\"E_max\":null,"
+              "\"failed_samples\":null,\"theta_deg\":null";
     }
-    json += "]";
     json += candidate_json_fields(candidate, true);
     json += "}\n";
     std::fputs(json.c_str(), stdout);
-    return kExitSuccess;
+    return status;
   }
-  std::printf("loop (%dR)\n", request.geometry.joints());
-  std::printf("  a                     %s\n", lengths_text(request.geometry.a).c_str());
-  std::printf("  alpha_deg             %s\n", degrees_text(request.geometry.alpha).c_str());
-  std::printf("  d                     %s\n", lengths_text(request.geometry.d).c_str());
-  std::printf("assembly at theta0      %s (%s)\n", to_string(assembly.status),
-              request.theta ? "from --theta-deg" : "least-energy of the deterministic guesses");
-  std::printf("  theta_deg             %s\n", degrees_text(assembly.state.theta).c_str());
-  std::printf("cycle energy (%d samples)\n", static_cast<int>(samples));
-  std::printf("  E_mean                %s   [E / (k_a L^2)]\n", readable(cycle.E_mean).c_str());
-  std::printf("  E_max                 %s\n", readable(cycle.E_max).c_str());
+  std::printf("loop (%dR)\n", n);
+  std::printf("  a                     %s\n", lengths_text(geometry.a).c_str());
+  std::printf("  alpha_deg             %s\n", degrees_text(geometry.alpha).c_str());
+  std::printf("  d                     %s\n", lengths_text(geometry.d).c_str());
   print_candidate(candidate);
-  return kExitSuccess;
+  if (window) {
+    std::printf("cycle energy along the motion (%d samples, %s from theta0 = %s deg)\n", static_cast<int>(samples),
+                window->range >= 2.0 * 3.14159265358979323846 ? "full turn"
+                                                               : ("window of " + readable(window->range * kDegreesPerRadian) +
+                                                                  " deg").c_str(),
+                readable(window->theta0 * kDegreesPerRadian).c_str());
+    std::printf("  theta_deg             %s\n", degrees_text(window->pose).c_str());
+    std::printf("  E_mean                %s   [E / (k_a L^2)]\n", readable(cycle.E_mean).c_str());
+    std::printf("  E_max                 %s\n", readable(cycle.E_max).c_str());
+    print_local_dimension(candidate.local_dimension);
+  }
+  return status;
 }
 
 }  // namespace
@@ -104,22 +129,26 @@ int run_verify(const VerifyArguments& args) {
 Subcommand add_verify_command(CLI::App& parent) {
   auto args = std::make_shared<VerifyArguments>();
   CLI::App* app = parent.add_subcommand(
-      "verify", "Verify a geometry with the rigid closure along its motion, classify it (Bennett, planar, "
-                "spherical, trivial) and give its canonical key and the local dimension of its zero set.");
+      "verify", "Verify a geometry: find every circuit of its rigid motion over the whole turn, classify it (Bennett, "
+                "planar, spherical, trivial, the 5R and 6R families), give its canonical key and, for a verified loop, "
+                "its cycle energy along the motion and the local dimension of its zero set.");
   app->footer(
       "Examples:\n"
       "  loopfarm verify --a 2,4,2,4 --alpha-deg 30,90,30,90 --theta-deg 120,90,-120,-90\n"
       "  loopfarm verify --geometry loop.toml --json\n"
-      "Exit codes: 0 done (whatever the verdict), 1 failure, 2 bad input.\n");
+      "Exit codes: 0 verified (a circuit of the rigid loop moves), 4 analysed but not verified, 1 failure,\n"
+      "2 bad input.\n");
   add_geometry_options(*app, args->geometry);
-  CLI::Option* theta0 = app->add_option("--theta0-deg", args->theta0_deg, "input angle theta0 to assemble at [deg]")
-                            ->type_name("DEG")
-                            ->capture_default_str();
+  CLI::Option* theta0 =
+      app->add_option("--theta0-deg", args->theta0_deg,
+                      "input angle theta0 [deg]: report the circuit whose input reaches it and start the cycle there "
+                      "(default: from --theta-deg, else 0 for a full turn and the middle of a rocker's range)")
+          ->type_name("DEG");
   args->geometry.theta_option->excludes(theta0);
   app->add_option("--samples", args->samples, "cycle samples for E_mean and the local dimension")
       ->type_name("N")
       ->capture_default_str();
-  app->add_option("--steps", args->steps, "verification steps per full turn (>= 360)")
+  app->add_option("--steps", args->steps, "tracing: the largest step along a circuit is 360/S deg (>= 360)")
       ->type_name("S")
       ->capture_default_str();
   app->add_flag("--json", args->json, "print one JSON object instead of the summary");

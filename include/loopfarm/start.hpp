@@ -35,11 +35,17 @@ struct CandidateAnalysis {
 };
 
 // `pose`: joint angles of an assembled pose of `geometry` (the verification
-// starts there); `jacobian`: dr/dx of the cycle residuals with respect to the
+// starts there: StartOptions::verification says whether every circuit is
+// sought or only the one through the pose); `jacobian`: dr/dx of the cycle residuals with respect to the
 // free parameters at the geometry, in dimensionless units
 // (dimensionless_columns).
 CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
                                     const Eigen::MatrixXd& jacobian, const StartOptions& options);
+// The same with the verification already done (`loopfarm verify` chooses
+// the pose of its cycle energy from it); `pose` is that pose.
+CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
+                                    VerificationSummary verification, const Eigen::MatrixXd& jacobian,
+                                    const StartOptions& options);
 
 struct StartSummary {
   std::uint64_t index = 0;

@@ -1,53 +1,91 @@
 // Verification of a candidate linkage, independent of the elastic model: the
-// rigid closure T_1 ... T_n = I solved for the passive angles along the motion,
-// in fine steps of the input angle, from an assembled pose both ways.
+// motion of the rigid loop (motion.hpp), traced by arclength.
 //
-// A movable loop closes to round-off at every step; a rigid one cannot be
-// followed at all (or does not even close at the start). A loop that moves
-// over part of the turn only (a rocker, many spherical and 6R loops) is still
-// movable: the walk stops at its dead points, and the covered input range is
-// reported.
+// A loop is verified when a circuit of its rigid closure moves: the input
+// covers at least `min_input_travel` along it, or the circuit closes on
+// itself, with every traced pose closing within the residual tolerance. The
+// reported circuit is the one through the given pose when that pose lies on
+// a moving circuit; otherwise (and when no pose is given) the one whose input
+// range covers theta0, if asked, else the one with the widest input range.
 //
-// For n > 4 a movable loop may have more than one degree of freedom; the walk
-// then follows the minimum-norm continuation of the passive angles (the
-// Gauss-Newton step is the least-norm one), which is one motion among many.
+// With `all_circuits` (the default: `loopfarm verify`, `loopfarm motion`),
+// every circuit is sought from assemblies spread over the whole turn, so a
+// movable loop is found whatever pose or theta0 it is given, or none. Without
+// it (the farm), only the circuit through the given pose is traced: a zero of
+// the cycle energy is on its motion already.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "loopfarm/loop.hpp"
+#include "loopfarm/motion.hpp"
 
 namespace loopfarm {
 
 struct VerificationOptions {
-  int steps_per_turn = 720;           // input step 360 / steps_per_turn degrees (>= 360)
-  double residual_tolerance = 1e-9;   // max-norm of the residual (translation / L) for "closes"
-  int max_newton_iterations = 30;
-  int max_bisections = 12;            // halvings of a step before a motion limit is declared
+  // Largest step along a circuit: 360 / steps_per_turn degrees of arclength
+  // in joint space (>= 360).
+  int steps_per_turn = 720;
+  double residual_tolerance = 1e-9;  // max-norm of the residual (translation / L) for "closes"
   int input_joint = 0;
+  // [rad] The least input travel of a moving circuit that does not close.
+  double min_input_travel = 3.14159265358979323846 / 180.0;
+  bool all_circuits = true;
+  // [rad] Prefer the circuit whose input range covers this angle (when no
+  // pose on a moving circuit is given).
+  std::optional<double> theta0;
 
+  // The tracer's options from these.
+  MotionOptions motion() const;
   // Throws std::invalid_argument naming the first invalid option.
   void validate() const;
 };
 
 struct VerificationSummary {
-  bool assembled = false;     // the rigid closure was solved at the start pose
-  bool verified = false;      // assembled, moves by at least one step, and every pose closes
-  bool full_turn = false;     // the input turns 360 deg and the loop returns to its start pose
-  double range_lo = 0.0;      // input angles covered [rad], unwrapped, range_lo <= theta0 <= range_hi
+  bool assembled = false;     // the given pose closes the rigid loop (after polishing)
+  bool on_motion = false;     // the given pose lies on the reported, moving circuit
+  bool verified = false;      // a circuit moves (the reported one)
+  bool full_turn = false;     // on the reported circuit the input turns fully
+  double range_lo = 0.0;      // the reported circuit's input range [rad], unwrapped
   double range_hi = 0.0;
-  double worst_residual = 0.0;  // largest residual over the solved poses (dimensionless)
-  int poses = 0;                // solved poses
-  std::vector<double> input_angles;       // the path, in increasing input angle
-  std::vector<JointVector> joint_angles;  // all joint angles along it, unwrapped (continuous)
-  JointVector joint_travel;     // per joint: max - min of its angle over the path [rad]
-  std::string limit;            // why the walk stopped short of a full turn; empty for a full turn
+  // Largest residual over the reported circuit's poses (dimensionless); when
+  // nothing closes, the least residual any assembly reached.
+  double worst_residual = 0.0;
+  int poses = 0;                          // points of the reported circuit
+  std::vector<double> input_angles;       // its input angle at each point
+  std::vector<JointVector> joint_angles;  // its poses, unwrapped (continuous)
+  JointVector joint_travel;               // per joint: max - min over it [rad]
+  int circuit = -1;                       // the reported circuit in motion.circuits; -1 if none
+  MotionAnalysis motion;                  // every circuit found
+  std::string limit;                      // what the verdict rests on, in words (empty for a full turn)
+
+  // A closed pose on the reported circuit (its first point); empty if none.
+  JointVector pose() const;
 };
 
 // Throws std::invalid_argument for a geometry validate_geometry rejects or a
-// start_angles of the wrong size or with non-finite values.
+// start pose of the wrong size or with non-finite values. `start_angles` may
+// be null (no pose given; needs all_circuits).
+VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector* start_angles,
+                                  const VerificationOptions& options = {});
+// The same with a pose.
 VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector& start_angles,
                                   const VerificationOptions& options = {});
+
+// Where a cycle of the elastic model driven along the reported motion
+// starts and what input range it covers: over a full turn from theta0 when
+// the input turns fully; otherwise a window inside the input's range, centred
+// on theta0 when theta0 lies inside it (else on the middle of the range),
+// reaching 90 % of the way to the nearer dead point on either side. theta0
+// defaults to the given pose's input when that pose is on the motion, else 0.
+struct MotionWindow {
+  double theta0 = 0.0;  // [rad] the cycle's start
+  double range = 0.0;   // [rad] 2 pi for a full turn
+  JointVector pose;     // a closed pose on the motion with the input at theta0
+};
+// Empty when the loop is not verified (or no pose is found at theta0).
+std::optional<MotionWindow> motion_window(const LoopGeometry& geometry, const VerificationSummary& verification,
+                                          std::optional<double> theta0, const VerificationOptions& options = {});
 
 }  // namespace loopfarm
