@@ -20,6 +20,7 @@
 #include "loopfarm/assembly.hpp"
 #include "loopfarm/classify.hpp"
 #include "loopfarm/cycle.hpp"
+#include "loopfarm/motion.hpp"
 #include "loopfarm/sample_loops.hpp"
 
 namespace loopfarm {
@@ -195,6 +196,24 @@ void BM_Cycle_Generic_GeneralStep(benchmark::State& state) { cycle(state, generi
 
 void BM_CycleJacobian_Generic(benchmark::State& state) { cycle_jacobian(state, generic_loops(true)); }
 
+// The rigid loop's motion: the circuit through a pose (what the farm does
+// for a zero), and every circuit from assemblies over the turn (verify).
+void BM_TraceCircuit_Bennett(benchmark::State& state) {
+  const LoopGeometry g = paper_bennett_loop();
+  const JointVector pose = bennett_angles(g, 2.0);
+  for (auto _ : state) benchmark::DoNotOptimize(trace_circuit(g, pose).points.size());
+}
+void BM_AnalyseMotion(benchmark::State& state, LoopGeometry g) {
+  for (auto _ : state) benchmark::DoNotOptimize(analyse_motion(g, nullptr).circuits.size());
+}
+
+BENCHMARK(BM_TraceCircuit_Bennett)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_AnalyseMotion, bennett, paper_bennett_loop())->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_AnalyseMotion, planar_rocker, planar_four_bar(2.0, 3.0, 2.5, 4.0))->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_AnalyseMotion, trihedral_6r,
+                  LoopGeometry::from_degrees(std::vector<double>{1, 1.2, 1.5, 1.3, 1.1, 1.1532562594670797},
+                                             std::vector<double>{90, 90, 90, 90, 90, 90}, std::vector<double>(6, 0.0)))
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SolveWarm_Bennett);
 BENCHMARK(BM_SolveWarm_Generic);
 BENCHMARK(BM_SolvePredicted_Bennett);

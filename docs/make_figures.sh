@@ -141,4 +141,9 @@ plot f(x, r_lo) with lines lc rgb "gray" title "sin(alpha_2) = (a_2/a_1) sin(alp
 e
 EOF
 
+# The rigid loop's motion (docs/motion.md): the non-Grashof four-bar
+# 2, 3, 2.5, 4, whose input rocks between 50.16 and 309.84 deg.
+echo "+ loopfarm motion --a 2,3,2.5,4 --alpha-deg 0,0,0,0 --plot $out/motion_triple_rocker.png" >&2
+"$loopfarm" motion --a 2,3,2.5,4 --alpha-deg 0,0,0,0 --plot "$out/motion_triple_rocker.png" >/dev/null
+
 echo "figures written to $out/" >&2

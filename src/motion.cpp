@@ -11,6 +11,7 @@
 #include <string>
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <Eigen/SVD>
 
 namespace loopfarm {
@@ -33,6 +34,8 @@ constexpr double kSingularTolerance = 1e-5;
 // close to a traced circuit (in every joint) lies on it.
 constexpr double kSamePose = 1e-6;
 constexpr double kOnCircuit = 1e-3;
+// A tangent component or singular value below this is round-off.
+constexpr double kNoise = 1e-10;
 // Circuits traced by analyse_motion at most (bifurcation branches included).
 constexpr int kMaxCircuits = 64;
 
@@ -345,8 +348,8 @@ bool curve_point(const ClosureSystem& system, const JointVector& x0, const Joint
 // directions spread over the null space at `xb` (singular values below
 // kSingularTolerance of the largest), each corrected onto the solution set;
 // the corrected probes' directions from xb, clustered. `spread` is set when
-// nearly every probe keeps its own direction (the null space is filled by
-// solutions: more than one freedom, not crossing branches).
+// most corrected probes have two freedoms or more themselves (a surface of
+// poses: more than one freedom, not branches crossing at a singular point).
 struct Probe {
   JointVector direction;
   JointVector point;
@@ -364,7 +367,7 @@ std::vector<Probe> probe_rays(const ClosureSystem& system, const JointVector& xb
   std::vector<Probe> rays;
   if (nullity < 2) return rays;
   const auto N = svd.matrixV().rightCols(nullity);
-  int distinct = 0;
+  int surface = 0, converged = 0;
   for (int i = 0; i < kProbes; ++i) {
     // Directions: a circle in the first two null vectors, tilted by Halton
     // coordinates into the others (if any).
@@ -380,41 +383,59 @@ std::vector<Probe> probe_rays(const ClosureSystem& system, const JointVector& xb
     const double distance = (y - xb).norm();
     if (distance < 0.25 * kProbeDistance) continue;
     const JointVector e = (y - xb) / distance;
-    if (e.dot(d) > 0.999) ++distinct;
+    // On a surface of poses the probe is a regular point with as many
+    // freedoms; on a branch through a singular point it has one.
+    ++converged;
+    SystemVector Fy;
+    SystemMatrix Ay;
+    system.evaluate(y, Fy, Ay);
+    if (n - numerical_rank(decompose(Ay), o.rank_tolerance) >= 2) ++surface;
     const bool known = std::any_of(rays.begin(), rays.end(), [&](const Probe& r) { return r.direction.dot(e) > 0.995; });
     if (!known) rays.push_back({e, y});
   }
-  spread = distinct >= kProbes / 2;
+  spread = converged > 0 && 2 * surface > converged;
   return rays;
 }
 
 // Joints to hold so that a pose with f > 1 freedoms leaves a curve: f - 1
-// passive joints chosen greedily (a pivoted QR) from the null-space
-// directions orthogonal to the one that moves the input most.
+// passive joints, picked one at a time. Holding joint h leaves the motions
+// of the null space with no h component; the pick keeps the most joints
+// moving in what is left (a joint moves if the space has a component of it
+// above round-off), then the input moving the most. So an idle joint pair is
+// held at one of its joints rather than freezing the loop's own motion.
 std::vector<int> joints_to_hold(const SystemMatrix& null_space, int input) {
   const int n = static_cast<int>(null_space.rows());
-  const int f = static_cast<int>(null_space.cols());
-  JointVector e = JointVector::Zero(n);
-  e[input] = 1.0;
-  JointVector keep = null_space * (null_space.transpose() * e);
-  if (keep.norm() < 1e-8) keep = null_space.col(0);
-  keep.normalize();
-  SystemMatrix rest = null_space - keep * (keep.transpose() * null_space);
+  using Basis = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxJoints>;
+  Basis basis = null_space;
   std::vector<int> held;
-  for (int pick = 0; pick < f - 1; ++pick) {
-    int best = -1;
-    double best_norm = -1.0;
-    for (int j = 0; j < n; ++j) {
-      if (j == input || std::find(held.begin(), held.end(), j) != held.end()) continue;
-      if (rest.row(j).norm() > best_norm) {
-        best_norm = rest.row(j).norm();
-        best = j;
+  // The basis of the motions left when joint h is held too.
+  auto without = [](const Basis& b, int h) {
+    const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxJoints, 1> r = b.row(h).transpose().normalized();
+    const Eigen::HouseholderQR<Basis> qr{Basis(r)};
+    const Basis q = qr.householderQ();
+    return Basis(b * q.rightCols(b.cols() - 1));
+  };
+  while (basis.cols() > 1) {
+    int best = -1, best_moving = -1;
+    double best_input = -1.0;
+    Basis best_basis;
+    for (int h = 0; h < n; ++h) {
+      if (h == input || std::find(held.begin(), held.end(), h) != held.end()) continue;
+      if (basis.row(h).norm() <= kNoise) continue;  // the joint does not move: holding it removes nothing
+      const Basis left = without(basis, h);
+      int moving = 0;
+      for (int j = 0; j < n; ++j) moving += left.row(j).norm() > 1e-6;
+      const double input_motion = left.row(input).norm();
+      if (moving > best_moving || (moving == best_moving && input_motion > best_input + 1e-12)) {
+        best = h;
+        best_moving = moving;
+        best_input = input_motion;
+        best_basis = left;
       }
     }
+    if (best < 0) break;
     held.push_back(best);
-    const Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxJoints> r =
-        rest.row(best) / std::max(best_norm, 1e-300);
-    rest -= (rest * r.transpose()) * r;
+    basis = best_basis;
   }
   std::sort(held.begin(), held.end());
   return held;
@@ -546,13 +567,19 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
     // Extremes of the joints and bifurcations between x and next.
     const int first = o.all_extremes ? 0 : o.input_joint;
     const int last = o.all_extremes ? n - 1 : o.input_joint;
+    // A joint the motion does not turn has a tangent component of round-off
+    // size whose sign means nothing; so has w where the Jacobian's rank is
+    // below n - 1 all along.
     for (int j = first; j <= last; ++j) {
-      if ((info.tangent[j] > 0.0 && next_info.tangent[j] < 0.0) ||
-          (info.tangent[j] < 0.0 && next_info.tangent[j] > 0.0)) {
+      const double a = info.tangent[j], b = next_info.tangent[j];
+      if (((a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0)) && std::max(std::abs(a), std::abs(b)) > kNoise) {
         locate_extreme(system, x, info, next, next_info, j, s, o, walk);
       }
     }
-    if (info.w.size() > 0 && info.w.dot(next_info.w) < 0.0) locate_bifurcation(system, x, info, next, next_info, s, o, walk);
+    if (info.w.dot(next_info.w) < 0.0 &&
+        std::max(info.w.norm(), next_info.w.norm()) > kNoise * std::max(info.sigma_max, 1.0)) {
+      locate_bifurcation(system, x, info, next, next_info, s, o, walk);
+    }
 
     s += step;
     walk.points.push_back(next);
@@ -629,12 +656,13 @@ TracedCircuit trace(const LoopGeometry& g, JointVector x, const MotionOptions& o
     const std::vector<Probe> rays = probe_rays(free_system, x, o, probe_nullity, spread);
     if (spread) {
       held = joints_to_hold(svd.matrixV().rightCols(nullity), o.input_joint);
-    } else if (!rays.empty()) {
+    } else {
       // A singular point: trace from a point on its first branch (the walk
-      // comes back through x), and seed the others.
+      // comes back through x), and seed the others; with no branch found,
+      // from x along its last null vector.
       c.freedoms = 1;
       for (size_t r = 1; r < rays.size(); ++r) out.branch_seeds.push_back(rays[r].point);
-      x = rays.front().point;
+      if (!rays.empty()) x = rays.front().point;
     }
   }
   const ClosureSystem system(g, held, x);
@@ -761,9 +789,9 @@ void MotionOptions::validate() const {
   if (free_guesses < 0) fail("free_guesses must be >= 0");
 }
 
-bool Circuit::moves(int input_joint, double min_travel) const {
+bool Circuit::moves(int input_joint, double min_travel, double residual_tolerance) const {
   if (closed() && freedoms > 0) return true;
-  if (ranges.empty()) return false;
+  if (ranges.empty() || worst_residual > 1e-3 * residual_tolerance) return false;
   const JointRange& r = input_range(input_joint);
   return r.hi - r.lo >= min_travel;
 }
@@ -852,15 +880,20 @@ MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* p
         if (same_pose(p, seed.x, kSamePose)) return;
       }
     }
+    // One motion of a loop with several freedoms is traced (motion.hpp):
+    // a later seed with as many is not, whatever surface it lies on.
+    if (!given && std::any_of(out.circuits.begin(), out.circuits.end(), [](const Circuit& c) { return c.freedoms > 1; })) {
+      const ClosureSystem free_system(g, {}, seed.x);
+      SystemVector F;
+      SystemMatrix A;
+      free_system.evaluate(seed.x, F, A);
+      if (n - numerical_rank(decompose(A), o.rank_tolerance) > 1) return;
+    }
     TracedCircuit t = trace(g, seed.x, o);
     if (t.circuit.points.empty()) return;
     if (t.circuit.end == CircuitEnd::rigid) {
       out.isolated_poses.push_back(t.circuit.points.front());
       return;
-    }
-    if (!given && t.circuit.freedoms > 1 &&
-        std::any_of(out.circuits.begin(), out.circuits.end(), [](const Circuit& c) { return c.freedoms > 1; })) {
-      return;  // one motion of a loop with several freedoms is traced (motion.hpp)
     }
     if (!given && repeats(t.circuit, out.circuits)) return;
     if (given) out.given_circuit = static_cast<int>(out.circuits.size());

@@ -29,7 +29,7 @@ bool covers(const Circuit& c, int input, double angle) {
 // The circuit to report: through the given pose if it moves; else one
 // covering theta0 if asked; else the widest moving one; else the given one.
 int reported_circuit(const MotionAnalysis& m, const VerificationOptions& o) {
-  auto moves = [&](const Circuit& c) { return c.moves(o.input_joint, o.min_input_travel); };
+  auto moves = [&](const Circuit& c) { return c.moves(o.input_joint, o.min_input_travel, o.residual_tolerance); };
   if (m.given_circuit >= 0 && moves(m.circuits[static_cast<size_t>(m.given_circuit)])) return m.given_circuit;
   int best = -1;
   for (int i = 0; i < static_cast<int>(m.circuits.size()); ++i) {
@@ -129,7 +129,7 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
   }
   const Circuit& c = m.circuits[static_cast<size_t>(out.circuit)];
   const int input = options.input_joint;
-  out.verified = c.moves(input, options.min_input_travel);
+  out.verified = c.moves(input, options.min_input_travel, options.residual_tolerance);
   out.on_motion = out.verified && out.circuit == m.given_circuit;
   const JointRange& r = c.input_range(input);
   out.full_turn = r.crank();
@@ -144,6 +144,9 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
     const JointRange& k_range = c.ranges[static_cast<size_t>(k)];
     out.joint_travel[k] = k_range.hi - k_range.lo;
   }
+  // A joint held to trace a loop with several freedoms is turned by the
+  // loop's other motions: it is not frozen.
+  for (int k : c.held_joints) out.joint_travel[k] = 2.0 * kPi;
 
   if (out.full_turn) {
     if (std::abs(r.turns) > 1) {

@@ -558,11 +558,126 @@ TEST_F(CliTest, VerifyClassifiesMovableAndRigidLoops) {
   const Result planar = run({"verify", "--a", "1,3,2.5,3.5", "--alpha-deg", "0,0,0,0", "--json"});
   EXPECT_EQ(json_raw(planar.out, "family"), "\"planar\"");
   EXPECT_EQ(json_number(planar.out, "local_dimension"), 7);
+  // Rigid: exit code 4, and nothing that means something only at a zero.
   const Result rigid = run({"verify", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0", "--json"});
-  ASSERT_EQ(rigid.exit_code, 0) << rigid.err;
+  ASSERT_EQ(rigid.exit_code, 4) << rigid.err;
   EXPECT_EQ(json_raw(rigid.out, "verified"), "false");
   EXPECT_EQ(json_raw(rigid.out, "family"), "\"unclassified\"");
-  EXPECT_GT(json_number(rigid.out, "E_mean"), 1e-4);
+  EXPECT_EQ(json_raw(rigid.out, "E_mean"), "null");
+  EXPECT_EQ(json_raw(rigid.out, "local_dimension"), "null");
+  EXPECT_EQ(json_raw(rigid.out, "singular_values"), "null");
+  EXPECT_EQ(json_raw(rigid.out, "circuits"), "[]");
+  const Result text = run({"verify", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0"});
+  EXPECT_EQ(text.exit_code, 4);
+  EXPECT_EQ(text.out.find("E_mean"), std::string::npos) << text.out;
+  EXPECT_EQ(text.out.find("local dimension"), std::string::npos) << text.out;
+}
+
+// A non-Grashof four-bar whose input cannot reach theta0 = 0: verified from
+// no pose, from theta0 = 0 and from a pose inside its range, with the range
+// of the law of cosines (delta^2 = 20 + 16 cos theta1 <= 30.25).
+TEST_F(CliTest, VerifyFindsARockerWhateverTheta0) {
+  const double lo = std::acos(10.25 / 16.0) * 180.0 / 3.14159265358979323846;
+  for (const std::vector<std::string>& extra :
+       {std::vector<std::string>{}, std::vector<std::string>{"--theta0-deg", "0"},
+        std::vector<std::string>{"--theta0-deg", "200"}}) {
+    std::vector<std::string> args = {"verify", "--a", "2,3,2.5,4", "--alpha-deg", "0,0,0,0", "--json"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Result r = run(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(json_raw(r.out, "verified"), "true");
+    EXPECT_EQ(json_raw(r.out, "family"), "\"planar\"");
+    EXPECT_EQ(json_raw(r.out, "full_turn"), "false");
+    const std::string range = json_raw(r.out, "input_range_deg");
+    const double range_lo = std::stod(range.substr(1));
+    const double range_hi = std::stod(range.substr(range.find(',') + 1));
+    EXPECT_NEAR(range_lo, lo, 1e-6) << range;
+    EXPECT_NEAR(range_hi, 360.0 - lo, 1e-6) << range;
+    // The cycle energy along the motion, over a window inside the range.
+    EXPECT_LT(json_number(r.out, "E_mean"), 1e-20);
+    EXPECT_LT(json_number(r.out, "cycle_range_deg"), 360.0 - 2 * lo);
+  }
+}
+
+// A trihedral Bricard 6R with every twist +90 deg and lengths for which that
+// loop cannot be assembled: the family's conditions hold, no motion exists,
+// and no family is claimed.
+TEST_F(CliTest, VerifyNamesNoFamilyWithoutAMotion) {
+  const std::vector<std::string> geometry = {"--a", "2.636,1.143,0.558,1.408,2.969,3.575738804778671",
+                                             "--alpha-deg", "90,90,90,90,90,90"};
+  std::vector<std::string> args = {"verify", "--json"};
+  args.insert(args.end(), geometry.begin(), geometry.end());
+  const Result r = run(args);
+  ASSERT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_EQ(json_raw(r.out, "family"), "null");
+  EXPECT_EQ(json_raw(r.out, "family_conditions_hold"), "\"bricard_trihedral\"");
+  args.erase(args.begin() + 1);
+  const Result text = run(args);
+  EXPECT_NE(text.out.find("none: the bricard_trihedral conditions hold, but no motion was found"), std::string::npos)
+      << text.out;
+  // The alternating signs move, with the same lengths.
+  const Result alternating = run({"verify", "--json", "--a", "2.636,1.143,0.558,1.408,2.969,3.575738804778671",
+                                  "--alpha-deg", "90,-90,90,-90,90,-90"});
+  ASSERT_EQ(alternating.exit_code, 0) << alternating.err;
+  EXPECT_EQ(json_raw(alternating.out, "family"), "\"bricard_trihedral\"");
+}
+
+TEST_F(CliTest, MotionPrintsCircuitsWritesCsvAndPlot) {
+  // The parallelogram: two circuits crossing at two change points.
+  const Result r = run({"motion", "--a", "1,2,1,2", "--alpha-deg", "0,0,0,0", "--csv", "{dir}/curves.csv",
+                        "--plot", "{dir}/curves.png"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("circuits                2 found"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("singular pose       the closure Jacobian loses rank; 4 branch directions leave it"),
+            std::string::npos) << r.out;
+  const std::vector<std::string> rows = lines_of(read_file(dir_ / "curves.csv"));
+  ASSERT_GT(rows.size(), 100u);
+  EXPECT_EQ(rows[0], "circuit,point,arclength_rad,theta1_deg,theta2_deg,theta3_deg,theta4_deg");
+  EXPECT_EQ(rows[1].substr(0, 4), "1,0,");
+  EXPECT_EQ(rows.back().substr(0, 2), "2,");
+  const std::string image = read_file(dir_ / "curves.png");
+  ASSERT_GT(image.size(), 100u);
+  EXPECT_EQ(image.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  // CSV to standard output, and JSON.
+  const Result csv = run({"motion", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--csv", "-"});
+  ASSERT_EQ(csv.exit_code, 0) << csv.err;
+  EXPECT_EQ(lines_of(csv.out)[0], "circuit,point,arclength_rad,theta1_deg,theta2_deg,theta3_deg,theta4_deg");
+  const Result json = run({"motion", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--json"});
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_EQ(json_raw(json.out, "verified"), "true");
+  EXPECT_NE(json.out.find("\"full_turn\":true"), std::string::npos);
+  // Rigid: exit code 4, no circuit.
+  const Result rigid = run({"motion", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--json"});
+  EXPECT_EQ(rigid.exit_code, 4) << rigid.err;
+  EXPECT_EQ(json_raw(rigid.out, "circuits"), "[]");
+}
+
+// motion refuses what verify refuses, with the same message.
+TEST_F(CliTest, MotionAndVerifyRefuseTheSameBadGeometry) {
+  const std::vector<std::vector<std::string>> bad = {
+      {"--a", "1,2,3", "--alpha-deg", "10,20,30"},
+      {"--a", "1,2,3,4", "--alpha-deg", "10,20,30"},
+      {"--a", "1,-2,3,4", "--alpha-deg", "10,20,30,40"},
+      {"--a", "1,2,3,4", "--alpha-deg", "10,20,nan,40"},
+      {"--a", "1,2,3,4", "--alpha-deg", "10,20,30,40", "--theta-deg", "1,2"}};
+  for (const std::vector<std::string>& geometry : bad) {
+    std::vector<std::string> verify = {"verify"}, motion = {"motion"};
+    verify.insert(verify.end(), geometry.begin(), geometry.end());
+    motion.insert(motion.end(), geometry.begin(), geometry.end());
+    const Result v = run(verify), m = run(motion);
+    EXPECT_EQ(v.exit_code, 2) << v.err;
+    EXPECT_EQ(m.exit_code, 2) << m.err;
+    // The same message after the command's name.
+    ASSERT_EQ(v.err.rfind("loopfarm verify: ", 0), 0u) << v.err;
+    ASSERT_EQ(m.err.rfind("loopfarm motion: ", 0), 0u) << m.err;
+    EXPECT_EQ(v.err.substr(17), m.err.substr(17));
+    EXPECT_EQ(m.out, "");
+  }
+  const Result steps = run({"motion", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--steps", "100"});
+  EXPECT_EQ(steps.exit_code, 2);
+  EXPECT_NE(steps.err.find("--steps"), std::string::npos) << steps.err;
+  const Result both = run({"motion", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--csv", "-", "--json"});
+  EXPECT_EQ(both.exit_code, 2);
 }
 
 }  // namespace

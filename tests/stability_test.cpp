@@ -108,16 +108,19 @@ void expect_sane(const CycleSummary& s, const CycleOptions& co, const Equilibriu
 
 void expect_sane(const VerificationSummary& v, const VerificationOptions& vo, const std::string& what) {
   EXPECT_TRUE(std::isfinite(v.worst_residual)) << what;
-  // The walk covers at most a full turn forward and one backward.
-  EXPECT_LE(v.poses, 2 * vo.steps_per_turn + 1) << what;
+  // A circuit has at most the tracer's point budget.
+  EXPECT_LE(v.poses, vo.motion().max_points) << what;
   EXPECT_EQ(v.input_angles.size(), static_cast<size_t>(v.poses)) << what;
   EXPECT_EQ(v.joint_angles.size(), static_cast<size_t>(v.poses)) << what;
   EXPECT_TRUE(std::isfinite(v.range_lo) && std::isfinite(v.range_hi)) << what;
   EXPECT_LE(v.range_lo, v.range_hi) << what;
   EXPECT_TRUE(v.joint_travel.allFinite()) << what;
   for (const JointVector& pose : v.joint_angles) EXPECT_TRUE(pose.allFinite()) << what;
-  if (v.verified) {
+  if (v.on_motion) {
     EXPECT_TRUE(v.assembled) << what;
+  }
+  if (v.verified) {
+    EXPECT_GE(v.circuit, 0) << what;
     EXPECT_LE(v.worst_residual, vo.residual_tolerance) << what;
   }
 }
@@ -490,8 +493,13 @@ TEST(StabilityKnownLimit, UnreachableInputAngleGivesFailedSamplesThatReadNearZer
   // The true energy at theta1 = 0 is 0.2 (the cycle from 150 deg reaches it);
   // this reads below every zero threshold.
   EXPECT_LT(m.cycle.E_mean, kZero);
+  // The rigid verification is not misled: the pose does not close, and the
+  // motion is found elsewhere, over its closed-form range [120, 240] deg.
   EXPECT_FALSE(m.verification.assembled);
-  EXPECT_FALSE(m.verification.verified);
+  EXPECT_FALSE(m.verification.on_motion);
+  EXPECT_TRUE(m.verification.verified);
+  EXPECT_NEAR(m.verification.range_hi - m.verification.range_lo, 2 * kPi / 3, 1e-8);
+  EXPECT_NEAR(std::cos(0.5 * (m.verification.range_lo + m.verification.range_hi)), -1.0, 1e-12);
 
   // The search cannot evaluate the start: a status, the summary's E_mean
   // NaN (no energy; it was a 0 that read as a zero until the limit pinned
@@ -915,8 +923,12 @@ TEST(StabilityKnownLimit, CollinearInitialAnglesAreAStationaryPointThatIsNotAMin
   EXPECT_NEAR(m.cycle.samples[0].energy, m.assembly.energy, 1e-12);
   for (size_t j = 1; j < m.cycle.samples.size(); ++j) EXPECT_LT(m.cycle.samples[j].energy, kZero) << j;
   EXPECT_NEAR(m.cycle.E_mean, m.assembly.energy / 32.0, 1e-12);
+  // The collinear pose does not close the rigid loop; the crank's motion is
+  // found from assemblies over the turn all the same.
   EXPECT_FALSE(m.verification.assembled);
-  EXPECT_GT(m.verification.worst_residual, 1.0);
+  EXPECT_FALSE(m.verification.on_motion);
+  EXPECT_TRUE(m.verification.verified);
+  EXPECT_TRUE(m.verification.full_turn);
   for (const char* algorithm : kAlgorithms) {
     const ParameterSpace space = space_around(crank, collinear, 0.1, 0.2);
     const LocalSearchSummary s = search(space, crank, algorithm);

@@ -2,13 +2,17 @@
 #pragma once
 
 #include <cmath>
+#include <algorithm>
 #include <functional>
+#include <random>
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Cholesky>
 #include <Eigen/QR>
 
 #include "loopfarm/equilibrium.hpp"
+#include "loopfarm/loop.hpp"
 
 namespace loopfarm::testing {
 
@@ -128,6 +132,47 @@ inline ReferenceEquilibrium reference_equilibrium(const LoopModel& model, double
   out.deformations = x.tail(ndef);
   out.energy = 0.5 * weight.cwiseProduct(out.deformations).squaredNorm();
   return out;
+}
+
+// The rigid closure solved for the passive angles, joint 1 held at theta0, by
+// Levenberg-Marquardt from random guesses in [-pi, pi): true with a pose
+// closing to 1e-13. A solver of the tests' own, independent of the library's
+// assembly and motion tracing (dense, from closure_jacobians).
+inline bool assemble_by_levenberg_marquardt(const LoopGeometry& g, double theta0, std::mt19937_64& rng,
+                                            JointVector& theta, int guesses) {
+  const int n = g.joints();
+  std::uniform_real_distribution<double> angle(-3.14159265358979323846, 3.14159265358979323846);
+  for (int s = 0; s < guesses; ++s) {
+    theta.resize(n);
+    theta[0] = theta0;
+    for (int k = 1; k < n; ++k) theta[k] = angle(rng);
+    double mu = 1e-3;
+    Vector6 r = closure_residual(g, theta);
+    for (int it = 0; it < 100 && r.cwiseAbs().maxCoeff() > 1e-14; ++it) {
+      ClosureJacobians J;
+      closure_jacobians(g, theta, J);
+      const Eigen::MatrixXd A = J.theta.rightCols(n - 1);
+      const Eigen::MatrixXd normal = A.transpose() * A;
+      const Eigen::VectorXd gradient = A.transpose() * r;
+      bool improved = false;
+      for (; mu < 1e10 && !improved; mu *= 10) {
+        Eigen::MatrixXd damped = normal;
+        damped.diagonal().array() += mu;
+        JointVector trial = theta;
+        trial.tail(n - 1) += damped.ldlt().solve(-gradient);
+        const Vector6 rt = closure_residual(g, trial);
+        if (rt.squaredNorm() < r.squaredNorm()) {
+          theta = trial;
+          r = rt;
+          improved = true;
+          mu = std::max(1e-12, mu / 100);
+        }
+      }
+      if (!improved) break;
+    }
+    if (r.cwiseAbs().maxCoeff() < 1e-13) return true;
+  }
+  return false;
 }
 
 }  // namespace loopfarm::testing

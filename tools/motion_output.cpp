@@ -72,8 +72,8 @@ void print_circuits(const MotionAnalysis& m, int input, int reported) {
                   readable(e.theta[input] * kDegreesPerRadian).c_str(), degrees_list(e.theta).c_str());
     }
     for (const Bifurcation& b : c.bifurcations) {
-      std::printf("    bifurcation         %d branch directions at theta_deg %s\n", b.branches,
-                  degrees_list(b.theta).c_str());
+      std::printf("    singular pose       the closure Jacobian loses rank; %d branch directions leave it; theta_deg %s\n",
+                  b.branches, degrees_list(b.theta).c_str());
     }
   }
 }

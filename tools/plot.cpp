@@ -205,12 +205,15 @@ void plot_motion(const std::filesystem::path& gnuplot, const MotionAnalysis& mot
   std::fprintf(gp, "set output %s\n", gnuplot_string(png.string()).c_str());
   std::fprintf(gp, "set multiplot layout 1,2 title %s noenhanced\n", gnuplot_string(title).c_str());
   std::fputs("set grid\nset key outside right\nset ylabel 'joint angle [deg]'\n", gp);
+  // A colour per joint, a dash pattern per circuit.
+  const int circuits = static_cast<int>(motion.circuits.size());
   std::fprintf(gp, "set xlabel 'input angle theta_%d [deg]'\n", motion.input_joint + 1);
-  std::fprintf(gp, "plot for [j=2:%d] %s using %d:j with lines lw 1.5 lt (j-1) title sprintf('theta_%%d', j-1)\n",
-               n + 1, data_name.c_str(), input);
+  std::fputs("curve_title(c, j) = c == 0 ? sprintf('theta_%d', j-1) : (j == 2 ? sprintf('circuit %d', c+1) : '')\n", gp);
+  const char* plot =
+      "plot for [c=0:%d] for [j=2:%d] %s index c using %s:j with lines lw 1.5 lc (j-1) dt 1+c%%5 title (curve_title(c, j))\n";
+  std::fprintf(gp, plot, circuits - 1, n + 1, data_name.c_str(), std::to_string(input).c_str());
   std::fputs("set xlabel 'arclength in joint space [rad]'\n", gp);
-  std::fprintf(gp, "plot for [j=2:%d] %s using 1:j with lines lw 1.5 lt (j-1) title sprintf('theta_%%d', j-1)\n",
-               n + 1, data_name.c_str());
+  std::fprintf(gp, plot, circuits - 1, n + 1, data_name.c_str(), "1");
   std::fputs("unset multiplot\nunset output\n", gp);
   script.close();
   render_gnuplot_script(gnuplot, script.path(), png, "--plot");

@@ -55,7 +55,7 @@ struct MotionOptions {
   // Halvings of a step allowed before the circuit is declared not followable.
   int max_halvings = 30;
   // Points per circuit at most (a circuit longer than this ends, said so).
-  int max_points = 200000;
+  int max_points = 50000;
   // A singular value of the closure Jacobian below this fraction of the
   // largest counts as zero (its numerical rank, hence the freedoms).
   double rank_tolerance = 1e-7;
@@ -122,8 +122,12 @@ struct Circuit {
   bool closed() const { return end == CircuitEnd::closed; }
   // The input's range [rad] and whether it turns fully.
   const JointRange& input_range(int input_joint) const { return ranges[static_cast<size_t>(input_joint)]; }
-  // Moves: the input covers at least `min_travel` or the circuit closes on itself.
-  bool moves(int input_joint, double min_travel) const;
+  // Moves: the circuit closes on itself, or its input covers at least
+  // `min_travel` with every point closing to round-off (a residual of at
+  // most 1e-3 of `residual_tolerance`). An open circuit whose residual
+  // climbs to the tolerance is a near miss closing approximately over a
+  // short stretch (often near a folded pose), not a motion.
+  bool moves(int input_joint, double min_travel, double residual_tolerance) const;
 };
 
 // Every closed pose (residual within options.residual_tolerance, polished to

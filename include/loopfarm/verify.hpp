@@ -1,9 +1,10 @@
 // Verification of a candidate linkage, independent of the elastic model: the
 // motion of the rigid loop (motion.hpp), traced by arclength.
 //
-// A loop is verified when a circuit of its rigid closure moves: the input
-// covers at least `min_input_travel` along it, or the circuit closes on
-// itself, with every traced pose closing within the residual tolerance. The
+// A loop is verified when a circuit of its rigid closure moves
+// (Circuit::moves): it closes on itself with every traced pose closing within
+// the residual tolerance, or, open, its input covers at least
+// `min_input_travel` with every pose closing to round-off. The
 // reported circuit is the one through the given pose when that pose lies on
 // a moving circuit; otherwise (and when no pose is given) the one whose input
 // range covers theta0, if asked, else the one with the widest input range.
@@ -55,7 +56,9 @@ struct VerificationSummary {
   int poses = 0;                          // points of the reported circuit
   std::vector<double> input_angles;       // its input angle at each point
   std::vector<JointVector> joint_angles;  // its poses, unwrapped (continuous)
-  JointVector joint_travel;               // per joint: max - min over it [rad]
+  // Per joint: max - min over the reported circuit [rad]; a joint held to
+  // trace a loop with several freedoms counts 2 pi (other motions turn it).
+  JointVector joint_travel;
   int circuit = -1;                       // the reported circuit in motion.circuits; -1 if none
   MotionAnalysis motion;                  // every circuit found
   std::string limit;                      // what the verdict rests on, in words (empty for a full turn)

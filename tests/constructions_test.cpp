@@ -1,0 +1,598 @@
+// Tests of the constructions with known motions (constructions.hpp) against
+// independent computations: closure residuals of loop.hpp's product, brute
+// force scans of the closed forms, Grashof's rule from the lengths, loop.hpp's
+// rewritings, the rank of the closure Jacobian, and a Levenberg-Marquardt
+// assembly of the rigid closure from random guesses (a generic 6R with its
+// input held cannot be assembled at all).
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/SVD>
+#include <gtest/gtest.h>
+
+#include "loopfarm/constructions.hpp"
+#include "loopfarm/loop.hpp"
+#include "loopfarm/sample_loops.hpp"
+#include "four_bar_cases.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm {
+namespace {
+
+using testing::FourBarCase;
+using testing::four_bar_cases;
+
+constexpr double kPi = 3.14159265358979323846;
+
+double residual(const LoopGeometry& g, const JointVector& theta) {
+  const Vector6 r = closure_residual(g, theta);
+  return std::max(r.head<3>().cwiseAbs().maxCoeff(), r.tail<3>().cwiseAbs().maxCoeff() / length_scale(g));
+}
+
+double angle_distance(double x, double y) { return std::abs(wrap_angle(x - y)); }
+
+double pose_distance(const JointVector& x, const JointVector& y) {
+  double out = 0.0;
+  for (int k = 0; k < x.size(); ++k) out = std::max(out, angle_distance(x[k], y[k]));
+  return out;
+}
+
+// Whether angle x lies in the interval, widened by `margin`.
+bool inside(const AngleInterval& i, double x, double margin) {
+  if (i.full_turn) return true;
+  const double shifted = i.lo + std::fmod(std::fmod(x - i.lo + margin, 2 * kPi) + 2 * kPi, 2 * kPi) - margin;
+  return shifted >= i.lo - margin && shifted <= i.hi + margin;
+}
+
+bool inside_any(const std::vector<AngleInterval>& set, double x, double margin) {
+  return std::any_of(set.begin(), set.end(), [&](const AngleInterval& i) { return inside(i, x, margin); });
+}
+
+// ---------------------------------------------------------------------------
+// dh_from_axes
+
+TEST(Constructions, DhFromAxesReadsAKnownLoopAndItsPoseOffItsAxes) {
+  // The coaxial "trivial" loop of ground-truth.md, which has offsets: a = (p,
+  // p, q, q), alpha = (b, b, c, c), d = (e, 0, -e, 0), closed at (t, pi, -t, pi).
+  LoopGeometry g;
+  g.a.resize(4);
+  g.alpha.resize(4);
+  g.d.resize(4);
+  g.a << 1.3, 1.3, 0.7, 0.7;
+  g.alpha << 0.9, 0.9, -2.1, -2.1;
+  g.d << 0.4, 0.0, -0.4, 0.0;
+  JointVector theta(4);
+  theta << 0.8, kPi, -0.8, kPi;
+  ASSERT_LT(residual(g, theta), 1e-14);
+  const LoopGeometry bennett = paper_bennett_loop();
+  for (const auto& [geometry, pose] : {std::pair{g, theta}, std::pair{bennett, bennett_angles(bennett, 1.1)}}) {
+    const PosedLoop read = dh_from_axes(joint_axes(geometry, pose));
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_NEAR(read.geometry.a[k], geometry.a[k], 1e-12) << k;
+      EXPECT_NEAR(angle_distance(read.geometry.alpha[k], geometry.alpha[k]), 0.0, 1e-12) << k;
+      EXPECT_NEAR(read.geometry.d[k], geometry.d[k], 1e-12) << k;
+      EXPECT_NEAR(angle_distance(read.theta[k], pose[k]), 0.0, 1e-12) << k;
+    }
+  }
+  // An axis reversed is the loop with that axis flipped (loop.hpp's rewriting).
+  for (int j = 1; j < 4; ++j) {
+    std::vector<Axis> axes = joint_axes(g, theta);
+    axes[static_cast<size_t>(j)].direction = -axes[static_cast<size_t>(j)].direction;
+    const PosedLoop read = dh_from_axes(axes);
+    const LoopGeometry flipped = axis_flipped(g, j);
+    const JointVector flipped_theta = axis_flipped_angles(theta, j);
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_NEAR(angle_distance(read.geometry.alpha[k], flipped.alpha[k]), 0.0, 1e-12) << j << " " << k;
+      EXPECT_NEAR(read.geometry.d[k], flipped.d[k], 1e-12) << j << " " << k;
+      EXPECT_NEAR(angle_distance(read.theta[k], flipped_theta[k]), 0.0, 1e-12) << j << " " << k;
+    }
+  }
+}
+
+TEST(Constructions, DhFromAxesRefusesBadAxes) {
+  const std::vector<Axis> three(3);
+  EXPECT_THROW(dh_from_axes(three), std::invalid_argument);
+  std::vector<Axis> four = joint_axes(paper_bennett_loop(), bennett_angles(paper_bennett_loop(), 1.0));
+  four[2].direction *= 2.0;
+  EXPECT_THROW(dh_from_axes(four), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------
+// Four-bars
+
+TEST(Constructions, FourBarKindsFromRangesAgreeWithGrashofsRule) {
+  for (const FourBarCase& c : four_bar_cases()) {
+    EXPECT_EQ(four_bar_kind(c.g, 0), c.kind_at_input_0) << c.name << ": " << to_string(four_bar_kind(c.g, 0));
+    if (!c.planar) continue;
+    for (int input = 0; input < 4; ++input) {
+      EXPECT_EQ(four_bar_kind(c.g, input), planar_four_bar_kind(c.g, input)) << c.name << " input " << input;
+    }
+  }
+  // Either end: driven at the output joint, a crank-rocker is a rocker-crank
+  // read backwards (input and output exchanged).
+  const LoopGeometry crank_rocker = planar_four_bar(1.0, 3.0, 2.5, 3.2);
+  EXPECT_EQ(planar_four_bar_kind(reversed(crank_rocker), 0), FourBarKind::rocker_crank);
+}
+
+TEST(Constructions, FourBarPosesCloseAndNumberTwoInsideTheRangeAndNoneOutside) {
+  for (const FourBarCase& c : four_bar_cases()) {
+    const bool change_point = c.kind_at_input_0 == FourBarKind::change_point;
+    for (int input = 0; input < 4; ++input) {
+      std::vector<AngleInterval> all;
+      for (const AngleInterval& i : four_bar_joint_ranges(c.g, input)) all.push_back(i);
+      ASSERT_FALSE(all.empty()) << c.name;
+      for (int s = 0; s < 720; ++s) {
+        const double x = -kPi + (s + 0.37) * kPi / 360;
+        const std::vector<JointVector> poses = four_bar_poses(c.g, input, x);
+        const std::string tag = c.name + " input " + std::to_string(input) + " at " + std::to_string(x);
+        for (const JointVector& t : poses) {
+          EXPECT_LT(residual(c.g, t), 1e-12) << tag;
+          EXPECT_EQ(t[input], x) << tag;
+        }
+        if (inside_any(all, x, -1e-6)) {
+          // At a change point the modes cross at the flat poses (one pose).
+          const bool flat = change_point && std::min(angle_distance(x, 0.0), angle_distance(x, kPi)) < 1e-6;
+          EXPECT_EQ(poses.size(), flat ? 1u : 2u) << tag;
+        } else if (!inside_any(all, x, 1e-6)) {
+          EXPECT_EQ(poses.size(), 0u) << tag;
+        }
+      }
+      // At the ends of a rocker's range the two modes merge into one pose.
+      for (const AngleInterval& i : all) {
+        if (i.full_turn) continue;
+        for (double end : {i.lo, i.hi}) {
+          const std::vector<JointVector> at = four_bar_poses(c.g, input, wrap_angle(end));
+          ASSERT_FALSE(at.empty()) << c.name << " end " << end;
+          for (const JointVector& t : at) EXPECT_LT(residual(c.g, t), 1e-12) << c.name;
+          if (at.size() == 2) {
+            EXPECT_LT(pose_distance(at[0], at[1]), 1e-5) << c.name << " end " << end;
+          }
+          const double in = end == i.lo ? end + 1e-8 : end - 1e-8;
+          const std::vector<JointVector> near = four_bar_poses(c.g, input, wrap_angle(in));
+          ASSERT_EQ(near.size(), 2u) << c.name << " near end " << end;
+          EXPECT_LT(pose_distance(near[0], near[1]), 1e-2) << c.name;
+          EXPECT_GT(pose_distance(near[0], near[1]), 1e-7) << c.name;
+        }
+      }
+    }
+  }
+}
+
+TEST(Constructions, ParallelogramPosesCloseAtTheChangePoint) {
+  const LoopGeometry g = parallelogram_four_bar(1.5, 2.5);
+  for (double x : {0.0, kPi, 1e-9, -1e-9, kPi - 1e-9}) {
+    const std::vector<JointVector> poses = four_bar_poses(g, 0, x);
+    ASSERT_FALSE(poses.empty()) << x;
+    for (const JointVector& t : poses) EXPECT_LT(residual(g, t), 1e-12) << x;
+  }
+  // Off the flat poses: the parallelogram mode, (t, pi - t, t, pi - t) as the
+  // opposite links stay parallel, and the anti-parallelogram mode.
+  const std::vector<JointVector> poses = four_bar_poses(g, 0, 0.7);
+  ASSERT_EQ(poses.size(), 2u);
+  JointVector parallelogram(4);
+  parallelogram << 0.7, kPi - 0.7, 0.7, kPi - 0.7;
+  EXPECT_LT(std::min(pose_distance(poses[0], parallelogram), pose_distance(poses[1], parallelogram)), 1e-12);
+  EXPECT_GT(std::max(pose_distance(poses[0], parallelogram), pose_distance(poses[1], parallelogram)), 0.1);
+}
+
+// The circuits of a four-bar by brute force: joint 0 scanned on a grid, the
+// poses at neighbouring grid points joined by nearest neighbour, and two
+// branches merged where they meet (a dead point, where the count drops, or a
+// crossing). Each circuit's range of every joint is the smallest arc
+// covering its samples.
+struct ScannedCircuits {
+  std::vector<std::array<std::vector<double>, 4>> samples;  // per circuit, per joint
+};
+
+ScannedCircuits scan_circuits(const LoopGeometry& g, int steps) {
+  struct Slot {
+    JointVector pose;
+    int label;
+  };
+  std::vector<int> parent;
+  const auto find = [&](int x) {
+    while (parent[static_cast<size_t>(x)] != x) {
+      parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];  // halving
+      x = parent[static_cast<size_t>(x)];
+    }
+    return x;
+  };
+  const auto unite = [&](int x, int y) { parent[static_cast<size_t>(find(x))] = find(y); };
+  std::vector<std::vector<Slot>> grid(static_cast<size_t>(steps));
+  for (int s = 0; s < steps; ++s) {
+    for (const JointVector& t : four_bar_poses(g, 0, -kPi + s * 2 * kPi / steps)) {
+      parent.push_back(static_cast<int>(parent.size()));
+      grid[static_cast<size_t>(s)].push_back({t, static_cast<int>(parent.size()) - 1});
+    }
+  }
+  for (int s = 0; s < steps; ++s) {
+    auto& here = grid[static_cast<size_t>(s)];
+    const auto& next = grid[static_cast<size_t>((s + 1) % steps)];
+    if (here.size() == 2 && (next.size() != 2 || pose_distance(here[0].pose, here[1].pose) < 1e-3)) {
+      unite(here[0].label, here[1].label);
+    }
+    if (next.size() == 2 && here.size() != 2) unite(next[0].label, next[1].label);
+    for (const Slot& slot : here) {
+      double best = 1e9;
+      int label = -1;
+      for (const Slot& other : next) {
+        const double dist = pose_distance(slot.pose, other.pose);
+        if (dist < best) {
+          best = dist;
+          label = other.label;
+        }
+      }
+      if (label >= 0 && best < 0.2) unite(slot.label, label);
+    }
+  }
+  std::vector<int> roots;
+  ScannedCircuits out;
+  for (const auto& slots : grid) {
+    for (const Slot& slot : slots) {
+      const int root = find(slot.label);
+      auto at = std::find(roots.begin(), roots.end(), root);
+      if (at == roots.end()) {
+        roots.push_back(root);
+        out.samples.emplace_back();
+        at = roots.end() - 1;
+      }
+      auto& circuit = out.samples[static_cast<size_t>(at - roots.begin())];
+      for (int k = 0; k < 4; ++k) circuit[static_cast<size_t>(k)].push_back(slot.pose[k]);
+    }
+  }
+  return out;
+}
+
+// The smallest arc covering the angles: the complement of the largest gap.
+AngleInterval covering_arc(std::vector<double> x, double full_gap) {
+  std::sort(x.begin(), x.end());
+  double gap = x.front() + 2 * kPi - x.back();
+  double lo = x.front(), hi = x.back();
+  for (size_t i = 1; i < x.size(); ++i) {
+    if (x[i] - x[i - 1] > gap) {
+      gap = x[i] - x[i - 1];
+      lo = x[i];
+      hi = x[i - 1] + 2 * kPi;
+    }
+  }
+  if (gap < full_gap) return {-kPi, kPi, true};
+  return {lo, hi, false};
+}
+
+TEST(Constructions, FourBarJointRangesAgreeWithABruteForceScanOfThePoses) {
+  for (const FourBarCase& c : four_bar_cases()) {
+    // Every joint as the input, on a 1e-4 rad grid: poses exist exactly on the
+    // union of its ranges over the circuits.
+    for (int joint = 0; joint < 4; ++joint) {
+      const std::vector<AngleInterval> ranges = four_bar_joint_ranges(c.g, joint);
+      int mismatches = 0;
+      // (Off -pi itself: a kite folded there has a continuum of poses.)
+      for (double x = -kPi + 0.5e-4; x < kPi; x += 1e-4) {
+        const bool has = !four_bar_poses(c.g, joint, x).empty();
+        if (has && !inside_any(ranges, x, 1e-4)) ++mismatches;
+        if (!has && inside_any(ranges, x, -1e-4)) ++mismatches;
+      }
+      EXPECT_EQ(mismatches, 0) << c.name << " joint " << joint;
+    }
+    // The circuits: their number, and every joint's range on each, against
+    // the scan along joint 0 (grid 1e-4 rad; the other joints' extremes to
+    // 1e-3; near joint 0's dead points the others move fast, so a gap of up
+    // to 0.2 rad still counts as a full turn).
+    const ScannedCircuits scanned = scan_circuits(c.g, 62832);
+    const std::vector<AngleInterval> first = four_bar_joint_ranges(c.g, 0);
+    ASSERT_EQ(scanned.samples.size(), first.size()) << c.name;
+    // Match the scanned circuits to the closed form's by the sign of a joint
+    // that keeps its sign (two circuits), else trivially.
+    std::vector<size_t> order(scanned.samples.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    if (order.size() == 2) {
+      int rocker = -1;
+      for (int j = 0; j < 4 && rocker < 0; ++j) {
+        if (!four_bar_joint_ranges(c.g, j)[0].full_turn) rocker = j;
+      }
+      ASSERT_GE(rocker, 0) << c.name;
+      const AngleInterval closed = four_bar_joint_ranges(c.g, rocker)[0];
+      const double closed_mid = 0.5 * (closed.lo + closed.hi);
+      const double scanned_value = scanned.samples[0][static_cast<size_t>(rocker)][0];
+      if ((closed_mid > 0) != (std::sin(scanned_value) > 0)) std::swap(order[0], order[1]);
+    }
+    for (int joint = 0; joint < 4; ++joint) {
+      const std::vector<AngleInterval> ranges = four_bar_joint_ranges(c.g, joint);
+      for (size_t k = 0; k < ranges.size(); ++k) {
+        const AngleInterval arc = covering_arc(scanned.samples[order[k]][static_cast<size_t>(joint)], 0.2);
+        const std::string tag = c.name + " joint " + std::to_string(joint) + " circuit " + std::to_string(k);
+        EXPECT_EQ(arc.full_turn, ranges[k].full_turn) << tag << ": scanned " << arc.lo << " " << arc.hi;
+        if (arc.full_turn || ranges[k].full_turn) continue;
+        EXPECT_LT(angle_distance(arc.lo, ranges[k].lo), 1e-3) << tag << ": " << arc.lo << " vs " << ranges[k].lo;
+        EXPECT_LT(angle_distance(arc.hi, ranges[k].hi), 1e-3) << tag << ": " << arc.hi << " vs " << ranges[k].hi;
+      }
+    }
+  }
+}
+
+TEST(Constructions, FourBarFunctionsRefuseBadArguments) {
+  const LoopGeometry crank_rocker = planar_four_bar(1.0, 3.0, 2.5, 3.2);
+  EXPECT_THROW(four_bar_poses(crank_rocker, 4, 0.0), std::invalid_argument);
+  EXPECT_THROW(four_bar_poses(crank_rocker, 0, std::nan("")), std::invalid_argument);
+  EXPECT_THROW(four_bar_joint_ranges(crank_rocker, -1), std::invalid_argument);
+  EXPECT_THROW(four_bar_poses(paper_bennett_loop(), 0, 0.0), std::invalid_argument);  // neither kind
+  EXPECT_THROW(planar_four_bar_kind(spherical_four_bar(0.3, 0.9, 0.75, 0.95), 0), std::invalid_argument);
+  EXPECT_THROW(parallelogram_four_bar(-1.0, 1.0), std::invalid_argument);
+  // An odd number of twists pi, or offsets that do not cancel: no pose at all.
+  LoopGeometry odd = crank_rocker;
+  odd.alpha[1] = kPi;
+  EXPECT_TRUE(four_bar_poses(odd, 0, 0.5).empty());
+  EXPECT_TRUE(four_bar_joint_ranges(odd, 0).empty());
+  LoopGeometry offset = crank_rocker;
+  offset.d[2] = 0.1;
+  EXPECT_TRUE(four_bar_poses(offset, 0, 0.5).empty());
+}
+
+// ---------------------------------------------------------------------------
+// Trihedral Bricard
+
+// Parameters spread over an interval where the branch exists (scanned on a
+// grid), or none.
+std::vector<double> trihedral_parameters(const TrihedralBricard& t, int count) {
+  double lo = 0.0, hi = -1.0, run_lo = 0.0;
+  bool in_run = false;
+  for (double p = -6.0; p <= 6.0 + 1e-9; p += 0.01) {
+    const bool exists = trihedral_bricard(t, p).has_value();
+    if (exists && !in_run) run_lo = p;
+    if (!exists && in_run && p - 0.01 - run_lo > hi - lo) {
+      lo = run_lo;
+      hi = p - 0.01;
+    }
+    in_run = exists;
+  }
+  if (in_run && 6.0 - run_lo > hi - lo) {
+    lo = run_lo;
+    hi = 6.0;
+  }
+  std::vector<double> out;
+  if (hi - lo < 0.2) return out;
+  for (int i = 0; i < count; ++i) out.push_back(lo + 0.05 + (hi - lo - 0.1) * i / (count - 1));
+  return out;
+}
+
+// The first branch (in order) of the pattern that moves over an interval of
+// p, with `count` parameters spread over it.
+std::vector<double> moving_branch(TrihedralBricard& t, int count) {
+  std::vector<double> ps;
+  for (t.branch = 0; t.branch < 16; ++t.branch) {
+    ps = trihedral_parameters(t, count);
+    if (!ps.empty()) return ps;
+  }
+  return ps;
+}
+
+TEST(Constructions, TrihedralBricardClosesAlongItsMotionInEverySignPattern) {
+  // Every one of the 64 patterns, on two length sets, from the first branch
+  // that moves over an interval of p: the exact DH loop (lengths as given,
+  // twists +-90 deg of the pattern, no offsets) is closed by the poses read
+  // off the construction at five parameters, and its joints move.
+  for (const std::array<double, 5>& lengths : {std::array<double, 5>{1.5, 1.0, 1.2, 0.8, 1.0},
+                                               std::array<double, 5>{0.7, 1.3, 1.6, 0.9, 1.1}}) {
+    for (unsigned pattern = 0; pattern < 64; ++pattern) {
+      TrihedralBricard t{lengths, pattern, 0};
+      const std::vector<double> ps = moving_branch(t, 5);
+      const std::string tag = "pattern " + std::to_string(pattern) + " branch " + std::to_string(t.branch);
+      ASSERT_EQ(ps.size(), 5u) << tag;
+      const PosedLoop first = *trihedral_bricard(t, ps[0]);
+      for (int k = 0; k < 6; ++k) {
+        EXPECT_EQ(first.geometry.alpha[k] < 0, ((pattern >> k) & 1u) != 0) << tag;
+        EXPECT_EQ(first.geometry.d[k], 0.0) << tag;
+      }
+      EXPECT_NEAR(first.geometry.a[5], trihedral_bricard_a6(t), 0.0) << tag;
+      double moved = 0.0;
+      for (double p : ps) {
+        const std::optional<PosedLoop> at = trihedral_bricard(t, p);
+        ASSERT_TRUE(at.has_value()) << tag << " p " << p;
+        EXPECT_EQ(at->geometry.a, first.geometry.a) << tag;
+        EXPECT_LT(residual(first.geometry, at->theta), 1e-10) << tag << " p " << p;
+        moved = std::max(moved, pose_distance(at->theta, first.theta));
+      }
+      EXPECT_GT(moved, 0.1) << tag;
+    }
+  }
+}
+
+TEST(Constructions, TrihedralBricardMovesWithOneDegreeOfFreedom) {
+  // The closure Jacobian at the construction's poses has rank 5 (a 6R whose
+  // input is held is rigid unless it is special), and the assembly by
+  // Levenberg-Marquardt from random guesses, which knows nothing of the
+  // construction, finds poses at the construction's input angles, with the
+  // construction's two points of concurrent axes.
+  std::mt19937_64 rng(41);
+  for (unsigned pattern : {0u, 42u, 1u}) {
+    TrihedralBricard t{{1.5, 1.0, 1.2, 0.8, 1.0}, pattern, 0};
+    const std::vector<double> ps = moving_branch(t, 3);
+    ASSERT_EQ(ps.size(), 3u) << pattern;
+    for (double p : ps) {
+      const PosedLoop at = *trihedral_bricard(t, p);
+      ClosureJacobians J;
+      closure_jacobians(at.geometry, at.theta, J);
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
+      EXPECT_GT(svd.singularValues()[4], 1e-4 * svd.singularValues()[0]) << pattern;
+      EXPECT_LT(svd.singularValues()[5], 1e-10 * svd.singularValues()[0]) << pattern;
+      JointVector theta;
+      ASSERT_TRUE(testing::assemble_by_levenberg_marquardt(at.geometry, at.theta[0], rng, theta, 40)) << pattern << " p " << p;
+      // In the pose found, axes 1, 3, 5 meet in one point and so do 2, 4, 6:
+      // the geometry the construction starts from.
+      const std::vector<Axis> axes = joint_axes(at.geometry, theta);
+      for (int k = 0; k < 6; ++k) {
+        const Axis& u = axes[static_cast<size_t>(k)];
+        const Axis& v = axes[static_cast<size_t>((k + 2) % 6)];
+        const Vector3 normal = u.direction.cross(v.direction);
+        ASSERT_GT(normal.norm(), 1e-6) << pattern;
+        EXPECT_LT(std::abs((v.point - u.point).dot(normal)) / normal.norm(), 1e-9) << pattern << " axes " << k;
+      }
+    }
+  }
+}
+
+TEST(Constructions, TrihedralBricardParityDecidesWhetherSomeLengthsMove) {
+  // The 64 patterns are two loops: flips change two twists at a time, so the
+  // parity of the number of -90 deg twists is kept by every writing. For
+  // these lengths no branch of even parity exists, and the assembly from
+  // random guesses finds no pose at any of 24 inputs in two even patterns
+  // (all +90 deg, and two -90 deg), while odd patterns (one -90 deg, Baker's
+  // alternating one) assemble and move.
+  const std::array<double, 5> lengths{2.636, 1.143, 0.558, 1.408, 2.969};
+  std::mt19937_64 rng(43);
+  for (unsigned pattern : {0u, 3u, 1u, 42u}) {
+    const bool odd = std::popcount(pattern) % 2 == 1;
+    bool any_branch = false;
+    for (unsigned branch = 0; branch < 16; ++branch) {
+      const TrihedralBricard t{lengths, pattern, branch};
+      for (double p = -30.0; p <= 30.0 && !any_branch; p += 0.01) any_branch = trihedral_bricard(t, p).has_value();
+    }
+    EXPECT_EQ(any_branch, odd) << pattern;
+    const TrihedralBricard t{lengths, pattern, 0};
+    LoopGeometry g;
+    g.a.resize(6);
+    g.alpha.resize(6);
+    g.d.setZero(6);
+    for (int k = 0; k < 5; ++k) g.a[k] = lengths[static_cast<size_t>(k)];
+    g.a[5] = trihedral_bricard_a6(t);
+    for (int k = 0; k < 6; ++k) g.alpha[k] = ((pattern >> k) & 1u) ? -kPi / 2 : kPi / 2;
+    int assembled = 0;
+    for (int i = 0; i < 24; ++i) {
+      JointVector theta;
+      if (testing::assemble_by_levenberg_marquardt(g, -kPi + (i + 0.5) * kPi / 12, rng, theta, odd ? 10 : 40)) ++assembled;
+    }
+    if (odd) {
+      EXPECT_GE(assembled, 12) << pattern;
+    } else {
+      EXPECT_EQ(assembled, 0) << pattern;
+    }
+  }
+}
+
+TEST(Constructions, TrihedralBricardRefusesBadParameters) {
+  EXPECT_THROW(trihedral_bricard({{1, -1, 1, 1, 1}, 0, 0}, 0.0), std::invalid_argument);
+  EXPECT_THROW(trihedral_bricard({{1, 1, 1, 1, 1}, 64, 0}, 0.0), std::invalid_argument);
+  EXPECT_THROW(trihedral_bricard({{1, 1, 1, 1, 1}, 0, 16}, 0.0), std::invalid_argument);
+  EXPECT_THROW(trihedral_bricard({{0.5, 2, 0.5, 2, 0.5}, 0, 0}, 0.0), std::invalid_argument);  // a6^2 < 0
+  EXPECT_THROW(trihedral_bricard({{1, 1, 1, 1, 1}, 0, 0}, std::nan("")), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------
+// Bennett loops fused in space
+
+// The loop built at t0 is closed by the poses at the other parameters, the
+// same geometry is read off at each, and the joints move.
+template <typename Build>
+void expect_closes_along(Build build, const std::vector<double>& ts, const std::string& tag) {
+  const PosedLoop first = build(ts.front());
+  double moved = 0.0;
+  for (double t : ts) {
+    const PosedLoop at = build(t);
+    EXPECT_LT(residual(first.geometry, at.theta), 1e-10) << tag << " t " << t;
+    const int n = first.geometry.joints();
+    for (int k = 0; k < n; ++k) {
+      EXPECT_NEAR(at.geometry.a[k], first.geometry.a[k], 1e-10) << tag << " t " << t;
+      EXPECT_NEAR(angle_distance(at.geometry.alpha[k], first.geometry.alpha[k]), 0.0, 1e-10) << tag << " t " << t;
+      EXPECT_NEAR(at.geometry.d[k], first.geometry.d[k], 1e-10) << tag << " t " << t;
+    }
+    moved = std::max(moved, pose_distance(at.theta, first.theta));
+  }
+  EXPECT_GT(moved, 0.1) << tag;
+}
+
+// Both setups: sin(alpha) sin(beta) > 0 is asymmetric, < 0 line-symmetric.
+const std::vector<BennettPairParameters> kPairs = {
+    {1.0, 1.2, 0.7, 2.1},   // both loops asymmetric
+    {1.3, -0.9, 2.4, 0.5},  // both line-symmetric
+    {0.8, 1.9, -1.1, 0.6},  // one of each
+};
+
+const std::vector<double> kMotion = {0.4, 0.9, 1.5, 2.2, 2.8};
+
+TEST(Constructions, Goldberg5RClosesAlongItsMotionInEveryFusion) {
+  for (const BennettPairParameters& pair : kPairs) {
+    for (double phi : {0.0, kPi, 1.1, -2.3}) {
+      const Goldberg5R g{pair, phi};
+      const std::string tag = "goldberg b " + std::to_string(pair.b) + " phi " + std::to_string(phi);
+      expect_closes_along([&](double t) { return goldberg_5r(g, t); }, kMotion, tag);
+      const PosedLoop at = goldberg_5r(g, 1.0);
+      ASSERT_EQ(at.geometry.joints(), 5);
+      EXPECT_EQ(goldberg_5r_pose(g, 1.0), at.theta);
+      // One degree of freedom: the closure Jacobian has rank 4.
+      ClosureJacobians J;
+      closure_jacobians(at.geometry, at.theta, J);
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
+      EXPECT_GT(svd.singularValues()[3], 1e-4 * svd.singularValues()[0]) << tag;
+      EXPECT_LT(svd.singularValues()[4], 1e-10 * svd.singularValues()[0]) << tag;
+    }
+  }
+}
+
+TEST(Constructions, BennettPair6RClosesOverBothOfItsFreedoms) {
+  for (const BennettPairParameters& pair : kPairs) {
+    const std::string tag = "pair b " + std::to_string(pair.b);
+    expect_closes_along([&](double t) { return bennett_pair_6r(pair, t, 0.8); }, kMotion, tag + " t1");
+    expect_closes_along([&](double t) { return bennett_pair_6r(pair, 0.8, t); }, kMotion, tag + " t2");
+    const PosedLoop at = bennett_pair_6r(pair, 1.1, -0.6);
+    EXPECT_EQ(bennett_pair_6r_pose(pair, 1.1, -0.6), at.theta);
+    ClosureJacobians J;
+    closure_jacobians(at.geometry, at.theta, J);
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
+    EXPECT_GT(svd.singularValues()[3], 1e-4 * svd.singularValues()[0]) << tag;
+    EXPECT_LT(svd.singularValues()[4], 1e-10 * svd.singularValues()[0]) << tag;
+  }
+}
+
+TEST(Constructions, ThreeBennett6RClosesAlongItsMotionOnEveryLinkAndFusion) {
+  for (const BennettPairParameters& pair : kPairs) {
+    for (int link = 0; link < 5; ++link) {
+      for (double phi : {0.0, kPi, 0.7}) {
+        for (double gamma : {0.9, -2.0}) {  // both setups of the third loop
+          const ThreeBennett6R s{{pair, link % 2 == 0 ? kPi : 0.0}, link, gamma, phi};
+          const std::string tag = "three bennett b " + std::to_string(pair.b) + " link " + std::to_string(link) +
+                                  " phi " + std::to_string(phi) + " gamma " + std::to_string(gamma);
+          expect_closes_along([&](double t) { return three_bennett_6r(s, t); }, kMotion, tag);
+          const PosedLoop at = three_bennett_6r(s, 1.0);
+          ASSERT_EQ(at.geometry.joints(), 6);
+          EXPECT_EQ(three_bennett_6r_pose(s, 1.0), at.theta);
+          // The 5R's links away from P are the 6R's; P's place holds the
+          // third loop's links S -> R (the 5R link PQ's a, alpha, read
+          // backwards) and R -> Q (c, gamma).
+          const PosedLoop five = goldberg_5r(s.goldberg, 1.0);
+          const auto six_index = [&](int k) { return k < link ? k : k + 1; };
+          for (int k = 0; k < 5; ++k) {
+            if (k == link || (k + 1) % 5 == link) continue;
+            EXPECT_NEAR(at.geometry.a[six_index(k)], five.geometry.a[k], 1e-10) << tag << " link " << k;
+            EXPECT_NEAR(angle_distance(at.geometry.alpha[six_index(k)], five.geometry.alpha[k]), 0.0, 1e-10) << tag;
+          }
+          const double a_pq = five.geometry.a[link], alpha_pq = five.geometry.alpha[link];
+          EXPECT_NEAR(at.geometry.a[link], a_pq, 1e-10) << tag;
+          EXPECT_NEAR(angle_distance(at.geometry.alpha[link], alpha_pq), 0.0, 1e-10) << tag;
+          EXPECT_NEAR(at.geometry.a[link + 1], a_pq * std::abs(std::sin(gamma) / std::sin(alpha_pq)), 1e-10) << tag;
+          EXPECT_NEAR(angle_distance(at.geometry.alpha[link + 1], gamma), 0.0, 1e-10) << tag;
+          ClosureJacobians J;
+          closure_jacobians(at.geometry, at.theta, J);
+          const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
+          EXPECT_GT(svd.singularValues()[4], 1e-5 * svd.singularValues()[0]) << tag;
+          EXPECT_LT(svd.singularValues()[5], 1e-10 * svd.singularValues()[0]) << tag;
+        }
+      }
+    }
+  }
+}
+
+TEST(Constructions, FusedConstructionsRefuseBadParameters) {
+  EXPECT_THROW(goldberg_5r({{-1.0, 1.0, 1.0, 2.0}, kPi}, 0.5), std::invalid_argument);
+  EXPECT_THROW(goldberg_5r({{1.0, 0.0, 1.0, 2.0}, kPi}, 0.5), std::invalid_argument);
+  EXPECT_THROW(bennett_pair_6r({1.0, 1.0, kPi, 2.0}, 0.5, 0.5), std::invalid_argument);
+  EXPECT_THROW(three_bennett_6r({{{1.0, 1.0, 1.0, 2.0}, kPi}, 5, 1.0, 0.0}, 0.5), std::invalid_argument);
+  EXPECT_THROW(three_bennett_6r({{{1.0, 1.0, 1.0, 2.0}, kPi}, 0, 0.0, 0.0}, 0.5), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace loopfarm
