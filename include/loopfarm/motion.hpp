@@ -17,8 +17,9 @@
 //                    curve, through turning points of the input, until the
 //                    circuit closes on itself or cannot be followed. Joint
 //                    extremes (the input's are its dead points) are solved
-//                    for on the curve, bifurcation points (the closure
-//                    Jacobian loses rank) are located and reported;
+//                    for on the curve, singular poses (the closure
+//                    Jacobian loses rank, as where branches cross) are
+//                    located and reported;
 //   analyse_motion   every circuit: seeds from a given pose, from assemblies
 //                    at input angles spread over the turn and from
 //                    assemblies with every joint free, each traced unless it
@@ -31,10 +32,10 @@
 //
 // A loop with f > 1 freedoms (two Bennett loops sharing a removed link) has
 // an f-dimensional set of poses; trace_circuit then holds f - 1 passive
-// joints at their values in the start pose (those the motion moves most
-// independently of the input, chosen by a pivoted QR of the null space) and
-// traces the curve left, which is one motion of many: Circuit::held_joints
-// names them. docs/motion.md has the method, its tolerances and its limits.
+// joints at their values in the start pose (picked so that the most joints
+// keep moving) and traces the curve left, which is one motion of many:
+// Circuit::held_joints names them. docs/motion.md has the method, its
+// tolerances and its limits.
 #pragma once
 
 #include <string>
@@ -80,8 +81,9 @@ struct JointExtreme {
   JointVector theta;       // the pose, unwrapped as the circuit is
 };
 
-// A pose where the closure Jacobian loses rank on the circuit (a
-// parallelogram's change point): other branches cross there.
+// A singular pose: the closure Jacobian loses rank on the circuit. Other
+// branches may cross there (a parallelogram's change point: 4 branch
+// directions) or none (0: the circuit only passes a fold of the closure).
 struct Bifurcation {
   double arclength = 0.0;
   JointVector theta;
