@@ -11,6 +11,7 @@
 #include <string>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 
@@ -110,18 +111,36 @@ struct Correction {
 // than `max_move` from where it started or the residual stops falling above
 // the tolerance.
 Correction correct(const ClosureSystem& system, JointVector& x, int max_rank, double max_move,
-                   const MotionOptions& o) {
+                   const MotionOptions& o, const JointVector* tangent = nullptr) {
+  using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxJoints>;
   const JointVector start = x;
   SystemVector F;
   SystemMatrix A;
   Correction c;
   c.residual = system.evaluate(x, F, A);
   for (; c.iterations < kMaxCorrectorIterations; ++c.iterations) {
-    const Svd svd = decompose(A);
-    const auto& s = svd.singularValues();
-    const int rank = std::min(max_rank, numerical_rank(svd, o.rank_tolerance));
-    JointVector step = JointVector::Zero(x.size());
-    for (int i = 0; i < rank; ++i) step -= svd.matrixV().col(i) * (svd.matrixU().col(i).dot(F) / s[i]);
+    JointVector step;
+    bool stepped = false;
+    if (tangent) {
+      // Along a curve whose tangent t is known, A^T A + t t^T is regular and
+      // its solve is the minimum-norm step (orthogonal to t): the bordered
+      // system of pseudo-arclength continuation, a small Cholesky instead
+      // of an SVD.
+      Square M = A.transpose() * A;
+      M.noalias() += *tangent * tangent->transpose();
+      const Eigen::LLT<Square> llt(M);
+      if (llt.info() == Eigen::Success) {
+        step = -llt.solve(A.transpose() * F);
+        stepped = step.allFinite();
+      }
+    }
+    if (!stepped) {
+      const Svd svd = decompose(A);
+      const auto& s = svd.singularValues();
+      const int rank = std::min(max_rank, numerical_rank(svd, o.rank_tolerance));
+      step = JointVector::Zero(x.size());
+      for (int i = 0; i < rank; ++i) step -= svd.matrixV().col(i) * (svd.matrixU().col(i).dot(F) / s[i]);
+    }
     const JointVector trial = x + step;
     SystemVector Ft;
     SystemMatrix At;
@@ -253,17 +272,22 @@ struct PointInfo {
 };
 
 PointInfo point_info(const ClosureSystem& system, const JointVector& x) {
-  const int n = system.joints();
+  using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxJoints>;
   SystemVector F;
   SystemMatrix A;
   system.evaluate(x, F, A);
-  const Svd svd = decompose(A);
+  // The right singular vectors and values from the eigen-decomposition of
+  // A^T A (ascending): cheaper than an SVD, and the squared singular values
+  // resolve what is needed here (the tangent, and a smallest retained
+  // singular value down to about 1e-8 of the largest).
+  const Square gram = A.transpose() * A;
+  const Eigen::SelfAdjointEigenSolver<Square> eigen(gram);
   PointInfo p;
-  p.tangent = svd.matrixV().col(n - 1);
-  p.v = svd.matrixV().col(n - 2);
-  const auto& s = svd.singularValues();
-  p.sigma = n - 2 < s.size() ? s[n - 2] : 0.0;
-  p.sigma_max = s[0];
+  p.tangent = eigen.eigenvectors().col(0);
+  p.v = eigen.eigenvectors().col(1);
+  const auto& lambda = eigen.eigenvalues();
+  p.sigma = std::sqrt(std::max(lambda[1], 0.0));
+  p.sigma_max = std::sqrt(std::max(lambda[lambda.size() - 1], 0.0));
   p.w = A * p.v;
   return p;
 }
@@ -523,7 +547,7 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
     }
     // Predictor along the tangent, corrector back onto the curve.
     JointVector next = x + h * info.tangent;
-    const Correction c = correct(system, next, n - 1, 0.5 * h, o);
+    const Correction c = correct(system, next, n - 1, 0.5 * h, o, &info.tangent);
     PointInfo next_info;
     bool accepted = c.converged;
     double step = 0.0;

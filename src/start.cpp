@@ -147,9 +147,13 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
     is_length.push_back(kind == static_cast<int>(ParameterKind::a) || kind == static_cast<int>(ParameterKind::d));
   }
   // A zero's pose is on its motion (the cycle went through it with no
-  // energy): only the circuit through it is traced.
+  // energy): only the circuit through it is traced, in steps of 1 deg of
+  // arclength, with the input's dead points solved for (the other joints'
+  // ranges from the traced points).
   StartOptions analysis = options;
   analysis.verification.all_circuits = false;
+  analysis.verification.all_extremes = false;
+  analysis.verification.steps_per_turn = std::min(analysis.verification.steps_per_turn, 360);
   out.candidate = analyse_candidate(out.final_geometry, out.final_angles,
                                     dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry)),
                                     analysis);

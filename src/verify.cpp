@@ -64,6 +64,7 @@ MotionOptions VerificationOptions::motion() const {
   m.input_joint = input_joint;
   m.residual_tolerance = residual_tolerance;
   m.max_step = 2.0 * kPi / steps_per_turn;
+  m.all_extremes = all_extremes;
   return m;
 }
 

@@ -76,9 +76,10 @@ TEST(Motion, BennettLoopIsOneClosedCircuitOnItsClosedFormRelation) {
       const JointVector expected = k.angles(k.g, c.points[i][0]);
       for (int j = 0; j < 4; ++j) ASSERT_NEAR(wrap_angle(c.points[i][j] - expected[j]), 0.0, 1e-9) << i << " " << j;
     }
-    // Points are spaced by at most the largest step.
+    // Points are spaced by the largest step at most (the corrector moves
+    // across the tangent, so a chord can exceed it by the curvature's share).
     for (size_t i = 1; i < c.points.size(); ++i) {
-      EXPECT_LE((c.points[i] - c.points[i - 1]).norm(), MotionOptions{}.max_step * (1 + 1e-9));
+      EXPECT_LE((c.points[i] - c.points[i - 1]).norm(), MotionOptions{}.max_step * 1.01);
     }
   }
 }

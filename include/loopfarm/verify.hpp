@@ -33,6 +33,10 @@ struct VerificationOptions {
   // [rad] The least input travel of a moving circuit that does not close.
   double min_input_travel = 3.14159265358979323846 / 180.0;
   bool all_circuits = true;
+  // Solve for every joint's extremes on the circuit (their ranges exact), or
+  // only the input's dead points (the farm: the other ranges from the
+  // traced points, to within a step).
+  bool all_extremes = true;
   // [rad] Prefer the circuit whose input range covers this angle (when no
   // pose on a moving circuit is given).
   std::optional<double> theta0;
