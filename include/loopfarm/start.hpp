@@ -36,9 +36,9 @@ struct CandidateAnalysis {
 
 // `pose`: joint angles of an assembled pose of `geometry` (the verification
 // starts there: StartOptions::verification says whether every circuit is
-// sought or only the one through the pose); `jacobian`: dr/dx of the cycle residuals with respect to the
-// free parameters at the geometry, in dimensionless units
-// (dimensionless_columns).
+// sought or only the one through the pose); `jacobian`: dr/dx of the cycle
+// residuals with respect to the free parameters at the geometry, in
+// dimensionless units (dimensionless_columns).
 CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
                                     const Eigen::MatrixXd& jacobian, const StartOptions& options);
 // The same with the verification already done (`loopfarm verify` chooses
