@@ -1,25 +1,15 @@
 #include "loopfarm/assembly.hpp"
 
+
 #include <array>
 #include <stdexcept>
+
+#include "halton.hpp"
 
 namespace loopfarm {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// Radical inverse of i in the given base: the Halton sequence, a fixed
-// low-discrepancy cover of the passive angles.
-double radical_inverse(int base, int i) {
-  double inverse = 0.0;
-  double scale = 1.0 / base;
-  while (i > 0) {
-    inverse += (i % base) * scale;
-    i /= base;
-    scale /= base;
-  }
-  return inverse;
-}
 
 bool better(const EquilibriumSummary& candidate, const EquilibriumSummary& best) {
   const bool c_ok = candidate.status == SolveStatus::converged;
@@ -38,7 +28,6 @@ void AssemblyOptions::validate() const {
 EquilibriumSummary assemble(const LoopModel& model, EquilibriumWorkspace& ws, double theta0,
                             const AssemblyOptions& options) {
   options.validate();
-  static constexpr std::array<int, kMaxJoints - 1> kPrimes{2, 3, 5, 7, 11, 13, 17};
   const int n = model.joints();
   EquilibriumSummary best;
   bool have_best = false;
@@ -50,7 +39,7 @@ EquilibriumSummary assemble(const LoopModel& model, EquilibriumWorkspace& ws, do
         theta[i] = theta0;
       } else {
         // Halton point g + 1: point 0 is zero in every base, a corner.
-        theta[i] = -kPi + 2.0 * kPi * radical_inverse(kPrimes[static_cast<size_t>(passive++)], g + 1);
+        theta[i] = -kPi + 2.0 * kPi * radical_inverse(kHaltonBases[static_cast<size_t>(passive++)], g + 1);
       }
     }
     const EquilibriumSummary s = solve_equilibrium(model, ws, theta0, EquilibriumState::at_angles(model, theta));

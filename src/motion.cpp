@@ -3,6 +3,7 @@
 // joint extremes and bifurcation points solved for on the curve.
 #include "loopfarm/motion.hpp"
 
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -14,6 +15,8 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
+
+#include "halton.hpp"
 
 namespace loopfarm {
 namespace {
@@ -44,12 +47,10 @@ using SystemMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kM
 using SystemVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxRows, 1>;
 using Svd = Eigen::JacobiSVD<SystemMatrix>;
 
-double wrap(double angle) { return wrap_angle(angle); }
-
 // Componentwise wrapped difference a - b, each in (-pi, pi].
 JointVector wrapped_difference(const JointVector& a, const JointVector& b) {
   JointVector d = a - b;
-  for (int k = 0; k < d.size(); ++k) d[k] = wrap(d[k]);
+  for (int k = 0; k < d.size(); ++k) d[k] = wrap_angle(d[k]);
   return d;
 }
 
@@ -209,27 +210,13 @@ double levenberg_marquardt(const LoopGeometry& g, const std::array<bool, kMaxJoi
   return r.cwiseAbs().maxCoeff();
 }
 
-// Radical inverse of i in the given base: the Halton sequence.
-double radical_inverse(int base, int i) {
-  double inverse = 0.0;
-  double scale = 1.0 / base;
-  while (i > 0) {
-    inverse += (i % base) * scale;
-    i /= base;
-    scale /= base;
-  }
-  return inverse;
-}
-
-constexpr std::array<int, kMaxJoints> kPrimes{2, 3, 5, 7, 11, 13, 17, 19};
-
 // Halton point `index` over the joints marked free (others keep x's values).
 JointVector halton_guess(const JointVector& x, const std::array<bool, kMaxJoints>& free, int index) {
   JointVector guess = x;
   int dimension = 0;
   for (int k = 0; k < x.size(); ++k) {
     if (free[static_cast<size_t>(k)]) {
-      guess[k] = -kPi + kTwoPi * radical_inverse(kPrimes[static_cast<size_t>(dimension++)], index + 1);
+      guess[k] = -kPi + kTwoPi * radical_inverse(kHaltonBases[static_cast<size_t>(dimension++)], index + 1);
     }
   }
   return guess;
@@ -251,7 +238,7 @@ std::vector<JointVector> assemblies(const LoopGeometry& g, const ClosureSystem& 
     least = std::min(least, residual);
     if (residual > std::sqrt(o.residual_tolerance)) continue;
     if (!correct(system, x, system.joints(), 0.1, o).converged) continue;
-    for (int k = 0; k < x.size(); ++k) x[k] = wrap(x[k]);
+    for (int k = 0; k < x.size(); ++k) x[k] = wrap_angle(x[k]);
     if (std::none_of(out.begin(), out.end(), [&](const JointVector& p) { return same_pose(p, x, kSamePose); })) {
       out.push_back(x);
     }
@@ -399,7 +386,7 @@ std::vector<Probe> probe_rays(const ClosureSystem& system, const JointVector& xb
     const double phi = kTwoPi * (i + 0.5) / kProbes;
     c[0] = std::cos(phi);
     c[1] = std::sin(phi);
-    for (int k = 2; k < nullity; ++k) c[k] = 2.0 * radical_inverse(kPrimes[static_cast<size_t>(k)], i + 1) - 1.0;
+    for (int k = 2; k < nullity; ++k) c[k] = 2.0 * radical_inverse(kHaltonBases[static_cast<size_t>(k)], i + 1) - 1.0;
     c.normalize();
     const JointVector d = N * c;
     JointVector y = xb + kProbeDistance * d;
@@ -618,6 +605,22 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
   }
 }
 
+// Events (extremes, singular poses) of the backward and the forward walk in
+// the order of the joined circuit, their arclength measured from its first
+// point (the backward walk's last).
+template <class Event>
+void append_events(const std::vector<Event>& backward, const std::vector<Event>& forward, double back_length,
+                   std::vector<Event>& out) {
+  for (auto it = backward.rbegin(); it != backward.rend(); ++it) {
+    out.push_back(*it);
+    out.back().arclength = back_length - it->arclength;
+  }
+  for (const Event& e : forward) {
+    out.push_back(e);
+    out.back().arclength += back_length;
+  }
+}
+
 // The ranges of every joint along a circuit, extremes included.
 void fill_ranges(Circuit& c) {
   const int n = static_cast<int>(c.points.front().size());
@@ -726,24 +729,8 @@ TracedCircuit trace(const LoopGeometry& g, JointVector x, const MotionOptions& o
   c.end = forward.end == CircuitEnd::closed ? CircuitEnd::closed
           : (forward.end == CircuitEnd::too_long || backward.end == CircuitEnd::too_long) ? CircuitEnd::too_long
                                                                                          : CircuitEnd::lost;
-  for (auto it = backward.extremes.rbegin(); it != backward.extremes.rend(); ++it) {
-    JointExtreme e = *it;
-    e.arclength = back_length - e.arclength;
-    c.extremes.push_back(e);
-  }
-  for (JointExtreme e : forward.extremes) {
-    e.arclength += back_length;
-    c.extremes.push_back(e);
-  }
-  for (auto it = backward.bifurcations.rbegin(); it != backward.bifurcations.rend(); ++it) {
-    Bifurcation b = *it;
-    b.arclength = back_length - b.arclength;
-    c.bifurcations.push_back(b);
-  }
-  for (Bifurcation b : forward.bifurcations) {
-    b.arclength += back_length;
-    c.bifurcations.push_back(b);
-  }
+  append_events(backward.extremes, forward.extremes, back_length, c.extremes);
+  append_events(backward.bifurcations, forward.bifurcations, back_length, c.bifurcations);
   for (const Walk* w : std::array<const Walk*, 2>{&backward, &forward}) {
     out.branch_seeds.insert(out.branch_seeds.end(), w->branch_seeds.begin(), w->branch_seeds.end());
   }
@@ -942,7 +929,7 @@ MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* p
   for (int k = 0; k < n; ++k) free[static_cast<size_t>(k)] = k != o.input_joint;
   for (int i = 0; i < o.scan_inputs; ++i) {
     JointVector base = JointVector::Zero(n);
-    base[o.input_joint] = wrap(kTwoPi * i / o.scan_inputs);
+    base[o.input_joint] = wrap_angle(kTwoPi * i / o.scan_inputs);
     const ClosureSystem system(g, {o.input_joint}, base);
     for (JointVector& x : assemblies(g, system, base, free, o.assembly_guesses, o, out.least_residual)) {
       seeds.push_back({std::move(x), false});
