@@ -191,7 +191,7 @@ std::optional<MotionWindow> motion_window(const LoopGeometry& geometry, const Ve
       if (image > r.lo && image < r.hi) centre = image;
     }
     w.theta0 = centre;
-    w.range = 1.8 * std::min(centre - r.lo, r.hi - centre);
+    w.range = cycle_window(r, centre);
   }
   // The cycle's angles as people read them: theta0 and the pose in (-180, 180] deg.
   w.theta0 = wrap_angle(w.theta0);

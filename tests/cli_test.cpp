@@ -329,7 +329,8 @@ TEST_F(CliTest, JsonForThePaperBennettLoopHasZeroEnergy) {
   // Keys present, in the documented order.
   const std::vector<std::string> keys = {"E_mean",     "E_max",      "samples",    "failed_samples",
                                          "branch_jumps", "refinements", "iterations", "max_closure_residual",
-                                         "theta0_deg", "theta_deg",  "length_scale", "compliance", "seconds"};
+                                         "theta0_deg", "theta_deg",  "range_deg",  "on_motion",
+                                         "full_turn",  "input_range_deg", "length_scale", "compliance", "seconds"};
   size_t previous = 0;
   for (const std::string& key : keys) {
     const size_t at = json.find("\"" + key + "\":");
@@ -349,6 +350,11 @@ TEST_F(CliTest, JsonForThePaperBennettLoopHasZeroEnergy) {
   EXPECT_EQ(json_raw(json, "compliance"), "\"paper\"");
   EXPECT_DOUBLE_EQ(json_number(json, "theta0_deg"), 120.0);
   EXPECT_NEAR(json_number(json, "length_scale"), std::sqrt(10.0), 1e-12);
+  // The given pose is on the Bennett motion, whose input turns fully.
+  EXPECT_EQ(json_raw(json, "on_motion"), "true");
+  EXPECT_EQ(json_raw(json, "full_turn"), "true");
+  EXPECT_EQ(json_raw(json, "input_range_deg"), "null");
+  EXPECT_EQ(json_number(json, "range_deg"), 360.0);
 
   std::string theta = json_raw(json, "theta_deg");
   ASSERT_GE(theta.size(), 2u);
@@ -378,6 +384,43 @@ TEST_F(CliTest, GenericLoopHasPositiveEnergy) {
   EXPECT_GT(e_mean, 1e-6) << result.out;
   EXPECT_GE(json_number(result.out, "E_max"), e_mean);
   EXPECT_EQ(json_raw(result.out, "samples"), "16");
+}
+
+// A non-Grashof four-bar driven at a rocker (range from the law of cosines,
+// as in VerifyFindsARockerWhateverTheta0): the automatic range is a window
+// centred on theta0 inside the input's range, where the energy is zero; a
+// full turn when theta0 is outside it (no assembly on a motion there) or
+// when asked for.
+TEST_F(CliTest, EnergyCyclesARockerOverAWindowInsideItsRange) {
+  const double lo = std::acos(10.25 / 16.0) * 180.0 / 3.14159265358979323846;
+  const std::vector<std::string> rocker = {"energy", "--a", "2,3,2.5,4", "--alpha-deg", "0,0,0,0"};
+  const Result inside = run(with(rocker, {"--theta0-deg", "200", "--json"}));
+  ASSERT_EQ(inside.exit_code, 0) << inside.err;
+  EXPECT_EQ(json_raw(inside.out, "on_motion"), "true");
+  EXPECT_EQ(json_raw(inside.out, "full_turn"), "false");
+  const std::string range = json_raw(inside.out, "input_range_deg");
+  EXPECT_NEAR(std::stod(range.substr(1)), lo, 1e-6) << range;
+  EXPECT_NEAR(std::stod(range.substr(range.find(',') + 1)), 360.0 - lo, 1e-6) << range;
+  EXPECT_NEAR(json_number(inside.out, "range_deg"), 1.8 * (360.0 - lo - 200.0), 1e-6);
+  EXPECT_LE(json_number(inside.out, "E_mean"), 1e-20);
+  EXPECT_EQ(json_raw(inside.out, "failed_samples"), "0");
+
+  const Result text = run(with(rocker, {"--theta0-deg", "200"}));
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("(on a motion of the rigid loop)"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("a window inside the input's range"), std::string::npos) << text.out;
+
+  const Result outside = run(with(rocker, {"--theta0-deg", "0", "--json"}));
+  ASSERT_EQ(outside.exit_code, 0) << outside.err;
+  EXPECT_EQ(json_raw(outside.out, "on_motion"), "false");
+  EXPECT_EQ(json_raw(outside.out, "full_turn"), "null");
+  EXPECT_EQ(json_number(outside.out, "range_deg"), 360.0);
+  EXPECT_GT(json_number(outside.out, "E_mean"), 1e-6);
+
+  const Result asked = run(with(rocker, {"--theta0-deg", "200", "--range-deg", "360", "--json"}));
+  ASSERT_EQ(asked.exit_code, 0) << asked.err;
+  EXPECT_EQ(json_number(asked.out, "range_deg"), 360.0);
+  EXPECT_GT(json_number(asked.out, "E_mean"), 1e-6);
 }
 
 TEST_F(CliTest, TomlGeometryGivesTheSameResultAsFlags) {

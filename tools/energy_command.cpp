@@ -1,5 +1,6 @@
 #include "energy_command.hpp"
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +17,8 @@
 #include "loopfarm/cycle.hpp"
 #include "loopfarm/equilibrium.hpp"
 #include "loopfarm/loop.hpp"
+#include "loopfarm/motion.hpp"
+#include "loopfarm/verify.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -35,7 +38,7 @@ struct EnergyArguments {
   std::string samples = "32";
   std::string compliance = "paper";
   std::string torsion_ratio = "1";
-  std::string range_deg = "360";
+  std::string range_deg = "auto";
   std::string csv, plot;
   bool json = false;
   bool log = false;
@@ -53,7 +56,7 @@ struct EnergyRequest {
   int samples = 32;
   Compliance compliance = Compliance::paper;
   double torsion_ratio = 1.0;
-  double range_deg = 360.0;
+  std::optional<double> range_deg;  // [deg]; empty: auto (choose_cycle)
   bool json = false;
   bool log = false;
 };
@@ -84,9 +87,12 @@ EnergyRequest read_request(const EnergyArguments& args) {
     throw UsageError("--torsion-ratio", "got " + format_double(request.torsion_ratio) + "; must be > 0");
   }
 
-  request.range_deg = parse_number(args.range_deg, "--range-deg");
-  if (!(request.range_deg > 0.0 && request.range_deg <= 360.0)) {
-    throw UsageError("--range-deg", "got " + format_double(request.range_deg) + "; must be in (0, 360]");
+  if (args.range_deg != "auto") {
+    const double range = parse_number(args.range_deg, "--range-deg");
+    if (!(range > 0.0 && range <= 360.0)) {
+      throw UsageError("--range-deg", "got " + format_double(range) + "; must be in (0, 360] or auto");
+    }
+    request.range_deg = range;
   }
 
   request.json = args.json;
@@ -143,8 +149,62 @@ void write_csv(std::FILE* out, const LoopModel& model, const DegreeDisplay& degr
   }
 }
 
-struct EnergyResult {
+// Where the cycle starts and the input range it covers.
+struct CycleStart {
   EquilibriumSummary assembly;
+  std::optional<MotionStart> motion;  // the motion the assembly lies on, if any
+  double range = 2.0 * kPi;           // [rad]
+};
+
+// The assembly: the given angles; without them, an assembly at theta0 on a
+// motion (motion_start, nearest the least-energy assembly first), else the
+// least-energy assembly. The range: as asked; auto, the window motion_start
+// gives when the assembly lies on a motion (a full turn when its input
+// turns fully, else a window inside the input's range), else a full turn.
+CycleStart choose_start(const EnergyRequest& request, const LoopModel& model, EquilibriumWorkspace& workspace,
+                        double theta0) {
+  CycleStart out;
+  MotionOptions motion;
+  motion.input_joint = model.options().input_joint;
+  motion.all_extremes = false;
+  const double min_travel = VerificationOptions{}.min_input_travel;
+  if (request.theta) {
+    out.assembly = assemble_from_angles(model, workspace, *request.theta);
+    out.motion = motion_start(request.geometry, theta0, &out.assembly.state.theta, min_travel, motion);
+    // On a motion only if it is the given pose's own.
+    for (int k = 0; out.motion && k < model.joints(); ++k) {
+      if (std::abs(wrap_angle(out.motion->pose[k] - out.assembly.state.theta[k])) > 1e-6) out.motion.reset();
+    }
+  } else {
+    out.assembly = assemble(model, workspace, theta0);
+    out.motion = motion_start(request.geometry, theta0, &out.assembly.state.theta, min_travel, motion);
+    if (out.motion) {
+      EquilibriumSummary on_motion = assemble_from_angles(model, workspace, out.motion->pose);
+      if (on_motion.status == SolveStatus::converged) {
+        out.assembly = std::move(on_motion);
+      } else {
+        out.motion.reset();
+      }
+    }
+  }
+  if (request.range_deg) {
+    out.range = *request.range_deg == 360.0 ? 2.0 * kPi : *request.range_deg / kDegreesPerRadian;
+  } else if (out.motion) {
+    out.range = out.motion->range;
+  }
+  return out;
+}
+
+// The input's range on the motion [deg], as the 2 pi image that holds theta0.
+std::array<double, 2> input_range_deg(const CycleStart& start, int input_joint, double theta0) {
+  const JointRange& r = start.motion->circuit.input_range(input_joint);
+  const double middle = 0.5 * (r.lo + r.hi);
+  const double shift = middle + std::remainder(theta0 - middle, 2.0 * kPi) - theta0;
+  return {(r.lo - shift) * kDegreesPerRadian, (r.hi - shift) * kDegreesPerRadian};
+}
+
+struct EnergyResult {
+  CycleStart start;
   CycleSummary cycle;
   double seconds = 0.0;
   DegreeDisplay degrees;
@@ -165,9 +225,25 @@ void print_json(const EnergyRequest& request, const LoopModel& model, const Ener
   json += ",\"theta_deg\":[";
   for (int i = 0; i < model.joints(); ++i) {
     if (i > 0) json += ',';
-    json += json_number(result.degrees.joint_deg(result.assembly.state.theta, i));
+    json += json_number(result.degrees.joint_deg(result.start.assembly.state.theta, i));
   }
   json += "]";
+  const CycleStart& start = result.start;
+  const int input = model.options().input_joint;
+  json += ",\"range_deg\":" + json_number(request.range_deg.value_or(start.range * kDegreesPerRadian));
+  json += ",\"on_motion\":" + std::string(start.motion ? "true" : "false");
+  if (start.motion) {
+    const bool full_turn = start.motion->circuit.input_range(input).crank();
+    json += ",\"full_turn\":" + std::string(full_turn ? "true" : "false");
+    if (full_turn) {
+      json += ",\"input_range_deg\":null";
+    } else {
+      const std::array<double, 2> r = input_range_deg(start, input, result.degrees.theta0);
+      json += ",\"input_range_deg\":[" + json_number(r[0]) + "," + json_number(r[1]) + "]";
+    }
+  } else {
+    json += ",\"full_turn\":null,\"input_range_deg\":null";
+  }
   json += ",\"length_scale\":" + json_number(model.length_scale());
   json += ",\"compliance\":" + json_string(to_string(request.compliance));
   json += ",\"seconds\":" + json_number(result.seconds);
@@ -189,7 +265,9 @@ std::string joint_angles_deg(const LoopModel& model, const DegreeDisplay& displa
 
 void print_summary(const EnergyRequest& request, const LoopModel& model, const EnergyResult& result) {
   const CycleSummary& c = result.cycle;
-  const EquilibriumSummary& a = result.assembly;
+  const EquilibriumSummary& a = result.start.assembly;
+  const CycleStart& start = result.start;
+  const int input = model.options().input_joint;
   const std::vector<double> d = request.input.d ? request.input.d->values
                                                 : std::vector<double>(request.input.a.values.size(), 0.0);
   std::printf("loop (%dR)\n", model.joints());
@@ -199,12 +277,26 @@ void print_summary(const EnergyRequest& request, const LoopModel& model, const E
   std::printf("  length scale L        %s\n", readable(model.length_scale()).c_str());
   std::printf("  compliance            %s, torsion ratio k_t/(k_a L^2) = %s\n", to_string(request.compliance),
               readable(request.torsion_ratio).c_str());
-  std::printf("assembly at theta0 = %s deg (%s)\n", readable(request.theta0_deg).c_str(),
-              request.theta ? "from --theta-deg" : "least-energy of the deterministic guesses");
+  const char* assembled = request.theta ? "from --theta-deg"
+                         : start.motion ? "on a motion of the rigid loop"
+                                        : "least-energy of the deterministic guesses: none at theta0 is on a motion";
+  std::printf("assembly at theta0 = %s deg (%s)\n", readable(request.theta0_deg).c_str(), assembled);
   std::printf("  status                %s after %d Newton iterations\n", to_string(a.status), a.iterations);
   std::printf("  theta_deg             %s\n", joint_angles_deg(model, result.degrees, a.state.theta).c_str());
-  std::printf("cycle (%d samples over %s deg)\n", static_cast<int>(c.samples.size()),
-              readable(request.range_deg).c_str());
+  std::string covered;
+  if (request.range_deg) {
+    covered = "as asked";
+  } else if (!start.motion) {
+    covered = request.theta ? "a full turn: the given pose is not on a motion" : "a full turn";
+  } else if (start.motion->circuit.input_range(input).crank()) {
+    covered = "a full turn: the input turns fully on the motion";
+  } else {
+    const std::array<double, 2> r = input_range_deg(start, input, result.degrees.theta0);
+    covered = "a window inside the input's range [" + readable(r[0]) + ", " + readable(r[1]) +
+              "] deg on the motion";
+  }
+  std::printf("cycle (%d samples over %s deg: %s)\n", static_cast<int>(c.samples.size()),
+              readable(request.range_deg.value_or(start.range * kDegreesPerRadian)).c_str(), covered.c_str());
   std::printf("  E_mean                %s   [E / (k_a L^2)]\n", readable(c.E_mean).c_str());
   std::printf("  E_max                 %s\n", readable(c.E_max).c_str());
   std::printf("  failed samples        %d\n", c.failed_samples);
@@ -253,24 +345,23 @@ int run_energy(const EnergyArguments& args) {
   }
   CycleOptions cycle_options;
   cycle_options.samples = request.samples;
-  // 360 must give exactly 2 pi so that the library treats it as a full turn.
-  cycle_options.range = request.range_deg / 360.0 * (2.0 * kPi);
-  cycle_options.validate();
 
   // 2. The computation.
   EquilibriumWorkspace workspace(model);
   EnergyResult result;
   const double theta0 = request.theta ? (*request.theta)[0] : request.theta0_deg / kDegreesPerRadian;
   result.degrees = {request.theta0_deg, theta0, model.options().input_joint};
-  const auto start = std::chrono::steady_clock::now();
-  result.assembly = request.theta ? assemble_from_angles(model, workspace, *request.theta)
-                                  : assemble(model, workspace, theta0);
-  cycle_energy(model, workspace, theta0, result.assembly.state, cycle_options, result.cycle);
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto clock = std::chrono::steady_clock::now();
+  result.start = choose_start(request, model, workspace, theta0);
+  // 360 gives exactly 2 pi, so that the library treats it as a full turn.
+  cycle_options.range = result.start.range;
+  cycle_options.validate();
+  cycle_energy(model, workspace, theta0, result.start.assembly.state, cycle_options, result.cycle);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
 
-  if (result.assembly.status != SolveStatus::converged) {
+  if (result.start.assembly.status != SolveStatus::converged) {
     std::fprintf(stderr, "loopfarm energy: warning: the assembly at theta0 did not converge (%s); "
-                         "the cycle starts from the best attempt\n", to_string(result.assembly.status));
+                         "the cycle starts from the best attempt\n", to_string(result.start.assembly.status));
   }
 
   // 3. Files first, each written in full before it replaces its target; then
@@ -327,7 +418,9 @@ Subcommand add_energy_command(CLI::App& parent) {
       ->type_name("X")
       ->capture_default_str();
   app->add_option("--range-deg", args->range_deg,
-                  "input range [deg]: 360 is a full turn from theta0, less is [theta0 - R/2, theta0 + R/2]")
+                  "input range [deg]: 360 is a full turn from theta0, less is [theta0 - R/2, theta0 + R/2]; "
+                  "auto: a full turn, or, when the assembly lies on a motion whose input rocks, a window "
+                  "centred on theta0 reaching 90 % of the way to the nearer dead point")
       ->type_name("R")
       ->capture_default_str();
 

@@ -38,6 +38,7 @@
 // tolerances and its limits.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -150,6 +151,32 @@ Circuit trace_circuit(const LoopGeometry& geometry, const JointVector& pose, con
 // never takes that angle.
 bool pose_at_input(const LoopGeometry& geometry, const Circuit& circuit, double angle, JointVector& pose,
                    const MotionOptions& options = {});
+
+// The input range [rad] a cycle of the elastic model started at `theta0` on
+// a circuit covers while staying on it: a full turn (2 pi) when the input
+// turns fully; otherwise a window centred on theta0 reaching 90 % of the way
+// to the nearer dead point on either side (the margin keeps the cycle's
+// samples off the fold, where the elastic equilibrium path turns back). 0
+// when no 2 pi image of theta0 lies strictly inside the input's range.
+double cycle_window(const JointRange& input_range, double theta0);
+
+// Where a cycle of the elastic model can start on a motion: a closed pose
+// with the input at theta0 whose circuit moves (Circuit::moves with
+// `min_travel`), and the window a cycle from it covers (cycle_window).
+struct MotionStart {
+  JointVector pose;     // closed, with pose[input_joint] = theta0
+  Circuit circuit;      // the circuit through it
+  double range = 0.0;   // cycle_window(circuit's input range, theta0) > 0
+};
+
+// The assembly at theta0 that lies on a motion: `near` (may be null) when,
+// with its input set to theta0 and polished, it closes and its circuit
+// moves; otherwise the assemblies find_assemblies finds there, nearest to
+// `near` first, the first whose circuit moves. Empty when no assembly at
+// theta0 lies on a motion (a loop that moves nowhere, or a theta0 outside
+// its input's range or at a dead point). Throws as trace_circuit does.
+std::optional<MotionStart> motion_start(const LoopGeometry& geometry, double theta0, const JointVector* near,
+                                        double min_travel, const MotionOptions& options = {});
 
 struct MotionAnalysis {
   int input_joint = 0;                  // as in the options
