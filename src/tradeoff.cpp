@@ -79,6 +79,9 @@ void TradeoffOptions::validate() const {
   for (int n : samples) {
     if (n < 4 || n > 100000) fail("samples: each must be in [4, 100000], got " + std::to_string(n));
   }
+  for (double r : ranges_deg) {
+    if (!(r > 0.0 && r <= 360.0)) fail("ranges_deg: each must be in (0, 360], got " + format_number(r));
+  }
   for (double t : closure_tolerances) {
     if (!(t > 0.0 && t <= 1e-5)) fail("closure_tolerances: each must be in (0, 1e-5], got " + format_number(t));
   }
@@ -120,6 +123,12 @@ std::vector<TradeoffConfiguration> tradeoff_configurations(const Job& base, cons
   for (int n : options.samples) {
     if (n == base.loop.samples) continue;
     add("samples", std::to_string(n), [n](Job& job) { job.loop.samples = n; });
+  }
+  for (double r : options.ranges_deg) {
+    // As the job file converts it (360 gives exactly 2 pi: a full turn).
+    const double range = r / 360.0 * (2.0 * 3.14159265358979323846);
+    if (range == base.loop.range) continue;
+    add("range_deg", format_number(r), [range](Job& job) { job.loop.range = range; });
   }
   for (double t : options.closure_tolerances) {
     if (t == base.loop.closure_tolerance) continue;

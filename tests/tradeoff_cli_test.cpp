@@ -37,7 +37,7 @@ class TradeoffCli : public testing::CommandTest {
 // The smallest sweep that has every axis: two starts, one loop per family.
 const std::vector<std::string> kSmallSweep = {
     "{dir}/job.toml",   "--starts", "2", "--per-family", "1", "--generic", "1", "--perturbations", "1e-2",
-    "--samples",        "8,16",     "--closure-tolerances", "1e-8", "--compliances", "paper", "--objectives", "mean,max", "--algorithms",
+    "--samples",        "8,16",     "--ranges-deg", "360,90", "--closure-tolerances", "1e-8", "--compliances", "paper", "--objectives", "mean,max", "--algorithms",
     "gauss-newton,LD_LBFGS", "--zero-thresholds", "1e-20", "--ftol-rels", "0,1e-3",
     "--reuse-nearby-cycles", "true,false"};
 
@@ -47,9 +47,9 @@ TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   const testing::CommandResult r = run(args);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> rows = split(read_file(dir_ / "t.csv"), '\n');
-  // Header, base, samples=16, closure_tolerance=1e-08, objective=max, algorithm=LD_LBFGS, ftol_rel=0.001,
-  // reuse_nearby_cycle=false, then "" after the last newline.
-  ASSERT_EQ(rows.size(), 9u) << read_file(dir_ / "t.csv");
+  // Header, base, samples=16, range_deg=90, closure_tolerance=1e-08, objective=max, algorithm=LD_LBFGS,
+  // ftol_rel=0.001, reuse_nearby_cycle=false, then "" after the last newline.
+  ASSERT_EQ(rows.size(), 10u) << read_file(dir_ / "t.csv");
   const std::vector<std::string> header = split(rows[0], ',');
   EXPECT_EQ(header.front(), "axis");
   EXPECT_EQ(header.back(), "pareto");
@@ -80,6 +80,8 @@ TEST_F(TradeoffCli, BadOptionsExitWithCode2NamingTheFlagAndLeaveFilesAlone) {
       {{"{dir}/job.toml", "--starts", "0"}, "--starts"},
       {{"{dir}/job.toml", "--samples", "2,8"}, "--samples"},
       {{"{dir}/job.toml", "--samples", "8.5"}, "--samples"},
+      {{"{dir}/job.toml", "--ranges-deg", "0"}, "--ranges-deg"},
+      {{"{dir}/job.toml", "--ranges-deg", "361"}, "--ranges-deg"},
       {{"{dir}/job.toml", "--algorithms", "gauss-newton,LD_FAST"}, "--algorithms"},
       {{"{dir}/job.toml", "--compliances", "rigid"}, "--compliances"},
       {{"{dir}/job.toml", "--objectives", "mean,median"}, "--objectives"},

@@ -48,9 +48,10 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
   o.zero_thresholds = {1e-12, 1e-20};
   o.ftol_rels = {0.0, 1e-3};          // 0 is the base's
   o.reuse_nearby_cycles = {true, false};  // true is the base's
+  o.ranges_deg = {360, 90};               // 360 is the base's
   const auto configurations = tradeoff_configurations(base, o);
-  // base, samples 8 and 32, tolerance, full, LBFGS, ftol 1e-3, no reuse, 1e-20
-  ASSERT_EQ(configurations.size(), 9u);
+  // base, samples 8 and 32, range 90, tolerance, full, LBFGS, ftol 1e-3, no reuse, 1e-20
+  ASSERT_EQ(configurations.size(), 10u);
   EXPECT_EQ(configurations[0].name(), "base");
   int changed_samples = 0;
   for (const TradeoffConfiguration& c : configurations) {
@@ -58,6 +59,7 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
     EXPECT_EQ(c.job.loop.samples != base.loop.samples, samples_axis) << c.name();
     EXPECT_EQ(c.job.optimizer.algorithm != base.optimizer.algorithm, c.axis == "algorithm") << c.name();
     EXPECT_EQ(c.job.loop.compliance != base.loop.compliance, c.axis == "compliance") << c.name();
+    EXPECT_EQ(c.job.loop.range != base.loop.range, c.axis == "range_deg") << c.name();
     EXPECT_EQ(c.job.search.zero_threshold != base.search.zero_threshold, c.axis == "zero_threshold") << c.name();
     EXPECT_EQ(c.job.optimizer.ftol_rel != base.optimizer.ftol_rel, c.axis == "ftol_rel") << c.name();
     EXPECT_EQ(c.job.optimizer.reuse_nearby_cycle != base.optimizer.reuse_nearby_cycle,
@@ -72,8 +74,10 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
     }
   }
   EXPECT_EQ(changed_samples, 2);
-  ASSERT_EQ(configurations[3].axis, "closure_tolerance");
-  EXPECT_EQ(configurations[3].job.loop.stationarity_tolerance, 1e-6);  // 100x the closure tolerance
+  ASSERT_EQ(configurations[3].axis, "range_deg");
+  EXPECT_EQ(configurations[3].job.loop.range, 90.0 / 360.0 * (2.0 * 3.14159265358979323846));
+  ASSERT_EQ(configurations[4].axis, "closure_tolerance");
+  EXPECT_EQ(configurations[4].job.loop.stationarity_tolerance, 1e-6);  // 100x the closure tolerance
 }
 
 TEST(Tradeoff, ParetoFrontKeepsTheRowsNoOtherBeatsInBothSpeedAndErrors) {
@@ -128,6 +132,31 @@ TEST(Tradeoff, ALooseZeroThresholdReadsPerturbedLoopsAsZero) {
   EXPECT_GT(row.error_rate(), 0.0);
 }
 
+// A window sees part of the motion: every movable loop still reads zero,
+// and each perturbed one reads less than over the full turn, but not zero
+// (the energy over the window is the mean over its samples, which lie on
+// the part of the full turn's curve around theta0).
+TEST(Tradeoff, AWindowReadsMovableLoopsAsZeroAndPerturbedOnesLower) {
+  const Job base = parse_job(kJob, "job.toml");
+  const auto truth = generate_ground_truth(small_options().ground_truth);
+  LoopSettings window = base.loop;
+  window.range = 90.0 / 360.0 * (2.0 * 3.14159265358979323846);
+  const std::vector<double> full = ground_truth_energies(truth, base.loop);
+  const std::vector<double> part = ground_truth_energies(truth, window);
+  int lower = 0, rigid = 0;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    if (truth[i].movable) {
+      EXPECT_LE(part[i], base.search.zero_threshold) << truth[i].id;
+      continue;
+    }
+    ++rigid;
+    EXPECT_GT(part[i], base.search.zero_threshold) << truth[i].id;
+    lower += part[i] < full[i];
+  }
+  EXPECT_EQ(rigid, 6);
+  EXPECT_GE(lower, rigid / 2);
+}
+
 TEST(Tradeoff, GroundTruthEnergiesOfTheSameLoopSettingsServeEveryAxisThatKeepsThem) {
   // What run_tradeoff does for the algorithm, ftol_rel, objective and
   // zero-threshold axes: the base's energies, read with another threshold,
@@ -171,6 +200,7 @@ TEST(Tradeoff, InvalidOptionsAreRejectedByName) {
             std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.starts = 0; }).find("starts"), std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.ftol_rels = {-1.0}; }).find("ftol_rels"), std::string::npos);
+  EXPECT_NE(with([](TradeoffOptions& o) { o.ranges_deg = {400.0}; }).find("ranges_deg"), std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.objectives = {"median"}; }).find("median"), std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.ground_truth.cases_per_family = -1; }), "");
 }

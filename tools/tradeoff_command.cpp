@@ -24,6 +24,7 @@ struct TradeoffArguments {
   std::string generic = "8";
   std::string perturbations = "1e-2,1e-3,1e-4,1e-5,1e-6,1e-7,1e-8";
   std::string samples = "4,8,16,32,64,128";
+  std::string ranges_deg = "360,180,90";
   std::string closure_tolerances = "1e-6,1e-8,1e-10,1e-13";
   std::string compliances = "paper,full";
   std::string objectives = "mean,max";
@@ -95,6 +96,8 @@ TradeoffOptions read_options(const TradeoffArguments& args) {
            "a whole number in [4, 100000]")) {
     o.samples.push_back(static_cast<int>(n));
   }
+  o.ranges_deg = checked_numbers(
+      args.ranges_deg, "--ranges-deg", [](double v) { return v > 0.0 && v <= 360.0; }, "in (0, 360]");
   o.closure_tolerances = checked_numbers(
       args.closure_tolerances, "--closure-tolerances", [](double v) { return v > 0.0 && v <= 1e-5; }, "in (0, 1e-5]");
   o.compliances = parse_word_list(args.compliances, "--compliances");
@@ -302,6 +305,10 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
       ->type_name("LIST")
       ->capture_default_str();
   app->add_option("--samples", args->samples, "cycle samples N tried")->type_name("LIST")->capture_default_str();
+  app->add_option("--ranges-deg", args->ranges_deg,
+                  "cycle input ranges tried [deg]: 360 a full turn, less a window around theta0")
+      ->type_name("LIST")
+      ->capture_default_str();
   app->add_option("--closure-tolerances", args->closure_tolerances,
                   "equilibrium closure tolerances tried (stationarity 100x looser)")
       ->type_name("LIST")

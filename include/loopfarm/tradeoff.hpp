@@ -36,6 +36,9 @@ struct TradeoffOptions {
   GroundTruthOptions ground_truth;
   // The values tried on each axis (the base job's own value is always one).
   std::vector<int> samples = {4, 8, 16, 32, 64, 128};
+  // The input range a cycle covers [deg] ([loop] range_deg): 360 is a full
+  // turn, less a window around theta0 (what a search for rockers needs).
+  std::vector<double> ranges_deg = {360.0, 180.0, 90.0};
   std::vector<double> closure_tolerances = {1e-6, 1e-8, 1e-10, 1e-13};  // stationarity 100x looser
   std::vector<std::string> compliances = {"paper", "full"};
   std::vector<std::string> objectives = {"mean", "max"};  // [loop] objective
@@ -56,7 +59,7 @@ struct TradeoffOptions {
 
 // One configuration: the base job with at most one choice changed.
 struct TradeoffConfiguration {
-  // "base", "samples", "closure_tolerance", "compliance", "objective", "algorithm", "ftol_rel",
+  // "base", "samples", "range_deg", "closure_tolerance", "compliance", "objective", "algorithm", "ftol_rel",
   // "reuse_nearby_cycle", "zero_threshold"
   std::string axis;
   std::string value;  // the value on that axis, as text ("16", "1e-08", "LD_LBFGS")
