@@ -19,6 +19,8 @@ namespace {
 
 using testing::rad;
 
+constexpr double kPi = 3.14159265358979323846;
+
 // Some joint angles that close the loop, from the rigid verification's own
 // assembly (started from a rough guess).
 JointVector assembled(const LoopGeometry& g, const JointVector& guess) {
@@ -101,6 +103,42 @@ zero_threshold = 1e-20
     EXPECT_EQ(s.candidate.local_dimension.parameters, 8) << objective;
     EXPECT_EQ(s.candidate.local_dimension.dimension, 3) << objective;
   }
+}
+
+// The shipped rocker job (jobs/trihedral-rocker-6r.toml) finds, from random
+// starts, trihedral Bricard loops whose input rocks: verified by the rigid
+// tracer, classified, on the trihedral condition (checked here in closed
+// form, a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2), and with every sample of
+// the cycle's window inside the traced input range (the elastic cycle and
+// the rigid motion agree on where the loop moves; a gap in the range
+// narrower than the samples' spacing may lie between two samples).
+TEST(RunStart, TheRockerJobFindsTrihedralLoopsWhoseInputRocks) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/trihedral-rocker-6r.toml");
+  ASSERT_LT(job.loop.range, 2.0 * kPi);
+  int rockers = 0;
+  for (std::uint64_t index = 0; index < 30; ++index) {
+    const StartSummary s = run_start(job, index);
+    if (!s.zero || !s.candidate.verification.verified) continue;
+    const VerificationSummary& v = s.candidate.verification;
+    EXPECT_EQ(s.candidate.classification.family, Family::bricard_trihedral) << index;
+    const JointVector& a = s.final_geometry.a;
+    const double condition = a[0] * a[0] + a[2] * a[2] + a[4] * a[4] - a[1] * a[1] - a[3] * a[3] - a[5] * a[5];
+    EXPECT_LT(std::abs(condition), 1e-8 * a.squaredNorm()) << index;
+    if (v.full_turn) continue;
+    ++rockers;
+    EXPECT_LT(v.range_hi - v.range_lo, 2.0 * kPi) << index;
+    // The samples theta0 - R/2 + j R / (N - 1), each at its image nearest
+    // the middle of the range.
+    const double middle = 0.5 * (v.range_lo + v.range_hi);
+    for (int j = 0; j < job.loop.samples; ++j) {
+      const double sample =
+          s.initial_angles[0] - 0.5 * job.loop.range + j * job.loop.range / (job.loop.samples - 1);
+      const double image = middle + std::remainder(sample - middle, 2.0 * kPi);
+      EXPECT_GE(image, v.range_lo - 1e-9) << index << " sample " << j;
+      EXPECT_LE(image, v.range_hi + 1e-9) << index << " sample " << j;
+    }
+  }
+  EXPECT_GE(rockers, 3);
 }
 
 // A search in a symmetric sub-space stays in it: the start, every step and
