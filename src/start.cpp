@@ -154,9 +154,21 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   analysis.verification.all_circuits = false;
   analysis.verification.all_extremes = false;
   analysis.verification.steps_per_turn = std::min(analysis.verification.steps_per_turn, 360);
-  out.candidate = analyse_candidate(out.final_geometry, out.final_angles,
-                                    dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry)),
-                                    analysis);
+  const Eigen::MatrixXd columns =
+      dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry));
+  out.candidate = analyse_candidate(out.final_geometry, out.final_angles, columns, analysis);
+  // The circuit through the search's pose cannot always be followed from it:
+  // a window's samples may step over a gap in the input's range that holds
+  // theta0 (the pose at theta0 is then elastic, not closed), the tracer may
+  // stall near a singular pose, or a loop with two freedoms may be traced
+  // with a joint held whose curve ends. A zero that is not verified so is
+  // analysed as `loopfarm verify` does it: every circuit, the one covering
+  // theta0 preferred.
+  if (!out.candidate.verification.verified) {
+    StartOptions whole = options;
+    whole.verification.theta0 = out.initial_angles[0];
+    out.candidate = analyse_candidate(out.final_geometry, out.final_angles, columns, whole);
+  }
   return out;
 }
 

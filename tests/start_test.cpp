@@ -141,6 +141,26 @@ TEST(RunStart, TheRockerJobFindsTrihedralLoopsWhoseInputRocks) {
   EXPECT_GE(rockers, 3);
 }
 
+// Zeros of the rocker job whose circuit cannot be followed from the search's
+// pose (start 299: theta0 lies in a gap of the input's range that the
+// window's samples step over, so the pose at theta0 does not close; 3500: the
+// tracer stalls; 2089: two freedoms, the curve with the chosen joint held
+// ends) are verified from the whole motion, as `loopfarm verify` does it.
+TEST(RunStart, AZeroWhoseCircuitCannotBeFollowedFromItsPoseIsVerifiedFromTheWholeMotion) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/trihedral-rocker-6r.toml");
+  VerificationOptions through_pose;  // what run_start tries first
+  through_pose.all_circuits = false;
+  through_pose.all_extremes = false;
+  through_pose.steps_per_turn = 360;
+  for (std::uint64_t index : {299u, 3500u, 2089u}) {
+    const StartSummary s = run_start(job, index);
+    ASSERT_TRUE(s.zero) << index;
+    EXPECT_FALSE(verify_motion(s.final_geometry, s.final_angles, through_pose).verified) << index;
+    EXPECT_TRUE(s.candidate.verification.verified) << index;
+    EXPECT_EQ(s.candidate.classification.family, Family::bricard_trihedral) << index;
+  }
+}
+
 // A search in a symmetric sub-space stays in it: the start, every step and
 // the final geometry are line- or plane-symmetric to the bit (the images are
 // ties, not variables of their own).
