@@ -5,12 +5,14 @@
 # numerical core (src/cycle.cpp and the search) compiled with the sanitizers;
 # CI cannot afford that. These test programs need only a few library sources,
 # which each compiles itself (as fuzz/ does), so the whole subset builds and
-# runs in about a minute:
+# runs in a few minutes:
 #
 #   loop_test               the loop's geometry and frames (loop.cpp, sample_loops.cpp)
 #   equilibrium_test        the equilibrium solve and assembly (equilibrium.cpp, assembly.cpp)
 #   sampler_test            the job's parameter space and sampler (job.cpp, parameter_space.cpp, sampler.cpp)
 #   results_database_test   the results database, SQLite's C API (results_database.cpp)
+#   cycle_start_test        the rigid motion's tracer and the cycle started on it
+#                           (motion.cpp, cycle.cpp, cycle_start.cpp, constructions.cpp)
 #
 # The parsers are sanitized by the fuzzers (fuzz/), the rest only by
 # tools/test.sh --sanitize. A link error here means a test needs a source more:
@@ -40,3 +42,7 @@ target_link_libraries(sampler_test PRIVATE tomlplusplus::tomlplusplus NLopt::nlo
 loopfarm_add_sanitized_test(results_database_test ${PROJECT_SOURCE_DIR}/src/results_database.cpp
   ${PROJECT_SOURCE_DIR}/src/loop.cpp)
 target_link_libraries(results_database_test PRIVATE SQLite::SQLite3)
+loopfarm_add_sanitized_test(cycle_start_test ${loopfarm_geometry}
+  ${PROJECT_SOURCE_DIR}/src/equilibrium.cpp ${PROJECT_SOURCE_DIR}/src/assembly.cpp
+  ${PROJECT_SOURCE_DIR}/src/motion.cpp ${PROJECT_SOURCE_DIR}/src/cycle.cpp
+  ${PROJECT_SOURCE_DIR}/src/cycle_start.cpp ${PROJECT_SOURCE_DIR}/src/constructions.cpp)

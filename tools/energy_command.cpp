@@ -13,12 +13,10 @@
 #include "cli_support.hpp"
 #include "geometry_input.hpp"
 #include "geometry_options.hpp"
-#include "loopfarm/assembly.hpp"
 #include "loopfarm/cycle.hpp"
+#include "loopfarm/cycle_start.hpp"
 #include "loopfarm/equilibrium.hpp"
 #include "loopfarm/loop.hpp"
-#include "loopfarm/motion.hpp"
-#include "loopfarm/verify.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -56,7 +54,7 @@ struct EnergyRequest {
   int samples = 32;
   Compliance compliance = Compliance::paper;
   double torsion_ratio = 1.0;
-  std::optional<double> range_deg;  // [deg]; empty: auto (choose_cycle)
+  std::optional<double> range_deg;  // [deg]; empty: auto (choose_cycle_start)
   bool json = false;
   bool log = false;
 };
@@ -147,52 +145,6 @@ void write_csv(std::FILE* out, const LoopModel& model, const DegreeDisplay& degr
     }
     std::fputc('\n', out);
   }
-}
-
-// Where the cycle starts and the input range it covers.
-struct CycleStart {
-  EquilibriumSummary assembly;
-  std::optional<MotionStart> motion;  // the motion the assembly lies on, if any
-  double range = 2.0 * kPi;           // [rad]
-};
-
-// The assembly: the given angles; without them, an assembly at theta0 on a
-// motion (motion_start, nearest the least-energy assembly first), else the
-// least-energy assembly. The range: as asked; auto, the window motion_start
-// gives when the assembly lies on a motion (a full turn when its input
-// turns fully, else a window inside the input's range), else a full turn.
-CycleStart choose_start(const EnergyRequest& request, const LoopModel& model, EquilibriumWorkspace& workspace,
-                        double theta0) {
-  CycleStart out;
-  MotionOptions motion;
-  motion.input_joint = model.options().input_joint;
-  motion.all_extremes = false;
-  const double min_travel = VerificationOptions{}.min_input_travel;
-  if (request.theta) {
-    out.assembly = assemble_from_angles(model, workspace, *request.theta);
-    out.motion = motion_start(request.geometry, theta0, &out.assembly.state.theta, min_travel, motion);
-    // On a motion only if it is the given pose's own.
-    for (int k = 0; out.motion && k < model.joints(); ++k) {
-      if (std::abs(wrap_angle(out.motion->pose[k] - out.assembly.state.theta[k])) > 1e-6) out.motion.reset();
-    }
-  } else {
-    out.assembly = assemble(model, workspace, theta0);
-    out.motion = motion_start(request.geometry, theta0, &out.assembly.state.theta, min_travel, motion);
-    if (out.motion) {
-      EquilibriumSummary on_motion = assemble_from_angles(model, workspace, out.motion->pose);
-      if (on_motion.status == SolveStatus::converged) {
-        out.assembly = std::move(on_motion);
-      } else {
-        out.motion.reset();
-      }
-    }
-  }
-  if (request.range_deg) {
-    out.range = *request.range_deg == 360.0 ? 2.0 * kPi : *request.range_deg / kDegreesPerRadian;
-  } else if (out.motion) {
-    out.range = out.motion->range;
-  }
-  return out;
 }
 
 // The input's range on the motion [deg], as the 2 pi image that holds theta0.
@@ -352,8 +304,11 @@ int run_energy(const EnergyArguments& args) {
   const double theta0 = request.theta ? (*request.theta)[0] : request.theta0_deg / kDegreesPerRadian;
   result.degrees = {request.theta0_deg, theta0, model.options().input_joint};
   const auto clock = std::chrono::steady_clock::now();
-  result.start = choose_start(request, model, workspace, theta0);
+  CycleStartOptions start_options;
   // 360 gives exactly 2 pi, so that the library treats it as a full turn.
+  if (request.range_deg) start_options.range = *request.range_deg / 360.0 * (2.0 * kPi);
+  result.start = choose_cycle_start(model, workspace, theta0, request.theta ? &*request.theta : nullptr,
+                                    start_options);
   cycle_options.range = result.start.range;
   cycle_options.validate();
   cycle_energy(model, workspace, theta0, result.start.assembly.state, cycle_options, result.cycle);
