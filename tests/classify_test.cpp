@@ -144,8 +144,10 @@ TEST(Classify, GenericAndNearlyMovableLoopsAreUnclassified) {
   g.a[0] += 1e-3;
   const Classification c = classify(g, bennett_angles(paper_bennett_loop(), rad(40)), kMoving);
   EXPECT_EQ(c.family, Family::unclassified);
-  // a1 - a3 = 1e-3 in units of L = sqrt(10): the Bennett residual says how far.
-  EXPECT_NEAR(c.checks[0].residual, 1e-3 / length_scale(g), 2e-4);
+  // Two Bennett conditions are off, a1 - a3 and a2 sin(alpha1) - a1 sin(alpha2)
+  // (sin(alpha2) = 1), each by 1e-3 in units of L; the residual is the largest
+  // condition, 1e-3 / L exactly (to round-off).
+  EXPECT_NEAR(c.checks[0].residual, 1e-3 / length_scale(g), 1e-12);
   EXPECT_NE(c.detail.find("bennett"), std::string::npos) << c.detail;
 }
 

@@ -496,9 +496,10 @@ TEST(Cycle, LandingsAfterFoldsConvergeToStrictLocalMinima) {
     }
   }
   EXPECT_GE(jumps, 5);
-  // A deterministic count, not a timing: 2,021 with the tangent landing,
-  // 1,895 since the skipped retries (next test).
-  EXPECT_LT(iterations, 2000);
+  // A deterministic count, not a timing: 1,498 Newton iterations in all,
+  // measured at commit 3903a98; the bound, 3 % above it, catches a change
+  // that costs the walk iterations.
+  EXPECT_LE(iterations, 1545) << "iterations " << iterations;
 }
 
 // Two cycles of the same 4R loop agree sample by sample: the same statuses,
@@ -541,9 +542,9 @@ PairTotals compare_generic_cycles(const CycleOptions& a, const CycleOptions& b, 
 // CycleOptions::skip_failed_retries against retrying: on the bench's 8
 // generic loops, whose cycles pass 9 folds at N = 32, skipping the solves
 // already known to fail changes no sample (the same statuses, energies and
-// angles to the solve's tolerance) and saves iterations (1,895 against 2,021
-// in all). Not on every loop: random_loop(4, 5) needs 318 against 317, one
-// skipped retry would have been accepted and the step bisects instead.
+// angles to the solve's tolerance) and saves iterations (1,498 against 1,596
+// in all, measured at commit 3903a98). Not on every loop: a skipped retry
+// can be one that would have been accepted, and the step bisects instead.
 TEST(Cycle, SkippingKnownFailedRetriesChangesNoSample) {
   CycleOptions skip, retry;
   retry.skip_failed_retries = false;

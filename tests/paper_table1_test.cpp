@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "loopfarm/job.hpp"
+#include "loopfarm/loop.hpp"
 #include "loopfarm/start.hpp"
 #include "test_support.hpp"
 
@@ -18,6 +19,8 @@ namespace {
 
 using testing::deg;
 using testing::rad;
+
+constexpr double kPi = 3.14159265358979323846;
 
 constexpr int kStarts = 16;
 
@@ -110,24 +113,31 @@ TEST(PaperTable1, ThePapersPointIsOnTheFamilyAndThePosePinsIt) {
   const ObjectiveValue v = objective.evaluate(paper, nullptr);
   ASSERT_TRUE(v.ok);
   EXPECT_LT(v.E_max, 1e-20);
-  // With the lengths at their nominal 2 and 4, the family is the curve
-  // sin(alpha2) = 2 sin(alpha1); the paper's pose (theta1, theta2) = (120,
-  // 90) deg adds eq. (2a): tan 60 tan 45 = sin((alpha2 + alpha1)/2) /
-  // sin((alpha2 - alpha1)/2). Newton on the two equations from a rough
-  // guess lands on the paper's twists.
-  Eigen::Vector2d x(rad(25), rad(80));
-  for (int it = 0; it < 50; ++it) {
-    const double a1 = x[0], a2 = x[1];
-    Eigen::Vector2d f(std::sin(a2) - 2 * std::sin(a1),
-                      std::sqrt(3.0) * std::sin((a2 - a1) / 2) - std::sin((a2 + a1) / 2));
-    Eigen::Matrix2d J;
-    J << -2 * std::cos(a1), std::cos(a2),
-        -std::sqrt(3.0) / 2 * std::cos((a2 - a1) / 2) - 0.5 * std::cos((a2 + a1) / 2),
-        std::sqrt(3.0) / 2 * std::cos((a2 - a1) / 2) - 0.5 * std::cos((a2 + a1) / 2);
-    x -= J.partialPivLu().solve(f);
+  // With the lengths at their nominal 2 and 4 the family is the curve
+  // sin(alpha2) = 2 sin(alpha1) (alpha1 <= 30 deg, two branches of alpha2);
+  // the paper's pose (theta1, theta2) = (120, 90) deg with the Bennett angles
+  // (-120, -90) for joints 3 and 4 closes the loop at one point of it only,
+  // (30, 90) deg. The library's closure residual, along both branches:
+  JointVector pose(4);
+  pose << rad(120), rad(90), rad(-120), rad(-90);
+  for (double alpha1_deg : {10.0, 20.0, 25.0, 28.0, 29.5, 30.0}) {
+    const double alpha1 = rad(alpha1_deg);
+    // At 30 deg exactly 90 (2 sin(alpha1) rounds just below 1, whose arcsine
+    // is 1e-6 deg off).
+    const double principal = alpha1_deg == 30.0 ? kPi / 2 : std::asin(2.0 * std::sin(alpha1));
+    for (double alpha2 : {principal, kPi - principal}) {
+      const LoopGeometry g = LoopGeometry::from_degrees(std::vector<double>{2, 4, 2, 4},
+                                                        std::vector<double>{alpha1_deg, deg(alpha2), alpha1_deg,
+                                                                            deg(alpha2)},
+                                                        std::vector<double>{0, 0, 0, 0});
+      const double residual = closure_residual(g, pose).cwiseAbs().maxCoeff();
+      if (alpha1_deg == 30.0) {
+        EXPECT_LT(residual, 1e-12) << deg(alpha2);
+      } else {
+        EXPECT_GT(residual, 1e-3) << alpha1_deg << " " << deg(alpha2);
+      }
+    }
   }
-  EXPECT_NEAR(deg(x[0]), 30.0, 1e-9);
-  EXPECT_NEAR(deg(x[1]), 90.0, 1e-9);
 }
 
 }  // namespace
