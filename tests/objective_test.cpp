@@ -137,6 +137,45 @@ TEST(Objective, SteeredGradientAndJacobianAgreeWithCentralDifferences) {
   EXPECT_LT(relative_error(J.transpose() * r, gradient), 1e-9);
 }
 
+// The steering factor against the formula docs/steering.md and
+// objective.hpp define, computed here on its own from the cycle's samples:
+// M = prod_f (dist_f^-p + shift) * prod_{j != input} (1 + (t0 / travel_j)^2),
+// travel_j the max - min of joint j's angle unwrapped along the samples.
+TEST(Objective, SteeringFactorIsTheDocumentedFormula) {
+  TiedFixture f;
+  for (const double power : {1.0, 2.0, 3.0}) {
+    ObjectiveSettings settings = ObjectiveSettings::from_loop(f.job.loop);
+    settings.deflation.push_back({"twist gap", twist_gap});
+    settings.deflation_power = power;
+    settings.deflation_shift = 0.5;
+    settings.nontrivial = true;
+    settings.min_travel = rad(60);
+    CycleObjective objective(f.job.space, settings, f.theta);
+    const ObjectiveValue v = objective.evaluate(f.x0(), nullptr);
+    ASSERT_TRUE(v.ok);
+
+    const LoopGeometry& g = objective.geometry();
+    const double gap = std::sqrt(std::pow(g.alpha[0] - g.alpha[2], 2) + std::pow(g.a[1] - 3.0, 2));
+    double expected = std::pow(gap, -power) + 0.5;
+    const std::vector<CycleSample>& samples = objective.cycle().samples;
+    for (int j = 1; j < 4; ++j) {
+      double angle = samples[0].state.theta[j], lo = angle, hi = angle;
+      for (size_t k = 1; k < samples.size(); ++k) {
+        double step = std::fmod(samples[k].state.theta[j] - samples[k - 1].state.theta[j], 2 * 3.14159265358979323846);
+        if (step > 3.14159265358979323846) step -= 2 * 3.14159265358979323846;
+        if (step < -3.14159265358979323846) step += 2 * 3.14159265358979323846;
+        angle += step;
+        lo = std::min(lo, angle);
+        hi = std::max(hi, angle);
+      }
+      expected *= 1.0 + std::pow(rad(60) / (hi - lo), 2);
+    }
+    EXPECT_NEAR(v.steering_factor, expected, 1e-12 * expected) << power;
+    EXPECT_GT(v.steering_factor, 2.0) << power;
+    EXPECT_NEAR(v.value, expected * v.E_mean, 1e-12 * v.value) << power;
+  }
+}
+
 TEST(Objective, MaxMeasureHasTheWorstSamplesGradientAndResiduals) {
   // E_max is differentiable where its worst sample does not change: checked
   // against central differences there, with and without steering, and the

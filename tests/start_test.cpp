@@ -161,6 +161,28 @@ TEST(RunStart, AZeroWhoseCircuitCannotBeFollowedFromItsPoseIsVerifiedFromTheWhol
   }
 }
 
+// Non-triviality moves a search off a frozen-joint minimum: start 34 of the
+// unsteered generic 4R job ends on a trivial loop (a joint that does not
+// turn); with [steering] nontrivial = true the same start ends on a Bennett
+// loop, every joint turning.
+TEST(RunStart, NonTrivialityLeadsASearchOffAFrozenJointMinimum) {
+  Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/generic-4r.toml");
+  ASSERT_FALSE(job.steering.nontrivial);
+  const StartSummary plain = run_start(job, 34);
+  ASSERT_TRUE(plain.zero);
+  ASSERT_TRUE(plain.candidate.verification.verified);
+  EXPECT_EQ(plain.candidate.classification.family, Family::trivial);
+  const JointVector& frozen = plain.candidate.verification.joint_travel;
+  EXPECT_LT(frozen.minCoeff(), job.steering.min_travel);
+
+  job.steering.nontrivial = true;
+  const StartSummary steered = run_start(job, 34);
+  ASSERT_TRUE(steered.zero);
+  ASSERT_TRUE(steered.candidate.verification.verified);
+  EXPECT_EQ(steered.candidate.classification.family, Family::bennett);
+  EXPECT_GT(steered.candidate.verification.joint_travel.minCoeff(), job.steering.min_travel);
+}
+
 // A search in a symmetric sub-space stays in it: the start, every step and
 // the final geometry are line- or plane-symmetric to the bit (the images are
 // ties, not variables of their own).
