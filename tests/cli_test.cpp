@@ -16,6 +16,10 @@
 
 #include <gtest/gtest.h>
 
+#include "loopfarm/cycle.hpp"
+#include "loopfarm/cycle_start.hpp"
+#include "loopfarm/loop.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -421,6 +425,50 @@ TEST_F(CliTest, EnergyCyclesARockerOverAWindowInsideItsRange) {
   ASSERT_EQ(asked.exit_code, 0) << asked.err;
   EXPECT_EQ(json_number(asked.out, "range_deg"), 360.0);
   EXPECT_GT(json_number(asked.out, "E_mean"), 1e-6);
+}
+
+// What `energy` prints is what the library computes: the same start
+// (choose_cycle_start) and cycle (cycle_energy), to the last bit, for a rigid
+// loop over a full turn and for a rocker over its automatic window.
+TEST_F(CliTest, EnergyPrintsWhatTheLibraryComputes) {
+  using loopfarm::CycleOptions, loopfarm::CycleStart, loopfarm::CycleSummary, loopfarm::EquilibriumWorkspace,
+      loopfarm::LoopGeometry, loopfarm::LoopModel;
+  struct Case {
+    std::vector<std::string> flags;
+    LoopGeometry geometry;
+    double theta0_deg;
+  };
+  const std::vector<Case> cases = {
+      {{"--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0", "--theta0-deg", "30"},
+       LoopGeometry::from_degrees(std::vector<double>{1, 2, 3, 2.5}, std::vector<double>{20, 70, 40, 110},
+                                  std::vector<double>{0.1, -0.3, 0.2, 0}),
+       30.0},
+      {{"--a", "2,3,2.5,4", "--alpha-deg", "0,0,0,0", "--theta0-deg", "200"},
+       LoopGeometry::from_degrees(std::vector<double>{2, 3, 2.5, 4}, std::vector<double>{0, 0, 0, 0},
+                                  std::vector<double>{0, 0, 0, 0}),
+       200.0},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"energy", "--samples", "16", "--json"};
+    args.insert(args.end(), c.flags.begin(), c.flags.end());
+    const Result r = run(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+
+    const LoopModel model(c.geometry);
+    EquilibriumWorkspace ws(model);
+    const double theta0 = c.theta0_deg * 3.14159265358979323846 / 180.0;
+    const CycleStart start = loopfarm::choose_cycle_start(model, ws, theta0, nullptr);
+    CycleOptions options;
+    options.samples = 16;
+    options.range = start.range;
+    CycleSummary cycle;
+    loopfarm::cycle_energy(model, ws, theta0, start.assembly.state, options, cycle);
+    EXPECT_EQ(json_number(r.out, "E_mean"), cycle.E_mean) << r.out;
+    EXPECT_EQ(json_number(r.out, "E_max"), cycle.E_max) << r.out;
+    EXPECT_EQ(json_number(r.out, "iterations"), cycle.total_iterations) << r.out;
+    EXPECT_EQ(json_raw(r.out, "on_motion"), start.motion ? "true" : "false") << r.out;
+    EXPECT_NEAR(json_number(r.out, "range_deg"), start.range * 180.0 / 3.14159265358979323846, 1e-12) << r.out;
+  }
 }
 
 TEST_F(CliTest, TomlGeometryGivesTheSameResultAsFlags) {

@@ -72,6 +72,15 @@ TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
   }
   EXPECT_GT(fs::file_size(dir_ / "t.png"), 1000u);
+  // A progress line on stderr per configuration, none with --quiet; the same table either way.
+  EXPECT_NE(r.err.find("loopfarm tradeoff: 1/8 configurations measured (base)\n"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("loopfarm tradeoff: 8/8 configurations measured"), std::string::npos) << r.err;
+  std::vector<std::string> quiet_args = kSmallSweep;
+  quiet_args.emplace_back("--quiet");
+  const testing::CommandResult quiet = run(quiet_args);
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.err;
+  EXPECT_EQ(quiet.err, "");
+  EXPECT_EQ(quiet.out.substr(0, quiet.out.find('\n')), r.out.substr(0, r.out.find('\n')));
 }
 
 TEST_F(TradeoffCli, BadOptionsExitWithCode2NamingTheFlagAndLeaveFilesAlone) {
