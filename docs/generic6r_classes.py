@@ -155,7 +155,8 @@ def cmd_exact(db, loopfarm, job):
               f"| {fmt(v[0:6])} | {fmt(v[6:12])} | {fmt(v[12:18])} |")
 
 
-# Rigid kinematics for the Jacobian: T_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) (DESIGN.md).
+# Rigid kinematics for the Jacobian: T_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)
+# (docs/design.md, "The loop and its closure").
 def mat_mul(A, B):
     return [[sum(A[i][k] * B[k][j] for k in range(4)) for j in range(4)] for i in range(4)]
 

@@ -272,7 +272,7 @@ void adjacent_coaxial_conditions(const Writing& w, Sink& c) {
         });
 }
 
-// Axes 1 and 3 of a 4R writing coincide (DESIGN.md).
+// Axes 1 and 3 of a 4R writing coincide (docs/design.md, "Trivial").
 template <class Writing, class Sink>
 void coaxial_13_conditions(const Writing& w, Sink& c) {
   const int n = 4;

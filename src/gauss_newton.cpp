@@ -3,12 +3,13 @@
 // cycle and J = dr/dx from implicit differentiation (cycle.hpp).
 //
 // Where a movable geometry exists the residual vanishes at the minimum, and
-// Gauss-Newton converges quadratically to it (DESIGN.md); elsewhere it is a
-// Levenberg-Marquardt method with Marquardt's diagonal scaling (lengths and
-// twists have different units) and the damping rule of Nielsen (1999). Bounds
-// are handled by projection: variables at a bound whose gradient points out
-// of the box are held there for the step, the others solve the damped normal
-// equations, and the trial point is clamped into the box.
+// Gauss-Newton converges quadratically to it (docs/design.md, "Objective and
+// local minimisation"); elsewhere it is a Levenberg-Marquardt method with
+// Marquardt's diagonal scaling (lengths and twists have different units) and
+// the damping rule of Nielsen (1999). Bounds are handled by projection:
+// variables at a bound whose gradient points out of the box are held there
+// for the step, the others solve the damped normal equations, and the trial
+// point is clamped into the box.
 #include <algorithm>
 #include <chrono>
 #include <cmath>

@@ -1,6 +1,6 @@
-// Classification of a movable loop into the known families (DESIGN.md, "Known
-// movable 4R loops"; docs/families.md for 5R and 6R), with the residual of
-// every condition of every family.
+// Classification of a movable loop into the known families (docs/design.md,
+// "Known movable 4R loops"; docs/families.md for 5R and 6R), with the residual
+// of every condition of every family.
 //
 // Conditions are evaluated on every equivalent writing of the loop (cyclic
 // relabelling, reversal, axis flips: 2n * 2^n of them) and the best one is

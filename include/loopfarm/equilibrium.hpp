@@ -3,7 +3,8 @@
 // With springs along each link's length a_i and about its twist alpha_i (the
 // paper's model; optionally along the offsets d_i too), the loop held at input
 // angle theta_in settles where the elastic energy is least. In the stiff limit
-// that is the equality-constrained least-norm problem (DESIGN.md)
+// that is the equality-constrained least-norm problem (docs/design.md, "The
+// equilibrium at one input angle")
 //
 //     E(theta_in) = min over passive angles q and deformations delta of
 //                   1/2 delta^T K delta   subject to   closure(theta_in, q, p + delta) = 0,

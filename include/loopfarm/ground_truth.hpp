@@ -2,7 +2,7 @@
 // by construction, to measure the search's methods against (issue 5: missed
 // zeros, false zeros, the smallest perturbation still told apart from zero).
 //
-// Known movable (DESIGN.md, "Known movable 4R loops"), each with a pose that
+// Known movable (docs/design.md, "Known movable 4R loops"), each with a pose that
 // closes the rigid loop to round-off, computed in closed form:
 //   bennett    both setups (bennett_loop, bennett_loop_line_symmetric), twists
 //              over [margin, 180 deg - margin] away from the twist pairs where
@@ -15,7 +15,7 @@
 //   spherical  all lengths zero, twists chosen so that the input turns fully
 //              (the spherical Grashof condition on the diagonal arc); pose
 //              from the spherical law of cosines;
-//   trivial    the coaxial 1-3 loop (DESIGN.md "Trivial"): axes 1 and 3
+//   trivial    the coaxial 1-3 loop (docs/design.md, "Trivial"): axes 1 and 3
 //              coincide, joints 2 and 4 frozen at 180 deg, theta3 = -theta1;
 //              some with axes flipped.
 // Known rigid: every movable case perturbed in one parameter that takes it

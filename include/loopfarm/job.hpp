@@ -129,10 +129,11 @@ struct SearchSettings {
   double zero_threshold = 1e-12;       // E_mean below this is a zero
 };
 
-// Steering away from the known families (DESIGN.md). Families are named
-// "planar", "spherical", "trivial" (any n), "bennett" (n = 4), "goldberg",
-// "myard", "goldberg_bent" (n = 5), "bricard_line_symmetric", "bricard_plane_symmetric",
-// "bricard_trihedral", "bennett_pair", "bennett_dyads" (n = 6): those family_distance measures.
+// Steering away from the known families (docs/design.md, "Steering away from
+// the known families"). Families are named "planar", "spherical", "trivial"
+// (any n), "bennett" (n = 4), "goldberg", "myard", "goldberg_bent" (n = 5),
+// "bricard_line_symmetric", "bricard_plane_symmetric", "bricard_trihedral",
+// "bennett_pair", "bennett_dyads" (n = 6): those family_distance measures.
 struct SteeringSettings {
   bool nontrivial = false;             // every joint must move over the cycle
   double min_travel = 0.0872664625997164788;  // [rad] (5 deg): what "moves" means

@@ -4,8 +4,8 @@
 // set {x : r(x) = 0} near it is, where it is a manifold of constant rank, the
 // null space of J = dr/dx: its dimension is the number of free parameters
 // minus the numerical rank of J. That is how many parameters the movable
-// family has inside the search space (DESIGN.md, "From a zero minimum to a
-// candidate"), and what makes an unknown family visible.
+// family has inside the search space (docs/design.md, "From a zero minimum to
+// a candidate"), and what makes an unknown family visible.
 //
 // Numerical rank: singular values above max(relative_tolerance * sigma_max,
 // absolute_tolerance). At a zero found to round-off the null-space singular

@@ -1,9 +1,10 @@
 // Kinematics of a closed loop of n revolute joints (4 <= n <= 8).
 //
-// Convention (Denavit-Hartenberg as in the Bennett literature, DESIGN.md):
-// joint i has axis z_i; link i joins axis i to axis i+1 (indices mod n) with
-// length a_i along the common normal x_{i+1}, twist alpha_i about x_{i+1} and
-// offset d_i along z_i. One joint-plus-link transform is
+// Convention (Denavit-Hartenberg as in the Bennett literature; docs/design.md,
+// "The loop and its closure"): joint i has axis z_i; link i joins axis i to
+// axis i+1 (indices mod n) with length a_i along the common normal x_{i+1},
+// twist alpha_i about x_{i+1} and offset d_i along z_i. One joint-plus-link
+// transform is
 //
 //     T_i = Rz(theta_i) * Tz(d_i) * Tx(a_i) * Rx(alpha_i)
 //

@@ -3,8 +3,8 @@
 // (envelope theorem) and, for Gauss-Newton, its residual vector r with
 // E_mean = |r|^2 / 2 and the Jacobian dr/dx (implicit differentiation).
 //
-// Optionally steered away from the known movable families (DESIGN.md): the
-// energy is multiplied by a factor
+// Optionally steered away from the known movable families (docs/design.md,
+// "Steering away from the known families"): the energy is multiplied by a factor
 //
 //     M(p) = prod_f (dist_f(p)^-power + shift) * prod_j (1 + (t0 / travel_j)^2)
 //
