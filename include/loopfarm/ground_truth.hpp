@@ -1,6 +1,6 @@
 // Ground truth: a generated, labelled set of 4R loops whose answer is known
-// by construction, to measure the search's methods against (issue 5: missed
-// zeros, false zeros, the smallest perturbation still told apart from zero).
+// by construction, to measure the search's methods against (missed zeros,
+// false zeros, the smallest perturbation still told apart from zero).
 //
 // Known movable (docs/design.md, "Known movable 4R loops"), each with a pose that
 // closes the rigid loop to round-off, computed in closed form:

@@ -16,9 +16,12 @@
 // Zeros away from the steered-off sets stay zeros; M tends to a constant
 // there.
 //
-// Each evaluation is a pure function of x: the loop is assembled afresh from
-// the start's initial joint angles, so the value does not depend on the order
-// of evaluations.
+// With ObjectiveSettings::reuse_nearby_cycle off, each evaluation is a pure
+// function of x: the loop is assembled afresh from the start's initial joint
+// angles. With it on (the default) each cycle is solved from the last
+// successful evaluation's samples, so a value depends on the search's path
+// to within the solve's tolerance (about 1e-12 relative), and each sample's
+// branch is followed continuously in the geometry.
 #pragma once
 
 #include <functional>
