@@ -6,7 +6,7 @@
 //   build/release/bench/loopfarm_bench
 //
 // Counters: Newton iterations per solve or per cycle sample, bisections per
-// cycle, samples that jumped branch or failed. Figures are in README.md.
+// cycle, samples that jumped branch or failed. Figures are in docs/performance.md.
 //
 // And the steering's family distances (deflation), which a steered search
 // evaluates with every objective value and again with their gradients for

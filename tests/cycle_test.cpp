@@ -577,8 +577,9 @@ TEST(Cycle, LooseMidpointsChangeNoSample) {
   EXPECT_LT(totals.iterations_a, totals.iterations_b);
 }
 
-// A known limit, pinned so that the README's statement stays true until it is
-// fixed (then this test fails and README "Known limits" must change with it):
+// A known limit, pinned so that docs/stability.md's statement stays true until
+// it is fixed (then this test fails and docs/stability.md, "Known limits of the
+// cycle near folds of the elastic path", must change with it):
 // near a fold of the elastic path the continuation can pass to another branch
 // without flagging a jump, so the cycle energy of this generic loop depends on
 // the per-step iteration budget.

@@ -1,4 +1,4 @@
-// The paper's figures (Xu & Li 2017, README.md "Citing") as asserted tests.
+// The paper's figures (Xu & Li 2017, README.md "Citing"; docs/paper-figures.md) as asserted tests.
 // The charts of the same runs are in docs/figures/ (docs/make_figures.sh).
 #include <cmath>
 #include <vector>

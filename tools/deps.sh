@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The one place that lists the Debian packages loopfarm needs (README.md says
-# why each is there). Installs only what is missing, so on a prepared machine
+# The one place that lists the Debian packages loopfarm needs (docs/building.md
+# says why each is there). Installs only what is missing, so on a prepared machine
 # it is a quick no-op; the other scripts call it first.
 set -euo pipefail
 
