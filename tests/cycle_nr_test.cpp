@@ -1,4 +1,4 @@
-// The cycle test on 5R and 6R loops (issue 7, item 1): the mean elastic
+// The cycle test on 5R and 6R loops: the mean elastic
 // energy over a cycle, from the automatic assembly at theta1 = 0, tells the
 // movable loops of docs/families.md (Goldberg, Myard, Bricard) from generic
 // ones, which are rigid (a generic 5R is over-constrained by one, a generic

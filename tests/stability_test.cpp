@@ -1,4 +1,4 @@
-// The stability suite (issue 5, item 3): where the methods fail.
+// The stability suite (docs/stability.md): where the methods fail.
 //
 // Every case runs every method that applies to it -- the equilibrium solve
 // (the assembly at theta0, and a direct solve where the case is one pose),
@@ -443,7 +443,7 @@ TEST(Stability, PlanarFourBarsWithChangePointsReadZeroAndVerify) {
 // cycle may not be those of one branch. Pinned here: within each half-turn
 // between the change points at 0 and 180 deg the samples keep to one branch,
 // and at 180 deg the walk changes branch, unflagged, with at least one of two
-// settings (with both since the sixth session of 2026-11-24; with exact
+// settings (with both since commit 8e8ed93; with exact
 // midpoints only before its factorisation changes).
 TEST(StabilityKnownLimit, ParallelogramCycleBranchAfterItsChangePointIsNotChosen) {
   Case exact{"parallelogram from 0, exact midpoints", planar_four_bar(1, 2, 1, 2), JointVector(), 0.0};
