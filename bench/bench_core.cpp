@@ -17,11 +17,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/classify.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/motion.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/motion.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 
 namespace loopfarm {
 namespace {

@@ -26,9 +26,9 @@
 #include <map>
 #include <string>
 
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 
 namespace {
 

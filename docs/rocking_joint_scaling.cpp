@@ -20,11 +20,11 @@
 #include <cstdlib>
 #include <cmath>
 #include <Eigen/Dense>
-#include "loopfarm/start.hpp"
-#include "loopfarm/job.hpp"
-#include "loopfarm/objective.hpp"
-#include "loopfarm/classify.hpp"
-#include "loopfarm/local_dimension.hpp"
+#include "loopfarm/search/start.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/search/objective.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/search/local_dimension.hpp"
 using namespace loopfarm;
 Job job;
 int K; double S;

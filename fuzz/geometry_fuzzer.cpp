@@ -28,7 +28,7 @@
 #include "cli_support.hpp"
 #include "geometry_input.hpp"
 #include "geometry_options.hpp"
-#include "loopfarm/loop.hpp"
+#include "loopfarm/core/loop.hpp"
 
 namespace {
 

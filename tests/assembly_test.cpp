@@ -1,11 +1,11 @@
-#include "loopfarm/assembly.hpp"
+#include "loopfarm/core/assembly.hpp"
 
 #include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

@@ -1,4 +1,4 @@
-#include "loopfarm/canonical.hpp"
+#include "loopfarm/search/canonical.hpp"
 
 #include <cstdint>
 #include <set>
@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

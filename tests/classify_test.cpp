@@ -1,4 +1,4 @@
-#include "loopfarm/classify.hpp"
+#include "loopfarm/search/classify.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "allocation_counter.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

@@ -16,9 +16,9 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/cycle_start.hpp"
-#include "loopfarm/loop.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/cycle_start.hpp"
+#include "loopfarm/core/loop.hpp"
 
 namespace {
 

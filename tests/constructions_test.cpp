@@ -15,9 +15,9 @@
 #include <Eigen/SVD>
 #include <gtest/gtest.h>
 
-#include "loopfarm/constructions.hpp"
-#include "loopfarm/loop.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/constructions.hpp"
+#include "loopfarm/core/loop.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 #include "four_bar_cases.hpp"
 #include "test_support.hpp"
 

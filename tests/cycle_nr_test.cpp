@@ -12,9 +12,9 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 
 namespace loopfarm {
 namespace {

@@ -1,14 +1,14 @@
-#include "loopfarm/cycle_start.hpp"
+#include "loopfarm/core/cycle_start.hpp"
 
 #include <cmath>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/constructions.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/constructions.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

@@ -1,4 +1,4 @@
-#include "loopfarm/equilibrium.hpp"
+#include "loopfarm/core/equilibrium.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -9,8 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "allocation_counter.hpp"
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

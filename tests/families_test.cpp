@@ -27,11 +27,11 @@
 #include <gtest/gtest.h>
 
 #include "allocation_counter.hpp"
-#include "loopfarm/classify.hpp"
-#include "loopfarm/constructions.hpp"
-#include "loopfarm/loop.hpp"
-#include "loopfarm/sample_loops.hpp"
-#include "loopfarm/verify.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/core/constructions.hpp"
+#include "loopfarm/core/loop.hpp"
+#include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "loopfarm/constructions.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/constructions.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 
 namespace loopfarm::testing {
 

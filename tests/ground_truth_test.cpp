@@ -2,7 +2,7 @@
 // case was built: movable cases by the rigid verification (verify.hpp), the
 // classifier (classify.hpp) and the cycle energy (cycle.hpp); rigid ones by
 // the same tools failing to find a motion.
-#include "loopfarm/ground_truth.hpp"
+#include "loopfarm/study/ground_truth.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,10 +15,10 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/classify.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/verify.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

@@ -14,7 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "command_test_support.hpp"
-#include "loopfarm/ground_truth.hpp"
+#include "loopfarm/study/ground_truth.hpp"
 
 namespace loopfarm {
 namespace {

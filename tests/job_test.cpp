@@ -1,5 +1,5 @@
-#include "loopfarm/job.hpp"
-#include "loopfarm/objective.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/search/objective.hpp"
 
 #include <cmath>
 #include <filesystem>

@@ -1,4 +1,4 @@
-#include "loopfarm/local_search.hpp"
+#include "loopfarm/search/local_search.hpp"
 
 #include <cmath>
 #include <string>
@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 #include <nlopt.h>
 
-#include "loopfarm/job.hpp"
+#include "loopfarm/search/job.hpp"
 #include "search_fixtures.hpp"
 #include "test_support.hpp"
 

@@ -1,4 +1,4 @@
-#include "loopfarm/loop.hpp"
+#include "loopfarm/core/loop.hpp"
 
 #include <array>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

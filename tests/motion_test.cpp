@@ -5,7 +5,7 @@
 // mechanism (trihedral Bricard 6R from its trihedron, 6R loops of fused
 // Bennett loops): verified whatever theta0, with zero cycle energy along the
 // motion from every theta0 tried, and their near misses refused.
-#include "loopfarm/motion.hpp"
+#include "loopfarm/core/motion.hpp"
 
 #include <cmath>
 #include <optional>
@@ -18,11 +18,11 @@
 #include <gtest/gtest.h>
 
 #include "four_bar_cases.hpp"
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/constructions.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/sample_loops.hpp"
-#include "loopfarm/verify.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/constructions.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

@@ -1,10 +1,10 @@
-#include "loopfarm/objective.hpp"
+#include "loopfarm/search/objective.hpp"
 
 #include <cmath>
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/job.hpp"
+#include "loopfarm/search/job.hpp"
 #include "search_fixtures.hpp"
 #include "test_support.hpp"
 

@@ -6,9 +6,9 @@
 #include <Eigen/SVD>
 #include <gtest/gtest.h>
 
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

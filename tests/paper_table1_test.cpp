@@ -9,9 +9,9 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/job.hpp"
-#include "loopfarm/loop.hpp"
-#include "loopfarm/start.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/core/loop.hpp"
+#include "loopfarm/search/start.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

@@ -3,7 +3,7 @@
 // independent of commit order, refusal of foreign or damaged files without
 // touching them, and reading while a writer is busy. Records are built by
 // hand; no search runs.
-#include "loopfarm/results_database.hpp"
+#include "loopfarm/farm/results_database.hpp"
 
 #include <sqlite3.h>
 #include <unistd.h>

@@ -1,6 +1,6 @@
 // StartRecord: built from a StartSummary, and its byte format for MPI (bit-exact
 // round trip, every truncation and corruption rejected).
-#include "loopfarm/results.hpp"
+#include "loopfarm/farm/results.hpp"
 
 #include <cmath>
 #include <cstring>
@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/start.hpp"
+#include "loopfarm/search/start.hpp"
 
 namespace loopfarm {
 namespace {

@@ -18,12 +18,12 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/equilibrium.hpp"
-#include "loopfarm/loop.hpp"
-#include "loopfarm/sample_loops.hpp"
-#include "loopfarm/sampler.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/equilibrium.hpp"
+#include "loopfarm/core/loop.hpp"
+#include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/sampler.hpp"
 
 namespace loopfarm {
 namespace {

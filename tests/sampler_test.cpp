@@ -1,4 +1,4 @@
-#include "loopfarm/sampler.hpp"
+#include "loopfarm/search/sampler.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/job.hpp"
+#include "loopfarm/search/job.hpp"
 
 namespace loopfarm {
 namespace {

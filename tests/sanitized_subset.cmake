@@ -2,7 +2,7 @@
 # and UndefinedBehaviorSanitizer into build/sanitize-subset and runs it after
 # the normal suite). tools/test.sh --sanitize runs everything instrumented,
 # but its build alone takes some 15 minutes on 2 cores, most of it the
-# numerical core (src/cycle.cpp and the search) compiled with the sanitizers;
+# numerical core (src/core/cycle.cpp and the search) compiled with the sanitizers;
 # CI cannot afford that. These test programs need only a few library sources,
 # which each compiles itself (as fuzz/ does), so the whole subset builds and
 # runs in a few minutes:
@@ -31,18 +31,19 @@ function(loopfarm_add_sanitized_test name)
   add_dependencies(sanitized_subset ${name})
 endfunction()
 
-set(loopfarm_geometry ${PROJECT_SOURCE_DIR}/src/loop.cpp ${PROJECT_SOURCE_DIR}/src/sample_loops.cpp)
+set(loopfarm_geometry ${PROJECT_SOURCE_DIR}/src/core/loop.cpp ${PROJECT_SOURCE_DIR}/src/core/sample_loops.cpp)
 loopfarm_add_sanitized_test(loop_test ${loopfarm_geometry})
 loopfarm_add_sanitized_test(equilibrium_test ${loopfarm_geometry}
-  ${PROJECT_SOURCE_DIR}/src/equilibrium.cpp ${PROJECT_SOURCE_DIR}/src/assembly.cpp)
+  ${PROJECT_SOURCE_DIR}/src/core/equilibrium.cpp ${PROJECT_SOURCE_DIR}/src/core/assembly.cpp)
 loopfarm_add_sanitized_test(sampler_test
-  ${PROJECT_SOURCE_DIR}/src/job.cpp ${PROJECT_SOURCE_DIR}/src/parameter_space.cpp ${PROJECT_SOURCE_DIR}/src/sampler.cpp
-  ${PROJECT_SOURCE_DIR}/src/loop.cpp)
+  ${PROJECT_SOURCE_DIR}/src/search/job.cpp ${PROJECT_SOURCE_DIR}/src/search/parameter_space.cpp
+  ${PROJECT_SOURCE_DIR}/src/search/sampler.cpp ${PROJECT_SOURCE_DIR}/src/search/nlopt_algorithms.cpp
+  ${PROJECT_SOURCE_DIR}/src/core/loop.cpp)
 target_link_libraries(sampler_test PRIVATE tomlplusplus::tomlplusplus NLopt::nlopt)
-loopfarm_add_sanitized_test(results_database_test ${PROJECT_SOURCE_DIR}/src/results_database.cpp
-  ${PROJECT_SOURCE_DIR}/src/loop.cpp)
+loopfarm_add_sanitized_test(results_database_test ${PROJECT_SOURCE_DIR}/src/farm/results_database.cpp
+  ${PROJECT_SOURCE_DIR}/src/core/loop.cpp)
 target_link_libraries(results_database_test PRIVATE SQLite::SQLite3)
 loopfarm_add_sanitized_test(cycle_start_test ${loopfarm_geometry}
-  ${PROJECT_SOURCE_DIR}/src/equilibrium.cpp ${PROJECT_SOURCE_DIR}/src/assembly.cpp
-  ${PROJECT_SOURCE_DIR}/src/motion.cpp ${PROJECT_SOURCE_DIR}/src/cycle.cpp
-  ${PROJECT_SOURCE_DIR}/src/cycle_start.cpp ${PROJECT_SOURCE_DIR}/src/constructions.cpp)
+  ${PROJECT_SOURCE_DIR}/src/core/equilibrium.cpp ${PROJECT_SOURCE_DIR}/src/core/assembly.cpp
+  ${PROJECT_SOURCE_DIR}/src/core/motion.cpp ${PROJECT_SOURCE_DIR}/src/core/cycle.cpp
+  ${PROJECT_SOURCE_DIR}/src/core/cycle_start.cpp ${PROJECT_SOURCE_DIR}/src/core/constructions.cpp)

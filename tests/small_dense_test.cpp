@@ -1,10 +1,10 @@
 // The solver's hand-written dense kernels against Eigen's own factorisation.
-#include "../src/small_dense.hpp"
+#include "../src/core/small_dense.hpp"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 
-#include "loopfarm/types.hpp"
+#include "loopfarm/core/types.hpp"
 
 namespace loopfarm {
 namespace {

@@ -30,13 +30,13 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/classify.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/local_search.hpp"
-#include "loopfarm/objective.hpp"
-#include "loopfarm/sample_loops.hpp"
-#include "loopfarm/verify.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/search/local_search.hpp"
+#include "loopfarm/search/objective.hpp"
+#include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {
@@ -58,7 +58,7 @@ constexpr double kBuiltInZeroThreshold = 1e-12;
 // The most Newton iterations one cycle may spend under its options: per
 // sample a bisection tree of depth max_refinements whose inner nodes try one
 // budgeted solve each and whose leaves try a budgeted and a full solve
-// (src/cycle.cpp, Stepper::step), plus the anchor's full solve. More would
+// (src/core/cycle.cpp, Stepper::step), plus the anchor's full solve. More would
 // be a loop that does not stop as designed.
 long cycle_iteration_bound(const CycleOptions& co, const EquilibriumOptions& eo) {
   const long leaves = 1L << co.max_refinements;
@@ -518,7 +518,7 @@ TEST(StabilityKnownLimit, UnreachableInputAngleGivesFailedSamplesThatReadNearZer
   // Started inside its range, the full turn solves every sample. Just past
   // the dead point at 240 deg the sample at 251.25 deg failed and read
   // 1.7e-18 until the landing after a fold started along the path tangent
-  // (Stepper::land in src/cycle.cpp); it now reads 0.0081, between its
+  // (Stepper::land in src/core/cycle.cpp); it now reads 0.0081, between its
   // neighbours' 3e-32 (at the dead point) and 0.028.
   const Methods inside = run_methods({"kite at 150, full turn", kite, JointVector(), rad(150)});
   EXPECT_EQ(inside.cycle.failed_samples, 0);

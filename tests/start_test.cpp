@@ -7,11 +7,11 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/classify.hpp"
-#include "loopfarm/job.hpp"
-#include "loopfarm/sample_loops.hpp"
-#include "loopfarm/start.hpp"
-#include "loopfarm/verify.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/start.hpp"
+#include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

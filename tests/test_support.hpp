@@ -11,8 +11,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
 
-#include "loopfarm/equilibrium.hpp"
-#include "loopfarm/loop.hpp"
+#include "loopfarm/core/equilibrium.hpp"
+#include "loopfarm/core/loop.hpp"
 
 namespace loopfarm::testing {
 

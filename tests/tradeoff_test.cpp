@@ -1,4 +1,4 @@
-#include "loopfarm/tradeoff.hpp"
+#include "loopfarm/study/tradeoff.hpp"
 
 #include <cmath>
 #include <limits>

@@ -1,4 +1,4 @@
-#include "loopfarm/verify.hpp"
+#include "loopfarm/search/verify.hpp"
 
 #include <cmath>
 #include <optional>
@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/sample_loops.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {

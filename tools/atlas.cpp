@@ -13,11 +13,11 @@
 #include <Eigen/Geometry>
 
 #include "cli_support.hpp"
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/classify.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/equilibrium.hpp"
-#include "loopfarm/loop.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/equilibrium.hpp"
+#include "loopfarm/core/loop.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "loopfarm/start.hpp"
+#include "loopfarm/search/start.hpp"
 
 namespace loopfarm::cli {
 

@@ -13,10 +13,10 @@
 #include "cli_support.hpp"
 #include "geometry_input.hpp"
 #include "geometry_options.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/cycle_start.hpp"
-#include "loopfarm/equilibrium.hpp"
-#include "loopfarm/loop.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/cycle_start.hpp"
+#include "loopfarm/core/equilibrium.hpp"
+#include "loopfarm/core/loop.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {

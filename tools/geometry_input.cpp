@@ -11,8 +11,8 @@
 #include <toml++/toml.h>
 
 #include "cli_support.hpp"
-#include "loopfarm/job.hpp"
-#include "loopfarm/types.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/core/types.hpp"
 
 namespace loopfarm::cli {
 namespace {

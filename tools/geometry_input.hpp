@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "loopfarm/loop.hpp"
+#include "loopfarm/core/loop.hpp"
 
 namespace loopfarm::cli {
 

@@ -9,7 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include "geometry_input.hpp"
-#include "loopfarm/loop.hpp"
+#include "loopfarm/core/loop.hpp"
 
 namespace loopfarm::cli {
 

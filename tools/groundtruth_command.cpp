@@ -10,7 +10,7 @@
 
 #include "candidate_output.hpp"
 #include "cli_support.hpp"
-#include "loopfarm/ground_truth.hpp"
+#include "loopfarm/study/ground_truth.hpp"
 
 namespace loopfarm::cli {
 namespace {

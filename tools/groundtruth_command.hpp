@@ -1,5 +1,5 @@
 // `loopfarm groundtruth`: the ground-truth set of 4R loops (known movable and
-// known rigid, labelled; include/loopfarm/ground_truth.hpp) as CSV or JSON.
+// known rigid, labelled; include/loopfarm/study/ground_truth.hpp) as CSV or JSON.
 #pragma once
 
 #include "subcommand.hpp"

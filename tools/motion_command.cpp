@@ -9,7 +9,7 @@
 #include "candidate_output.hpp"
 #include "cli_support.hpp"
 #include "geometry_options.hpp"
-#include "loopfarm/verify.hpp"
+#include "loopfarm/search/verify.hpp"
 #include "motion_output.hpp"
 #include "plot.hpp"
 

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <string>
 
-#include "loopfarm/motion.hpp"
+#include "loopfarm/core/motion.hpp"
 
 namespace loopfarm::cli {
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <string_view>
 
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/motion.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/motion.hpp"
 
 namespace loopfarm::cli {
 

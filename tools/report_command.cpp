@@ -21,10 +21,10 @@
 
 #include "atlas.hpp"
 #include "cli_support.hpp"
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/classify.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/results_database.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/farm/results_database.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {

@@ -40,10 +40,10 @@
 #include <vector>
 
 #include "cli_support.hpp"
-#include "loopfarm/job.hpp"
-#include "loopfarm/results.hpp"
-#include "loopfarm/results_database.hpp"
-#include "loopfarm/start.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/farm/results.hpp"
+#include "loopfarm/farm/results_database.hpp"
+#include "loopfarm/search/start.hpp"
 #include "progress.hpp"
 
 // Under AddressSanitizer (tools/test.sh --sanitize): the allocations Open MPI

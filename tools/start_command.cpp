@@ -8,8 +8,8 @@
 
 #include "candidate_output.hpp"
 #include "cli_support.hpp"
-#include "loopfarm/job.hpp"
-#include "loopfarm/start.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/search/start.hpp"
 
 namespace loopfarm::cli {
 namespace {

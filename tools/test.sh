@@ -41,7 +41,7 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 jobs="$(nproc)"
 
 # The sanitizer builds. clang, not gcc: with both sanitizers on, gcc 12 took
-# 694 s to compile src/cycle.cpp and clang 14 took 344 s with full debug
+# 694 s to compile src/core/cycle.cpp and clang 14 took 344 s with full debug
 # information and about 85 s of CPU with line tables only, which is all a
 # report's stack needs (docs/reliability.md). -O1 keeps the instrumented
 # suite fast enough; every UB report aborts (so the test fails) instead of

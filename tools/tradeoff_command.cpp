@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "cli_support.hpp"
-#include "loopfarm/job.hpp"
-#include "loopfarm/tradeoff.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/study/tradeoff.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {

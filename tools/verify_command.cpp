@@ -9,9 +9,9 @@
 #include "candidate_output.hpp"
 #include "cli_support.hpp"
 #include "geometry_options.hpp"
-#include "loopfarm/assembly.hpp"
-#include "loopfarm/cycle.hpp"
-#include "loopfarm/start.hpp"
+#include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/search/start.hpp"
 
 namespace loopfarm::cli {
 namespace {

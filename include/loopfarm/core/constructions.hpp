@@ -1,0 +1,226 @@
+// Loops with known motions, built by constructions that share nothing with
+// the classifier's family conditions (classify.hpp): ground truth for motion
+// tracers and for the classifier itself (docs/ground-truth.md, "Loops built
+// from their mechanism").
+//
+// - four-bars (planar and spherical) in closed form: every pose at an input
+//   angle (law of cosines, spherical law of cosines), the range of every
+//   joint on each circuit, and the kind of motion (Grashof);
+// - the trihedral Bricard 6R built from its geometry: a trihedron, a point,
+//   and the perpendiculars from the point to the trihedron's faces;
+// - Bennett loops fused in space: the Goldberg 5R, two Bennett loops sharing
+//   a link (a 6R with two degrees of freedom) and a 6R of three Bennett loops,
+//   their DH parameters read off the joint axes (dh_from_axes).
+//
+// Angles in radians; lengths in the geometry's unit. Bad arguments throw
+// std::invalid_argument naming the value.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "loopfarm/core/loop.hpp"
+
+namespace loopfarm {
+
+// ---------------------------------------------------------------------------
+// Axes and poses
+
+// A joint axis in space: a point on it and its unit direction.
+struct Axis {
+  Vector3 point = Vector3::Zero();
+  Vector3 direction = Vector3::UnitZ();
+};
+
+// A loop with one of its assembled poses.
+struct PosedLoop {
+  LoopGeometry geometry;
+  JointVector theta;
+};
+
+// The joint axes of a loop in a pose, in the base frame: axis k is frame k's
+// z axis through frame k's origin (forward_transform(g, theta, k)).
+std::vector<Axis> joint_axes(const LoopGeometry& geometry, const JointVector& theta);
+
+// The DH parameters and joint angles of the loop whose joint axes are these
+// lines, in order (4 to 8 axes, unit directions as given, so a direction
+// reversed is an axis flipped): link k is the common normal from axis k to
+// axis k+1, a_k >= 0 its length, alpha_k the angle from z_k to z_{k+1} about
+// it; d_k and theta_k are measured along and about z_k from the incoming
+// normal to the outgoing one. Intersecting axes: the normal is z_k x z_{k+1}
+// (a_k = 0, alpha_k in [0, pi]). Parallel axes: the normal through the
+// incoming normal's foot on axis k (d_k = 0; for axis 0, through its point).
+// The pose closes the geometry by construction; what says the loop moves is
+// that the same geometry comes out at every pose of a mechanism.
+PosedLoop dh_from_axes(std::span<const Axis> axes);
+
+// ---------------------------------------------------------------------------
+// Four-bars in closed form
+//
+// Planar four-bar: every twist 0 or pi (an even number of pi), every length
+// > 0; offsets are allowed when their signed sum along the common axis
+// direction is zero (they slide along the axes and do not change the
+// angles), otherwise the loop has no pose. Spherical four-bar: every length
+// and offset 0, every twist away from 0 and pi. Any other 4R throws.
+
+// An interval of a joint angle [rad]: lo <= hi, lo in [-pi, pi]; hi exceeds
+// pi when the interval contains pi (e.g. [2.5, 3.8]). A joint that turns
+// fully has full_turn set, lo = -pi and hi = pi.
+struct AngleInterval {
+  double lo = 0.0;
+  double hi = 0.0;
+  bool full_turn = false;
+};
+
+// Every closed pose of the four-bar with joint `input` (0..3) held at
+// `input_angle`, in closed form: the law of cosines on the diagonal between
+// the input's neighbours (planar), the spherical law of cosines (spherical).
+// 0 poses outside the input's range, 1 at its ends (dead points, where the
+// two assembly modes merge) and 2 inside. The two modes come in a fixed order
+// (the same root first), so nearby inputs give nearby poses in the same slot
+// except across a dead point.
+std::vector<JointVector> four_bar_poses(const LoopGeometry& geometry, int input, double input_angle);
+
+// The range of joint `joint` (0..3) on each circuit (connected component of
+// the motion), in closed form. Two circuits when some joint can reach
+// neither 0 nor pi (its sign never changes, so the motion and its mirror
+// image theta -> -theta are apart: a Grashof four-bar); then circuit 0 is the
+// one on which the lowest such joint is positive, and the same circuit is
+// circuit 0 for every `joint`. One circuit otherwise (non-Grashof, or at a
+// change point, where the two modes meet); none when the loop cannot close.
+std::vector<AngleInterval> four_bar_joint_ranges(const LoopGeometry& geometry, int joint);
+
+// The motion of a four-bar driven at joint `input`, with the link before the
+// input as the ground: the input link is link `input`, the coupler link
+// input+1, the output link input+2 and the output joint input+3.
+enum class FourBarKind {
+  crank_rocker,   // Grashof: the input turns fully, the output rocks
+  rocker_crank,   // Grashof: the input rocks, the output turns fully
+  double_crank,   // Grashof: both turn fully (the ground is the shortest link)
+  double_rocker,  // Grashof: both rock (the coupler is the shortest link), the coupler turns fully
+  triple_rocker,  // non-Grashof: no joint turns fully, one circuit
+  change_point,   // Grashof equality (e.g. a parallelogram): the circuits meet at a flat pose
+};
+
+const char* to_string(FourBarKind kind);
+
+// The kind of a planar four-bar from its lengths (Grashof's rule with s, l
+// the shortest and longest and p, q the others: s + l < p + q Grashof, which
+// link is the shortest deciding the kind; s + l > p + q triple rocker; equal
+// to 1e-12 of the perimeter: change point).
+FourBarKind planar_four_bar_kind(const LoopGeometry& geometry, int input);
+
+// The kind of a planar or spherical four-bar from four_bar_joint_ranges:
+// two circuits: which of the input and output turn fully; one circuit: a
+// change point when some joint turns fully, a triple rocker otherwise.
+FourBarKind four_bar_kind(const LoopGeometry& geometry, int input);
+
+// Planar parallelogram: lengths (a, b, a, b), twists 0. At its flat poses it
+// is at a change point: the parallelogram and anti-parallelogram modes meet.
+LoopGeometry parallelogram_four_bar(double a, double b);
+
+// ---------------------------------------------------------------------------
+// Trihedral Bricard 6R from its geometry
+//
+// Three lines through a point A (the apex) span a trihedron; a point B lies
+// off its faces. Joints 1, 3, 5 are the trihedron's edges u1, u3, u5; joints
+// 2, 4, 6 are the perpendiculars from B to the faces (u1, u3), (u3, u5),
+// (u5, u1). Every two consecutive axes are then perpendicular (an edge lies
+// in the faces the perpendiculars cross), the common normals meet each axis
+// in one point (the feet of B on the edges and faces), so every offset is
+// zero and, with p_k = (B - A) . u_k,
+//     a_1^2 - a_2^2 = p_3^2 - p_1^2, a_3^2 - a_4^2 = p_5^2 - p_3^2,
+//     a_5^2 - a_6^2 = p_1^2 - p_5^2:
+// the trihedral condition a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2 holds for
+// any trihedron and any B. The motion keeps the six lengths: p1 = p is its
+// parameter (the signed distance from A to joint 1's foot along axis 1),
+// p3^2 and p5^2 follow from the relations above, and in each face the angle
+// between the two edges follows from the two lengths (cos = (p_i p_j +- a a')
+// / (p_i^2 + a^2)). Which roots are taken is the branch.
+//
+// Sign patterns: flipping one axis changes the sign of the two twists at it
+// (axis_flipped), so the parity of the number of -90 deg twists is all that
+// a writing cannot change: the 64 patterns are two loops. In the
+// construction the parity is the number of faces, mod 2, in which B's foot
+// lies inside the angle between the face's two edges (or its vertical
+// angle), i.e. the number of faces where the root with the minus sign is
+// taken. Odd parity (e.g. Baker's alternating +90, -90, ...) moved for every
+// admissible length set tried; even parity (e.g. all +90) moves for most, but
+// some length sets have no real pose at all (docs/ground-truth.md).
+struct TrihedralBricard {
+  // a1..a5 > 0; a6 = sqrt(a1^2 - a2^2 + a3^2 - a4^2 + a5^2) must be real and > 0.
+  std::array<double, 5> a{1.0, 1.0, 1.0, 1.0, 1.0};
+  // Bit k set: twist k (alpha_{k+1}) is -90 deg, else +90 deg; 0..63.
+  unsigned sign_pattern = 0;
+  // Which of the 16 branches of the pattern's parity, 0..15: bits 0 and 1
+  // choose the roots in faces (u1, u3) and (u3, u5) (set: minus), the root in
+  // face (u5, u1) follows from the parity; bits 2 and 3 the signs of p3, p5.
+  unsigned branch = 0;
+};
+
+// The trihedral condition's a6.
+double trihedral_bricard_a6(const TrihedralBricard& parameters);
+
+// The loop, with exactly the given lengths, twists +-pi/2 of the pattern and
+// zero offsets, and its pose at motion parameter p, read off the six axes of
+// the construction; nothing where the branch has no real trihedron at p.
+std::optional<PosedLoop> trihedral_bricard(const TrihedralBricard& parameters, double p);
+
+// ---------------------------------------------------------------------------
+// Bennett loops fused in space
+//
+// A Bennett loop here is (a, alpha), (b, beta), (a, alpha), (b, beta) with
+// zero offsets and |sin alpha| / a = |sin beta| / b; the signs of the twists
+// give its setup (sin alpha sin beta > 0: asymmetric, sample_loops.hpp's
+// bennett_angles; < 0: line-symmetric). Its poses are those closed forms.
+
+// Two Bennett loops ABCD = (a, alpha), (b, beta), (a, alpha), (b, beta) and
+// AFED = (c, gamma), (b, beta), (c, gamma), (b, beta) sharing the link DA
+// (axes A and D), with a = b |sin alpha / sin beta| and
+// c = b |sin gamma / sin beta| (Goldberg's common ratio).
+struct BennettPairParameters {
+  double b = 1.0;      // the shared link DA's length, > 0
+  double beta = 1.0;   // its twist, away from 0 and pi
+  double alpha = 1.0;  // twist of links AB and CD, away from 0 and pi
+  double gamma = 2.0;  // twist of links AF and ED, away from 0 and pi
+};
+
+// Goldberg 5R: the two loops at A's angles t (loop 1) and t + phi (loop 2),
+// links AB and AF fixed to each other at the angle phi about axis A (0:
+// collinear, same side; pi: collinear, opposite sides; any other value the
+// bent-link variant), the shared link DA removed, so A is no joint: the 5R
+// B C D E F. t is the motion parameter (loop 1's angle at A).
+struct Goldberg5R {
+  BennettPairParameters loops;
+  double phi = 3.14159265358979323846;
+};
+PosedLoop goldberg_5r(const Goldberg5R& parameters, double t);
+JointVector goldberg_5r_pose(const Goldberg5R& parameters, double t);
+
+// The two loops sharing DA, the link removed and nothing fused: the 6R
+// A B C D E F, each loop at its own angle at A (t1 for ABCD, t2 for AFED).
+// Two degrees of freedom (t1, t2).
+PosedLoop bennett_pair_6r(const BennettPairParameters& parameters, double t1, double t2);
+JointVector bennett_pair_6r_pose(const BennettPairParameters& parameters, double t1, double t2);
+
+// A 6R of three Bennett loops: the Goldberg 5R with a third Bennett loop P Q R
+// S fused onto its link P Q (from 5R joint `link` = P to joint link+1 = Q).
+// The third loop shares the axes P and Q and the link PQ (its a and alpha);
+// its other link has twist gamma and length c = a_PQ |sin gamma / sin
+// alpha_PQ| (either setup, from the signs). At P its link S -> P is fixed to
+// the 5R's link arriving at P at the angle phi about P, and link PQ is
+// removed, so P is no joint: the 6R's joints are the 5R's with P replaced by
+// S, R (in loop order). At every t the third loop's angle at P is the 5R's
+// angle at P minus phi, so it moves with the 5R: one degree of freedom.
+struct ThreeBennett6R {
+  Goldberg5R goldberg;
+  int link = 0;        // 0..4
+  double gamma = 1.0;  // away from 0 and pi
+  double phi = 0.0;
+};
+PosedLoop three_bennett_6r(const ThreeBennett6R& parameters, double t);
+JointVector three_bennett_6r_pose(const ThreeBennett6R& parameters, double t);
+
+}  // namespace loopfarm

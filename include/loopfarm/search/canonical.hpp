@@ -1,0 +1,45 @@
+// Canonical form of a loop, the key for de-duplication: the same linkage
+// written down in any way gives the same key. Equivalent writings are the
+// cyclic relabellings, the reversal of the loop, the flips of joint-axis
+// directions (loop.hpp) and scale.
+//
+// Every one of the 2n * 2^n representations is scaled to length_scale 1, its
+// twists wrapped to (-pi, pi], its values quantised to `tolerance` (lengths
+// relative to L, twists in radians), and the lexicographically smallest
+// quantised vector (a, alpha, d) is the canonical one. Key format:
+//
+//     "4R a=0.632456,1.264911,0.632456,1.264911 alpha=0.523599,1.570796,... d=0,0,0,0"
+//
+// n, then each list with as many decimals as the tolerance has (6 for 1e-6).
+//
+// Known limit: a value within the tolerance of a quantisation boundary can
+// round either way in two writings of the same loop (twists near +-pi are
+// snapped to +pi and -0 to 0, which removes the commonest case). A
+// de-duplicator should therefore also compare candidate geometries
+// numerically (canonical geometries within a few tolerances are the same).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "loopfarm/core/loop.hpp"
+
+namespace loopfarm {
+
+struct CanonicalForm {
+  LoopGeometry geometry;      // the chosen representation, scaled to length scale 1 (unquantised)
+  double scale = 1.0;         // length_scale of the input
+  int shift = 0;              // the transformation applied: relabelled by shift,
+  bool reversed = false;      // then reversed,
+  std::uint32_t flips = 0;    // then these axes flipped
+  std::string key;
+};
+
+// Throws std::invalid_argument for a geometry validate_geometry rejects or a
+// tolerance that is not in (0, 1).
+CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance = 1e-6);
+
+// Joint angles of the input mapped to the canonical representation.
+JointVector canonical_angles(const CanonicalForm& form, const JointVector& theta);
+
+}  // namespace loopfarm

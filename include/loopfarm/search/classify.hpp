@@ -1,0 +1,175 @@
+// Classification of a movable loop into the known families (docs/design.md,
+// "Known movable 4R loops"; docs/families.md for 5R and 6R), with the residual
+// of every condition of every family.
+//
+// Conditions are evaluated on every equivalent writing of the loop (cyclic
+// relabelling, reversal, axis flips: 2n * 2^n of them) and the best one is
+// kept, so that the answer does not depend on labels or axis directions.
+// Residuals are dimensionless: lengths divided by the length scale L.
+//
+//   bennett    (n = 4) a1 = a3, a2 = a4, alpha1 = alpha3, alpha2 = alpha4,
+//              d_i = 0, and a2 sin(alpha1) = a1 sin(alpha2) (asymmetric setup,
+//              paper eq. 1) or = -a1 sin(alpha2) (line-symmetric, eq. 3)
+//   planar     every sin(alpha_i) = 0, and the signed sum of the offsets (the
+//              sign turning at each alpha_i = pi) is zero
+//   spherical  every a_i = 0 and d_i = 0
+//   trivial    two joint axes coincide in the given pose and some joint stays
+//              frozen over the motion: a rigid rotation about the shared axis
+//   goldberg   (n = 5) two Bennett loops sharing a link, the shared link
+//              removed and the two collinear links fused
+//   myard      (n = 5) the plane-symmetric Goldberg 5R
+//   goldberg_bent (n = 5) the same two Bennett loops with the two links
+//              fused at any angle (Goldberg's collinear fusion is its
+//              special case): offsets d1 = +-d5 appear at the fused link
+//   bricard_line_symmetric, bricard_plane_symmetric, bricard_trihedral (n = 6)
+//   bennett_pair (n = 6) two Bennett loops sharing a link, the shared link
+//              removed and nothing fused: moves with two degrees of freedom
+//   bennett_dyads (n = 6) two Bennett dyads with equal (cos alpha + cos
+//              beta) / kappa joined by two equal links (docs/families.md)
+//   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
+//              or pi) and the (n-1)R loop with them merged is in a movable
+//              family (not trivial); or a joint stays locked over the motion
+//              (no axes coincide) and the (n-1)R loop left by locking it is
+//              in a movable family
+//
+// docs/classification.md has the details and the tolerances.
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "loopfarm/core/loop.hpp"
+
+namespace loopfarm {
+
+// Strings (to_string) are stored in results databases: a new family gets a
+// new string, an existing one never changes.
+enum class Family {
+  bennett,
+  planar,
+  spherical,
+  trivial,
+  unclassified,
+  // 5R (docs/families.md)
+  goldberg,
+  myard,
+  // 6R
+  bricard_line_symmetric,
+  bricard_plane_symmetric,
+  bricard_trihedral,
+  // n = 5, 6: two adjacent axes coincide and the loop with them merged is in
+  // a movable family (an idle joint)
+  degenerate,
+  // 5R: Goldberg's construction with the two links fused at an angle
+  goldberg_bent,
+  // 6R: two Bennett loops sharing a link, the shared link removed (mobility 2)
+  bennett_pair,
+  // 6R: two Bennett dyads joined by two equal links (found by the generic search)
+  bennett_dyads,
+};
+const char* to_string(Family family);
+
+// Every family, in the enum's order: the one list for loops over families
+// and lists of their names (a --family option and its message). A family
+// added to the enum is added here (classify_test fails until it is).
+inline constexpr Family kAllFamilies[] = {
+    Family::bennett,          Family::planar,
+    Family::spherical,        Family::trivial,
+    Family::unclassified,     Family::goldberg,
+    Family::myard,            Family::bricard_line_symmetric,
+    Family::bricard_plane_symmetric, Family::bricard_trihedral,
+    Family::degenerate,       Family::goldberg_bent,
+    Family::bennett_pair,     Family::bennett_dyads,
+};
+// The family whose to_string is `name`, or none.
+std::optional<Family> family_from_string(std::string_view name);
+// The joint count the family's conditions are written for; 0 for any
+// (planar, spherical, trivial, unclassified) and for degenerate (n = 5, 6).
+int family_joints(Family family);
+// Whether family_distance measures it: every family but degenerate and
+// unclassified.
+bool has_family_distance(Family family);
+// The family's dimension for `joints` joints: its free real parameters,
+// the scale included (docs/families.md, docs/classification.md); none for a
+// joint count it does not have, for degenerate and for unclassified.
+std::optional<int> family_dimension(Family family, int joints);
+
+enum class BennettSetup { none, asymmetric, line_symmetric };
+const char* to_string(BennettSetup setup);
+
+struct ConditionResidual {
+  std::string name;   // e.g. "a1 - a3", in the best writing's labels
+  double residual = 0.0;
+};
+
+struct FamilyCheck {
+  Family family = Family::unclassified;
+  BennettSetup setup = BennettSetup::none;
+  double residual = 0.0;  // max |condition| of the best writing (inf where the family does not apply)
+  std::vector<ConditionResidual> conditions;
+};
+
+struct ClassifyOptions {
+  double tolerance = 1e-8;        // a family fits when its residual is at most this
+  double frozen_travel = 1e-6;    // [rad] a joint turning less than this over the motion is frozen
+  // [rad] 5R only: a joint that rocks by more than frozen_travel but at most
+  // this may still be locked for the locked-joint rule (degenerate), where the
+  // 4R left must then fit to `tolerance` as for a frozen joint: a loop a
+  // distance eps off a locked-joint Bennett loop can close along the walk to
+  // order eps^2 with its locked joint rocking by order eps (up to 1e3 eps
+  // measured), docs/discovery-5r-6r.md, "The rocking joint". Not for trivial.
+  double rocking_travel = 1e-3;
+};
+
+struct Classification {
+  Family family = Family::unclassified;
+  BennettSetup setup = BennettSetup::none;
+  double residual = 0.0;          // of the family found (of the nearest family when unclassified)
+  std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
+  // bennett, planar, spherical, trivial, in this order; then for n = 5
+  // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
+  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads (the order they
+  // are tried).
+  std::vector<FamilyCheck> checks;
+};
+
+// `pose`: the joint angles of one assembled pose (for the coincidence of
+// axes); `joint_travel`: per joint, how far it turns over the verified motion
+// [rad], empty when unknown (then no loop is called trivial). Throws
+// std::invalid_argument for an invalid geometry or a pose of the wrong size.
+Classification classify(const LoopGeometry& geometry, const JointVector& pose, std::span<const double> joint_travel,
+                        const ClassifyOptions& options = {});
+
+// Distance of a geometry to a family's conditions, for steering the search
+// away from it (deflation): sqrt of the sum of the squared conditions of the
+// best writing, lengths divided by L; with its gradient with respect to
+// (a, alpha, d) when `gradient` is not null (a min over writings: smooth
+// away from the points where the best writing changes).
+//   planar, bennett: the conditions above;
+//   spherical: sqrt(sum a_i^2 + d_i^2) in the geometry's own units (in units
+//     of L it would be constant);
+//   trivial: the nearest coincidence of two axes that the geometry alone
+//     decides: a_i = 0 and sin(alpha_i) = 0 for adjacent axes, and for n = 4
+//     the coaxial 1-3 (or 2-4) conditions a1 = a2, alpha1 = alpha2, a3 = a4,
+//     alpha3 = alpha4, d2 = d4 = 0, d1 = -d3.
+// The numeric path, called on every evaluation of a steered search: it builds
+// no names and, after the first call for a joint count (which builds that
+// count's table of writings), allocates nothing. Also goldberg, myard and
+// goldberg_bent (n = 5) and the three Bricard families (n = 6), their conditions as
+// classify() lists them. Throws std::invalid_argument for an invalid
+// geometry, a family for another joint count (Bennett with n != 4, ...),
+// Family::degenerate (its conditions depend on which axes are merged) or
+// Family::unclassified.
+double family_distance(Family family, const LoopGeometry& geometry, GeometryVector* gradient = nullptr);
+
+// The same distance (and gradient) by the reporting path: every writing
+// written out and the best one's conditions listed by name, as classify()
+// lists them (`residual` is the distance; `setup` the best Bennett setup).
+// Equal to family_distance bit for bit; slow and allocating, for reports,
+// the documentation and tests.
+FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, GeometryVector* gradient = nullptr);
+
+}  // namespace loopfarm

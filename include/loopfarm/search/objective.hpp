@@ -1,0 +1,168 @@
+// The objective of the geometry search: the cycle energy E_mean of the
+// geometry a ParameterSpace builds from free values x, with its gradient
+// (envelope theorem) and, for Gauss-Newton, its residual vector r with
+// E_mean = |r|^2 / 2 and the Jacobian dr/dx (implicit differentiation).
+//
+// Optionally steered away from the known movable families (docs/design.md,
+// "Steering away from the known families"): the energy is multiplied by a factor
+//
+//     M(p) = prod_f (dist_f(p)^-power + shift) * prod_j (1 + (t0 / travel_j)^2)
+//
+// where dist_f is the distance of the geometry to family f's conditions
+// (deflation, as for nonlinear equations: a zero of E on the family stops
+// being a zero of M E, since E vanishes there only quadratically) and the
+// second product, the non-triviality requirement, grows where a joint hardly
+// turns over the cycle (travel_j below t0), the mark of a trivial motion.
+// Zeros away from the steered-off sets stay zeros; M tends to a constant
+// there.
+//
+// With ObjectiveSettings::reuse_nearby_cycle off, each evaluation is a pure
+// function of x: the loop is assembled afresh from the start's initial joint
+// angles. With it on (the default) each cycle is solved from the last
+// successful evaluation's samples, so a value depends on the search's path
+// to within the solve's tolerance (about 1e-12 relative), and each sample's
+// branch is followed continuously in the geometry.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/search/job.hpp"
+
+namespace loopfarm {
+
+// The distance of a geometry to a family's condition set and, when the
+// pointer is not null, its gradient with respect to (a, alpha, d).
+using FamilyDistance = std::function<double(const LoopGeometry&, GeometryVector*)>;
+
+struct DeflationTerm {
+  std::string family;
+  FamilyDistance distance;
+};
+
+// Which of the cycle's energies the search minimises.
+enum class CycleMeasure {
+  mean,  // E_mean: smooth, the default
+  max,   // E_max: the paper's peak; its gradient and residuals are the worst sample's
+};
+
+struct ObjectiveSettings {
+  EquilibriumOptions equilibrium;
+  CycleOptions cycle;
+  CycleMeasure measure = CycleMeasure::mean;
+  std::vector<DeflationTerm> deflation;
+  double deflation_power = 2.0;
+  double deflation_shift = 1.0;
+  bool nontrivial = false;
+  double min_travel = 0.0872664625997164788;  // t0 [rad]
+  // Start each evaluation's cycle from the last successful evaluation's
+  // samples (cycle_energy_from_nearby) instead of walking it from the
+  // assembly, falling back to the walk when that cannot be vouched for.
+  bool reuse_nearby_cycle = true;
+
+  // The loop settings of a job (compliance, stiffness ratio, samples, range);
+  // steering is added by the caller, which knows the family distances.
+  static ObjectiveSettings from_loop(const LoopSettings& loop);
+};
+
+struct ObjectiveValue {
+  bool ok = false;               // assembled and the cycle evaluated
+  double value = 0.0;            // M * E_mean (or M * E_max): what the optimiser sees
+  double E_mean = 0.0;
+  double E_max = 0.0;
+  double steering_factor = 1.0;  // M
+  int failed_samples = 0;
+  int branch_jumps = 0;
+};
+
+class CycleObjective {
+ public:
+  // `initial_angles`: the start's joint angles at theta0 = initial_angles[0]
+  // (the input joint is joint 1); the passive ones are the assembly's guess.
+  CycleObjective(const ParameterSpace& space, ObjectiveSettings settings, JointVector initial_angles);
+
+  // F(x) and, when `gradient` is not null, dF/dx.
+  ObjectiveValue evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient);
+  // F(x) = |r|^2 / 2 and, when `jacobian` is not null, dr/dx.
+  ObjectiveValue evaluate_residuals(const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* jacobian);
+
+  // dr/dx at the last evaluation (which must have succeeded): one implicit
+  // differentiation of its cycle, no new cycle.
+  void residual_jacobian(Eigen::MatrixXd& jacobian);
+
+  // Makes `other`'s last cycle (same space and loop settings) the nearby
+  // cycle of this objective's next evaluation, as if this objective had
+  // evaluated it: the unsteered energy at a steered search's result follows
+  // the branch the search followed. Nothing when `other`'s last evaluation
+  // failed.
+  void continue_from(const CycleObjective& other);
+
+  int evaluations() const { return evaluations_; }
+  // The last evaluation's x, and whether it succeeded.
+  const Eigen::VectorXd& last_x() const { return last_x_; }
+  bool last_ok() const { return last_ok_; }
+  // The last evaluation's geometry, assembled start state and cycle.
+  const LoopGeometry& geometry() const { return geometry_; }
+  const EquilibriumState& start_state() const { return start_; }
+  const CycleSummary& cycle() const { return cycle_; }
+  const ParameterSpace& space() const { return space_; }
+  const ObjectiveSettings& settings() const { return settings_; }
+
+ private:
+  // Builds the geometry, assembles and runs the cycle; false when the loop
+  // cannot be assembled at theta0 or the geometry is invalid.
+  bool run_cycle(const Eigen::VectorXd& x);
+  bool run_cycle_at(const Eigen::VectorXd& x);
+  // M and dM/d(a, alpha, d) (when `gradient` is not null) at the last cycle;
+  // `angle_jacobian` (rows j * n + i) is needed for the travel term.
+  double steering(const Eigen::MatrixXd* angle_jacobian, GeometryVector* gradient) const;
+  // The last cycle's energies and counts (unsteered: M = 1).
+  ObjectiveValue cycle_value() const;
+  // The measure of the last cycle: the sample it looks at (-1: all, the
+  // mean), its energy, and the residual rows that carry it.
+  int measured_sample() const;
+  double measured_energy() const;
+  void measured_residuals(Eigen::VectorXd& r) const;
+  // Keeps only the measured sample's rows of the stacked per-sample rows
+  // (scaled to weigh 1), for the max; leaves them all for the mean.
+  void mask_to_measured_sample(Eigen::Ref<Eigen::MatrixXd> rows) const;
+  bool steered() const { return !settings_.deflation.empty() || settings_.nontrivial; }
+
+  const ParameterSpace& space_;
+  ObjectiveSettings settings_;
+  JointVector initial_angles_;
+  Eigen::MatrixXd geometry_jacobian_;  // d(a, alpha, d) / dx
+  int evaluations_ = 0;
+  Eigen::VectorXd last_x_;
+  bool last_ok_ = false;
+  LoopGeometry geometry_;
+  std::unique_ptr<LoopModel> model_;  // of the last evaluation
+  std::unique_ptr<EquilibriumWorkspace> workspace_;
+  EquilibriumState start_;
+  CycleSummary cycle_;
+  // The cycle of the last successful evaluation before the current one,
+  // and its start state: where the next evaluation starts from.
+  CycleSummary nearby_;
+  EquilibriumState nearby_start_;
+  bool have_nearby_ = false;
+  // Buffers of the Jacobians, kept so that repeated evaluations reuse them.
+  Eigen::VectorXd weighted_deformations_;
+  Eigen::MatrixXd deformation_jacobian_;  // dr/d(a, alpha, d)
+  Eigen::MatrixXd angle_jacobian_;        // d theta / d(a, alpha, d), rows j * n + i
+};
+
+// Per joint, how far its angle turns over the cycle [rad]: max - min of the
+// angle unwrapped from sample to sample, with the samples where it is reached.
+struct JointTravel {
+  double travel = 0.0;
+  int argmax = 0;
+  int argmin = 0;
+};
+std::vector<JointTravel> joint_travel(const CycleSummary& cycle, int joints);
+
+}  // namespace loopfarm

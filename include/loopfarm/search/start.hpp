@@ -1,0 +1,78 @@
+// One random start of a search, end to end: draw the geometry and initial
+// angles of start `index` from the job's (seed, index) stream, minimise the
+// (steered) cycle energy locally, and, if it reaches zero, verify the motion
+// with the rigid closure, classify it, put it in canonical form and measure
+// the local dimension of the zero set there.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "loopfarm/search/canonical.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/search/local_dimension.hpp"
+#include "loopfarm/search/local_search.hpp"
+#include "loopfarm/search/verify.hpp"
+
+namespace loopfarm {
+
+struct StartOptions {
+  VerificationOptions verification;
+  ClassifyOptions classification;
+  double rank_tolerance = 1e-6;  // local_dimension's relative singular-value threshold
+  std::function<void(const SearchTraceRow&)> trace;
+};
+
+// What is known of a zero: its rigid verification, family, canonical form
+// and the local dimension of the zero set.
+struct CandidateAnalysis {
+  VerificationSummary verification;
+  Classification classification;
+  CanonicalForm canonical;
+  LocalDimension local_dimension;
+};
+
+// `pose`: joint angles of an assembled pose of `geometry` (the verification
+// starts there: StartOptions::verification says whether every circuit is
+// sought or only the one through the pose); `jacobian`: dr/dx of the cycle
+// residuals with respect to the free parameters at the geometry, in
+// dimensionless units (dimensionless_columns).
+CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
+                                    const Eigen::MatrixXd& jacobian, const StartOptions& options);
+// The same with the verification already done (`loopfarm verify` chooses
+// the pose of its cycle energy from it); `pose` is that pose.
+CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
+                                    VerificationSummary verification, const Eigen::MatrixXd& jacobian,
+                                    const StartOptions& options);
+
+struct StartSummary {
+  std::uint64_t index = 0;
+  std::string algorithm;
+  LoopGeometry initial_geometry;
+  JointVector initial_angles;      // drawn (fixed and tied filled in)
+  double initial_E_mean = 0.0;     // unsteered, at the initial geometry (NaN if it cannot be assembled)
+  LoopGeometry final_geometry;
+  JointVector final_angles;        // assembled pose at theta0 of the final geometry
+  double E_mean = 0.0;             // unsteered, at the final geometry
+  double E_max = 0.0;
+  double objective = 0.0;          // what the optimiser minimised (steered E_mean)
+  int evaluations = 0;
+  double seconds = 0.0;
+  SearchStatus status = SearchStatus::failure;
+  std::string message;
+  int failed_samples = 0;          // of the final cycle
+  int branch_jumps = 0;
+  bool zero = false;               // E_mean <= the job's zero threshold
+
+  CandidateAnalysis candidate;     // for zeros only (`zero`); otherwise default
+};
+
+// The steering of a job as objective settings (deflation terms from the
+// families' distance functions).
+ObjectiveSettings objective_settings(const Job& job);
+
+StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& options = {});
+
+}  // namespace loopfarm

@@ -1,0 +1,811 @@
+#include "loopfarm/core/cycle.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <tuple>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include "small_dense.hpp"
+
+namespace loopfarm {
+namespace {
+
+constexpr double kTwoPi = 6.28318530717958647692;
+
+[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(what); }
+
+// Largest change of a passive angle between two states, modulo 2 pi.
+double passive_change(const LoopModel& model, const EquilibriumState& a, const EquilibriumState& b) {
+  double change = 0.0;
+  for (int i = 0; i < model.joints(); ++i) {
+    if (i == model.options().input_joint) continue;
+    change = std::max(change, std::abs(wrap_angle(a.theta[i] - b.theta[i])));
+  }
+  return change;
+}
+
+// Step control: the largest departure of the cubic prediction from the
+// tangent line accepted without bisecting, as a fraction of
+// CycleOptions::max_passive_step. Newton iterations over the bench's 8
+// generic 4R cycles at N = 32: 2782 at 0.04, 2793 at 0.1, 3222 at 0.4, 3456
+// without this control; the energies are the same in all four.
+constexpr double kMaxBend = 0.1;
+
+// A landing after a fold starts this many max_passive_step along the last
+// tangent (see Stepper::land). Over the bench's 8 generic 4R cycles at
+// N = 32 (bench/cycle_breakdown), with the tangent start tried first,
+// reaches of 0.2, 0.5, 1 and 2 gave 2176, 2088, 1972 and 1901 Newton
+// iterations (2305 with no tangent start), the last with every landing
+// converged; with the budgeted solve from the last point tried first, as
+// land() does, 2021.
+constexpr double kLandingReach = 2.0;
+
+// Gauss-Newton steps a solve may take before it is given up (see
+// solve_equilibrium): such steps mean the exact Hessian is not positive
+// definite on the constraints' null space, which is where a solve that has
+// left its branch creeps (10-20 iterations, mostly failing). A continuation
+// step's solve gives up after kStepGaussNewtonSteps (the step is then
+// bisected or lands), the landing's solve from the last point at its first
+// (kLandingGaussNewtonSteps: where it converged on the paper's flat-folded
+// loop it took none; the landing along the tangent follows). Over the
+// bench's 8 generic 4R cycles at N = 32 (bench/cycle_breakdown): no limits
+// 1,947 Newton iterations, the landing's limit alone 1,833, both 1,728 with
+// a step limit of 8 (6: 1,746, 7: 1,766, 10: 1,750), every E_mean unchanged;
+// step limits of 1-5 moved one loop's cycle to another branch (E_mean 1.01
+// to 2.33).
+constexpr int kStepGaussNewtonSteps = 8;
+constexpr int kLandingGaussNewtonSteps = 0;
+
+// Largest rate of change of a passive angle along a path tangent.
+double passive_rate(const LoopModel& model, const EquilibriumState& tangent) {
+  double rate = 0.0;
+  for (int i = 0; i < model.joints(); ++i) {
+    if (i != model.options().input_joint) rate = std::max(rate, std::abs(tangent.theta[i]));
+  }
+  return rate;
+}
+
+// A solved point of the equilibrium path, with its tangent when the solve
+// provided one.
+struct PathPoint {
+  const EquilibriumState* state = nullptr;
+  const EquilibriumState* tangent = nullptr;  // d state / d theta_in, or null
+  double theta = 0.0;
+};
+
+// The guess for the solve at from.theta + h. With tangents at `from` and
+// `before`: the cubic Hermite polynomial through both points and tangents,
+// error O(h^4); with a tangent at `from` only, a Taylor step along it
+// (O(h^2)); without a tangent, the secant through `before` and `from`
+// (O(h^2)). Angles are differenced modulo 2 pi.
+double predict(const PathPoint& from, const PathPoint* before, double h, EquilibriumState& out) {
+  const EquilibriumState& x = *from.state;
+  out.theta = x.theta;
+  out.deformations = x.deformations;
+  out.multipliers = x.multipliers;
+  if (from.tangent != nullptr) {
+    const EquilibriumState& t = *from.tangent;
+    if (before == nullptr || before->tangent == nullptr) {
+      out.theta += h * t.theta;
+      out.deformations += h * t.deformations;
+      out.multipliers += h * t.multipliers;
+      return 0.0;
+    }
+    // P(s) = x + t s + a s^2 + b s^3 with P(-p) = x_b, P'(-p) = t_b:
+    // b = (2 (x_b - x) + (t + t_b) p) / p^3, a = (t - t_b) / (2 p) + 3/2 b p.
+    const EquilibriumState& xb = *before->state;
+    const EquilibriumState& tb = *before->tangent;
+    const double p = from.theta - before->theta;
+    auto extrapolate = [&](double x1, double x0, double t1, double t0) {
+      const double cubic = (2.0 * (x0 - x1) + (t1 + t0) * p) / (p * p * p);
+      const double quadratic = (t1 - t0) / (2.0 * p) + 1.5 * cubic * p;
+      return h * (t1 + h * (quadratic + h * cubic));
+    };
+    double bend = 0.0;
+    for (int i = 0; i < x.theta.size(); ++i) {
+      // x_b - x modulo 2 pi: differences only, so the branch of each angle does not matter.
+      const double move = extrapolate(0.0, wrap_angle(xb.theta[i] - x.theta[i]), t.theta[i], tb.theta[i]);
+      out.theta[i] += move;
+      bend = std::max(bend, std::abs(move - h * t.theta[i]));
+    }
+    for (int k = 0; k < x.deformations.size(); ++k) {
+      out.deformations[k] += extrapolate(x.deformations[k], xb.deformations[k], t.deformations[k], tb.deformations[k]);
+    }
+    for (int k = 0; k < 6; ++k) {
+      out.multipliers[k] += extrapolate(x.multipliers[k], xb.multipliers[k], t.multipliers[k], tb.multipliers[k]);
+    }
+    return bend;
+  }
+  if (before == nullptr) return 0.0;
+  const EquilibriumState& b = *before->state;
+  const double ratio = h / (from.theta - before->theta);
+  for (int i = 0; i < x.theta.size(); ++i) out.theta[i] += ratio * wrap_angle(x.theta[i] - b.theta[i]);
+  out.deformations += ratio * (x.deformations - b.deformations);
+  out.multipliers += ratio * (x.multipliers - b.multipliers);
+  return 0.0;
+}
+
+// Continuation from one solved input angle to the next, with bisection where a
+// solve fails or the passive angles move too far for one step.
+class Stepper {
+ public:
+  Stepper(const LoopModel& model, EquilibriumWorkspace& ws, const CycleOptions& options)
+      : model_(model), ws_(ws), options_(options) {}
+
+  struct Result {
+    EquilibriumSummary solve;
+    SampleStatus status = SampleStatus::failed;
+    int iterations = 0;
+    int refinements = 0;
+  };
+
+  // Steps from `from` to the input angle `target` (`before`, if given, is
+  // the point before `from`, for the predictor).
+  //
+  // `beyond_failure`: a solve at `target` from an earlier point of this
+  // interval failed, and the first half of the interval was then reached in
+  // one step, so what made it fail (a fold of the path, as a rule) lies
+  // between `from` and `target`. The solve from `from` would fail too (on the
+  // bench's generic loops it did at every depth, after its full budget or
+  // converged to the far branch, too far to accept): with
+  // CycleOptions::skip_failed_retries it is not tried, and the step bisects
+  // straight on or, at the finest depth, lands.
+  //
+  // `stepping_stone`: `target` is a bisection's midpoint, not a sample: its
+  // solve may end at CycleOptions::stepping_tolerance.
+  Result step(const PathPoint& from, const PathPoint* before, double target, int depth,
+              bool beyond_failure = false, bool stepping_stone = false) const {
+    Result r;
+    if (before != nullptr && before->theta == from.theta) before = nullptr;
+    const double h = target - from.theta;
+    const bool can_refine = depth < options_.max_refinements;
+    const bool known_failure = options_.skip_failed_retries && beyond_failure;
+    const bool predicted = options_.predictor && (from.tangent != nullptr || before != nullptr);
+    // Step control from the path's own shape: bisect before solving where
+    // the tangent says the passive angles would move too far, or where the
+    // cubic prediction leaves the tangent line by more than kMaxBend of that
+    // (the path bends within the step: the prediction is not to be trusted).
+    const bool tangent_too_long =
+        from.tangent != nullptr && std::abs(h) * passive_rate(model_, *from.tangent) > options_.max_passive_step;
+    bool too_long = can_refine && (known_failure || tangent_too_long);
+    EquilibriumState guess;
+    if (!too_long && !known_failure) {  // a solve will be tried: its start
+      if (predicted) {
+        const double bend = predict(from, before, h, guess);
+        too_long = can_refine && bend > kMaxBend * options_.max_passive_step;
+      } else {
+        guess = *from.state;
+      }
+    }
+    bool failed_here = false;  // a solve at `target` from `from` was tried and rejected
+    if (!too_long) {
+      // A warm-started solve that needs many iterations has lost the branch:
+      // bisecting is cheaper than letting it wander.
+      if (known_failure) {
+        r.solve.status = SolveStatus::max_iterations;  // as the skipped solve would end
+      } else {
+        SolveLimits limits;
+        limits.max_iterations = options_.max_iterations_per_step;
+        limits.max_gauss_newton_steps = kStepGaussNewtonSteps;
+        if (stepping_stone) limits.stepping_tolerance = options_.stepping_tolerance;
+        r.solve = solve_equilibrium(model_, ws_, target, guess, limits);
+        r.iterations += r.solve.iterations;
+        if (acceptable(r.solve, *from.state)) {
+          r.status = SampleStatus::converged;
+          return r;
+        }
+      }
+      failed_here = true;
+      // A step that fails from its prediction is bisected, not retried from
+      // `from`: with the tangent predictor such a retry never succeeded on
+      // the bench's generic loops (18 tries, 316 iterations, none accepted).
+      if (!can_refine) {
+        // The equilibrium branch ends here (a fold of the elastic path) or the
+        // solve is hard: a landing (land() below), and whatever it lands on
+        // is a jump to another branch. Where the budgeted solve has already converged (to a point
+        // too far away: the jump itself) that solve is the landing: solving
+        // again from the last point took 10-75 Newton iterations, mostly
+        // linearly converging Gauss-Newton steps, and on the bench's generic
+        // loops and the paper's figures always landed on the same
+        // equilibrium (energies equal to 10 digits), 7 % of a generic cycle's
+        // iterations.
+        if (r.solve.status != SolveStatus::converged) {
+          r.solve = land(from, target);
+          r.iterations += r.solve.iterations;
+        }
+        if (acceptable(r.solve, *from.state)) {
+          r.status = SampleStatus::converged;
+        } else {
+          r.status = r.solve.status == SolveStatus::converged ? SampleStatus::branch_jump : SampleStatus::failed;
+        }
+        return r;
+      }
+    }
+    // Bisect: reach the midpoint, then the target from there.
+    const double mid = 0.5 * (from.theta + target);
+    Result half = step(from, before, mid, depth + 1, false, true);
+    r.iterations += half.iterations;
+    r.refinements += 1 + half.refinements;
+    if (half.status == SampleStatus::failed) {
+      half.iterations = r.iterations;
+      half.refinements = r.refinements;
+      return half;
+    }
+    const PathPoint midpoint{&half.solve.state, half.solve.has_tangent ? &half.solve.tangent : nullptr, mid};
+    // Across a jump the point before lies on another branch: predict from
+    // the landing point's own tangent only.
+    const PathPoint* behind = half.status == SampleStatus::branch_jump ? nullptr : &from;
+    Result rest = step(midpoint, behind, target, depth + 1,
+                       (failed_here || beyond_failure) && half.status == SampleStatus::converged, stepping_stone);
+    rest.iterations += r.iterations;
+    rest.refinements += r.refinements;
+    if (rest.status == SampleStatus::converged) rest.status = SampleStatus::refined;
+    if (half.status == SampleStatus::branch_jump && rest.status != SampleStatus::failed) {
+      rest.status = SampleStatus::branch_jump;
+    }
+    return rest;
+  }
+
+ private:
+  // The solve at `target` after the branch through `from` has ended (a fold
+  // of the elastic path, or a hard step at the finest refinement): whatever
+  // it converges to is the equilibrium the loop snaps to. First from `from`
+  // itself with the step budget, which near a singular pose (the paper's
+  // flat-folded loop) stays on the branch, given up at its first
+  // Gauss-Newton step (kLandingGaussNewtonSteps). Where that does not converge,
+  // `from` is a near-degenerate saddle of the energy on the constraint
+  // manifold (the fold): the gradient there is tiny and the exact Hessian
+  // indefinite, and the Gauss-Newton steps that replace it creep (they took
+  // 39-100 iterations on the bench's generic loops, two of them not
+  // converging within 100). Near a fold the path tangent is large along the
+  // direction in which the branch leaves, which is where the snap goes: a
+  // start moved kLandingReach * max_passive_step along it is past the
+  // saddle, and the solve from there converged in 6-12 iterations to the
+  // same energies (to 6 digits) where the creeping solve converged. Where
+  // the tangent is missing or that solve fails too, the creeping solve with
+  // the full iteration limit.
+  EquilibriumSummary land(const PathPoint& from, double target) const {
+    SolveLimits limits;
+    limits.max_iterations = options_.max_iterations_per_step;
+    limits.max_gauss_newton_steps = kLandingGaussNewtonSteps;
+    EquilibriumSummary summary = solve_equilibrium(model_, ws_, target, *from.state, limits);
+    if (summary.status == SolveStatus::converged) return summary;
+    int iterations = summary.iterations, evaluations = summary.residual_evaluations;
+    auto count = [&](const EquilibriumSummary& s) {
+      iterations += s.iterations;
+      evaluations += s.residual_evaluations;
+    };
+    const double rate = from.tangent != nullptr ? passive_rate(model_, *from.tangent) : 0.0;
+    if (rate > 0.0 && std::isfinite(rate)) {
+      const double s = kLandingReach * options_.max_passive_step / rate;
+      EquilibriumState guess = *from.state;
+      guess.theta += s * from.tangent->theta;
+      guess.deformations += s * from.tangent->deformations;
+      summary = solve_equilibrium(model_, ws_, target, guess);
+      count(summary);
+    }
+    if (summary.status != SolveStatus::converged) {
+      summary = solve_equilibrium(model_, ws_, target, *from.state);
+      count(summary);
+    }
+    summary.iterations = iterations;
+    summary.residual_evaluations = evaluations;
+    return summary;
+  }
+
+  bool acceptable(const EquilibriumSummary& s, const EquilibriumState& from) const {
+    return s.status == SolveStatus::converged && passive_change(model_, s.state, from) <= options_.max_passive_step;
+  }
+
+  const LoopModel& model_;
+  EquilibriumWorkspace& ws_;
+  const CycleOptions& options_;};
+
+// d normalised parameter / d parameter, D = diag(scale) - length dLᵀ:
+// p~ = p / L(p) for the lengths a and d (scale 1 / L, length p / L^2), alpha
+// unchanged (scale 1, length 0). Diagonal plus rank one, so it is applied in
+// O(3n) per row without forming D.
+class Normalization {
+ public:
+  explicit Normalization(const LoopModel& model) : dL_(length_scale_gradient(model.geometry())) {
+    const LoopGeometry& g = model.geometry();
+    const int n = g.joints();
+    const double L = model.length_scale();
+    scale_.setOnes(3 * n);
+    length_.setZero(3 * n);
+    for (int i = 0; i < n; ++i) {
+      scale_[i] = 1.0 / L;
+      scale_[2 * n + i] = 1.0 / L;
+      length_[i] = g.a[i] / (L * L);
+      length_[2 * n + i] = g.d[i] / (L * L);
+    }
+  }
+
+  // v <- v D for a row vector v, which is v <- Dᵀ v for a column (a gradient).
+  template <class Vector>
+  void apply(Vector&& v) const {
+    const int size = static_cast<int>(scale_.size());
+    double along = 0.0;
+    for (int i = 0; i < size; ++i) along += v(i) * length_[i];
+    for (int j = 0; j < size; ++j) v(j) = v(j) * scale_[j] - along * dL_[j];
+  }
+
+  const GeometryVector& scale() const { return scale_; }
+  const GeometryVector& length() const { return length_; }
+  const GeometryVector& dL() const { return dL_; }
+
+ private:
+  GeometryVector dL_;
+  GeometryVector scale_;
+  GeometryVector length_;
+};
+
+// Chain element of geometric parameter j in GeometryVector order.
+int parameter_element(int n, int j) {
+  const int joint = j % n;
+  switch (j / n) {
+    case 0: return chain_index(joint, ChainParameter::a);
+    case 1: return chain_index(joint, ChainParameter::alpha);
+    default: return chain_index(joint, ChainParameter::d);
+  }
+}
+
+// B <- L^-ᵀ B for a row-major B of n rows and a fixed number of columns, L
+// from dense::cholesky_in_place (inverted diagonal): the back-substitution
+// matching dense::solve_lower_rows, whole rows at a time (Eigen's fixed-width
+// row operations, which vectorise where a plain loop over two rows of the
+// same buffer was left scalar).
+template <class Matrix, class Rows>
+void solve_lower_transposed_rows(const Matrix& lower, int n, Rows& b) {
+  static_assert(Rows::IsRowMajor && Rows::ColsAtCompileTime > 0, "row-major, fixed width");
+  for (int i = n - 1; i >= 0; --i) {
+    auto row = b.row(i);
+    for (int k = i + 1; k < n; ++k) row -= lower(k, i) * b.row(k);
+    row *= lower(i, i);
+  }
+}
+
+// Augmentations sigma = 1, 10, ..., 1e11 tried for H = W + sigma AᵀA.
+constexpr int kMaxSensitivityAugmentations = 12;
+
+// W(i, j), the Hessian of the Lagrangian in unknowns i and j: the constraint
+// curvature (`chain_hessian` over every chain element) and the springs.
+double lagrangian_hessian(const LoopModel& model, const ChainMatrix& chain_hessian, int i, int j) {
+  double h = chain_hessian(model.unknown_element(i), model.unknown_element(j));
+  if (i == j) {
+    const int k = model.unknown_deformation(j);
+    if (k >= 0) h += model.deformation_stiffness(k);
+  }
+  return h;
+}
+
+// The sensitivity dx (unknowns x parameters) of a sample whose H = W +
+// sigma AᵀA is positive definite for no sigma tried: W is then indefinite on
+// the null space of A, the sample is no minimum (in practice a sample whose
+// solve failed), and its sensitivity, still that of the KKT conditions at its
+// state, comes from the whole KKT matrix [W Aᵀ; A 0] (rare: 13 of the 86,112
+// samples differentiated in the default job's first 40 starts). Not inlined,
+// so that its buffers take stack space only when it runs.
+template <class ElementJacobian, class ParameterJacobian, class Sensitivity, size_t Parameters>
+[[gnu::noinline]] void kkt_sensitivity(const LoopModel& model, const ChainMatrix& chain_hessian,
+                                       const ElementJacobian& element_jacobian, const ParameterJacobian& Ap,
+                                       const std::array<int, Parameters>& parameter, Sensitivity& dx) {
+  constexpr int nu = Sensitivity::RowsAtCompileTime;
+  constexpr int np = static_cast<int>(Parameters);
+  using KktMatrix = Eigen::Matrix<double, nu + 6, nu + 6>;
+  using KktRhs = Eigen::Matrix<double, nu + 6, np>;
+  KktMatrix kkt = KktMatrix::Zero();
+  KktRhs rhs;
+  for (int c = 0; c < nu; ++c) {
+    for (int r = 0; r < nu; ++r) kkt(r, c) = lagrangian_hessian(model, chain_hessian, r, c);
+    const int ec = model.unknown_element(c);
+    kkt.template block<6, 1>(nu, c) = element_jacobian.col(ec);
+    kkt.template block<1, 6>(c, nu) = element_jacobian.col(ec).transpose();
+    for (int p = 0; p < np; ++p) rhs(c, p) = -chain_hessian(ec, parameter[static_cast<size_t>(p)]);
+  }
+  rhs.template bottomRows<6>() = -Ap;
+  const KktRhs solution = Eigen::FullPivLU<KktMatrix>(kkt).solve(rhs);
+  dx = solution.template topRows<nu>();
+}
+
+// The implicit differentiation of every sample of a cycle of a loop of
+// `Joints` joints with `Unknowns` unknowns (compile-time sizes: every buffer
+// has a fixed size and every row a fixed width, which the compiler unrolls
+// and vectorises; one instantiation per loop size and compliance): fills
+// `jacobian` and, if not null, `angle_jacobian` (rows of the input joint
+// left as they are).
+//
+// Each sample's KKT conditions are differentiated with respect to the 3n
+// normalised parameters p~: [W Aᵀ; A 0] [dx; dl] = -[W_xp; A_p], W the
+// Hessian of the Lagrangian in the unknowns, W_xp its mixed block with the
+// parameters, A and A_p the closure Jacobians. Solved as a Newton step is,
+// through H = W + sigma AᵀA = L Lᵀ (positive definite at a regular minimum;
+// the right-hand side shifted by sigma Aᵀ A_p to match): with
+// [B | C] = L^-1 [Aᵀ | -W_xp - sigma Aᵀ A_p], the Schur complement is
+// A H^-1 Aᵀ = BᵀB, dl = (BᵀB)^-1 (BᵀC + A_p) and dx = L^-ᵀ (C - B dl).
+// Buffers: fixed-size ones on the stack (about 7 kB for a 4R loop, 30 kB for
+// 8 joints and full compliance); no heap allocation.
+template <int Joints, int Unknowns>
+void differentiate_cycle(const LoopModel& model, EquilibriumWorkspace& ws, const CycleSummary& summary,
+                         Eigen::MatrixXd& jacobian, Eigen::MatrixXd* angle_jacobian) {
+  constexpr int n = Joints;
+  constexpr int nu = Unknowns;
+  constexpr int np = 3 * Joints;  // parameters
+  constexpr int width = 6 + np;   // [Aᵀ | right-hand sides]
+  using Rows = Eigen::Matrix<double, nu, width, Eigen::RowMajor>;
+  using ParameterRows = Eigen::Matrix<double, nu, np, Eigen::RowMajor>;
+  using DualRows = Eigen::Matrix<double, 6, np, Eigen::RowMajor>;
+  assert(model.joints() == Joints && model.unknown_count() == Unknowns);
+  const int m = model.deformation_count();
+  const int N = static_cast<int>(summary.samples.size());
+
+  // Unknowns and parameters share chain elements, so one Hessian and one set
+  // of residual derivatives over the whole chain give all four blocks.
+  std::array<int, kElementsPerJoint * n> all{};
+  for (int e = 0; e < kElementsPerJoint * n; ++e) all[static_cast<size_t>(e)] = e;
+  std::array<int, np> parameter{};
+  for (int p = 0; p < np; ++p) parameter[static_cast<size_t>(p)] = parameter_element(n, p);
+  std::array<double, kMaxDeformations> weight{};  // sqrt(stiffness / N)
+  for (int k = 0; k < m; ++k) weight[static_cast<size_t>(k)] = std::sqrt(model.deformation_stiffness(k) / N);
+  // The normalisation D = diag(scale) - length dLᵀ (see Normalization).
+  const Normalization normalization(model);
+  using ParameterRow = Eigen::Matrix<double, 1, np>;
+  const ParameterRow scale = normalization.scale().transpose();
+  const ParameterRow length = normalization.length().transpose();
+  const ParameterRow dL = normalization.dL().transpose();
+
+  Eigen::Matrix<double, 6, kElementsPerJoint * n> element_jacobian;  // d residual / d s_e
+  Eigen::Matrix<double, nu, nu> H;  // W + sigma AᵀA, then its Cholesky factor (diagonal inverted)
+  Rows solved;                      // [Aᵀ | R], then [B | C]
+  ParameterRows dx;                 // C - B dl, then dx
+  Eigen::Matrix<double, 6, np> Ap;  // A_p
+  Eigen::Matrix<double, 6, width> gram;
+  DualRows dual;
+
+  for (int j = 0; j < N; ++j) {
+    const CycleSample& s = summary.samples[static_cast<size_t>(j)];
+    deformed_geometry(model, s.state.deformations, ws.deformed);
+    compute_chain(ws.deformed, s.state.theta, ws.chain);
+    residual_hessian(ws.chain, s.state.multipliers, all, ws.chain_hessian);
+    for (int e = 0; e < kElementsPerJoint * n; ++e) element_jacobian.col(e) = residual_derivative(ws.chain, e);
+    for (int p = 0; p < np; ++p) Ap.col(p) = element_jacobian.col(parameter[static_cast<size_t>(p)]);
+    auto a_col = [&](int u) { return element_jacobian.col(model.unknown_element(u)); };
+
+    // H = W + sigma AᵀA (lower triangle, all the factorisation reads), sigma
+    // raised until it is positive definite.
+    double sigma = 1.0;
+    bool factored = false;
+    for (int attempt = 0; attempt < kMaxSensitivityAugmentations && !factored; ++attempt) {
+      if (attempt > 0) sigma *= 10.0;
+      for (int c = 0; c < nu; ++c) {
+        for (int r = c; r < nu; ++r) {
+          H(r, c) = lagrangian_hessian(model, ws.chain_hessian, r, c) + sigma * a_col(r).dot(a_col(c));
+        }
+      }
+      factored = dense::cholesky_in_place(H, nu);
+    }
+
+    if (factored) {
+      // [B | C] = L^-1 [Aᵀ | -W_xp - sigma Aᵀ A_p].
+      for (int u = 0; u < nu; ++u) {
+        const Vector6 a = a_col(u);
+        const int eu = model.unknown_element(u);
+        auto row = solved.row(u);
+        row.template head<6>() = a.transpose();
+        row.template tail<np>().noalias() = -sigma * (a.transpose() * Ap);
+        for (int p = 0; p < np; ++p) row[6 + p] -= ws.chain_hessian(eu, parameter[static_cast<size_t>(p)]);
+      }
+      dense::solve_lower_rows(H, nu, solved);
+      // Bᵀ [B | C]: the Schur complement BᵀB and BᵀC.
+      gram.setZero();
+      for (int u = 0; u < nu; ++u) {
+        gram.noalias() += solved.row(u).template head<6>().transpose() * solved.row(u);
+      }
+      const Matrix6 schur = gram.template leftCols<6>();
+      dual = (gram.template rightCols<np>() + Ap);
+      // The Schur complement is singular only where the closure Jacobian
+      // loses rank; there the sensitivity is not defined and a
+      // pseudo-inverse is used: from the eigen-decomposition of the symmetric
+      // BᵀB, eigenvalues within 6 eps of the largest taken as zero (the rank
+      // rule of Eigen's CompleteOrthogonalDecomposition, whose solve
+      // allocates for a singular matrix; the two agree to round-off).
+      Matrix6 schur_factor = schur;
+      if (dense::cholesky_in_place(schur_factor, 6)) {
+        dense::solve_lower_rows(schur_factor, 6, dual);
+        solve_lower_transposed_rows(schur_factor, 6, dual);
+      } else {
+        const Eigen::SelfAdjointEigenSolver<Matrix6> eigen(schur);
+        const Vector6& values = eigen.eigenvalues();
+        const double cutoff = 6.0 * std::numeric_limits<double>::epsilon() * values.cwiseAbs().maxCoeff();
+        Vector6 inverse;
+        for (int i = 0; i < 6; ++i) inverse[i] = std::abs(values[i]) > cutoff ? 1.0 / values[i] : 0.0;
+        const DualRows projected = inverse.asDiagonal() * (eigen.eigenvectors().transpose() * dual);
+        dual.noalias() = eigen.eigenvectors() * projected;
+      }
+      // dx = L^-ᵀ (C - B dl).
+      for (int u = 0; u < nu; ++u) {
+        auto out = dx.row(u);
+        out = solved.row(u).template tail<np>();
+        for (int r = 0; r < 6; ++r) out -= solved(u, r) * dual.row(r);
+      }
+      solve_lower_transposed_rows(H, nu, dx);
+    } else {
+      kkt_sensitivity(model, ws.chain_hessian, element_jacobian, Ap, parameter, dx);
+    }
+
+    for (int u = 0; u < nu; ++u) {
+      // d x / d p = d x / d p~ D. Angles are dimensionless: they depend on the
+      // geometry only through the normalised parameters, as the deformations do.
+      auto row = dx.row(u);
+      const double along = row.dot(length);
+      row = row.cwiseProduct(scale) - along * dL;
+      const int k = model.unknown_deformation(u);
+      if (k >= 0) jacobian.row(j * m + k) = weight[static_cast<size_t>(k)] * row;
+      const int joint = model.unknown_joint(u);
+      if (angle_jacobian && joint >= 0) angle_jacobian->row(j * n + joint) = row;
+    }
+  }
+}
+
+// The summary's energies and counts from its samples.
+void summarize_samples(CycleSummary& summary) {
+  const double N = static_cast<double>(summary.samples.size());
+  summary.E_mean = 0.0;
+  summary.E_max = 0.0;
+  summary.failed_samples = 0;
+  summary.branch_jumps = 0;
+  summary.max_closure_residual = 0.0;
+  for (const CycleSample& s : summary.samples) {
+    summary.E_mean += s.energy / N;
+    summary.E_max = std::max(summary.E_max, s.energy);
+    summary.failed_samples += s.status == SampleStatus::failed;
+    summary.branch_jumps += s.status == SampleStatus::branch_jump;
+    summary.max_closure_residual = std::max(summary.max_closure_residual, s.closure_residual);
+  }
+}
+
+}  // namespace
+
+bool CycleOptions::full_turn() const { return range >= kTwoPi; }
+
+void CycleOptions::validate() const {
+  if (samples < 2) fail("samples: must be >= 2, got " + std::to_string(samples));
+  if (!(range > 0.0) || !(range <= kTwoPi + 1e-12)) {
+    fail("range: must be in (0, 360] degrees, got " + std::to_string(range * 360.0 / kTwoPi) + " degrees");
+  }
+  if (!(max_passive_step > 0.0) || !std::isfinite(max_passive_step)) {
+    fail("max_passive_step: must be a finite number > 0, got " + std::to_string(max_passive_step));
+  }
+  if (max_refinements < 0 || max_refinements > 30) {
+    fail("max_refinements: must be in [0, 30], got " + std::to_string(max_refinements));
+  }
+  if (max_iterations_per_step < 1) {
+    fail("max_iterations_per_step: must be >= 1, got " + std::to_string(max_iterations_per_step));
+  }
+  if (!(stepping_tolerance >= 0.0) || !std::isfinite(stepping_tolerance)) {
+    fail("stepping_tolerance: must be a finite number >= 0, got " + std::to_string(stepping_tolerance));
+  }
+}
+
+const char* to_string(SampleStatus status) {
+  switch (status) {
+    case SampleStatus::converged: return "converged";
+    case SampleStatus::refined: return "refined";
+    case SampleStatus::branch_jump: return "branch_jump";
+    case SampleStatus::failed: return "failed";
+  }
+  return "unknown";
+}
+
+void cycle_energy(const LoopModel& model, EquilibriumWorkspace& ws, double theta0, const EquilibriumState& start,
+                  const CycleOptions& options, CycleSummary& summary) {
+  options.validate();
+  const int N = options.samples;
+  summary.samples.resize(static_cast<size_t>(N));
+  const bool full = options.full_turn();
+  for (int j = 0; j < N; ++j) {
+    summary.samples[static_cast<size_t>(j)].theta_in =
+        full ? theta0 + kTwoPi * j / N : theta0 + options.range * (static_cast<double>(j) / (N - 1) - 0.5);
+  }
+
+  const Stepper stepper(model, ws, options);
+  // The anchor: the equilibrium at theta0 itself, from the given start.
+  EquilibriumSummary anchor = solve_equilibrium(model, ws, theta0, start);
+  if (options.predictor && anchor.status == SolveStatus::converged && !anchor.has_tangent) {
+    // Started on the solution (no Newton step, so no tangent from one): the
+    // first steps predict much better with it.
+    anchor.has_tangent = equilibrium_tangent(model, ws, anchor.state, anchor.tangent);
+  }
+  summary.total_iterations = 0;
+  summary.refinements = 0;
+
+  auto record = [&](int j, const Stepper::Result& r) {
+    CycleSample& s = summary.samples[static_cast<size_t>(j)];
+    s.energy = r.solve.energy;
+    s.status = r.status;
+    s.solve_status = r.solve.status;
+    s.iterations = r.iterations;
+    s.refinements = r.refinements;
+    s.closure_residual = r.solve.closure_residual;
+    s.state = r.solve.state;
+    summary.total_iterations += r.iterations;
+    summary.refinements += r.refinements;
+  };
+
+  bool anchor_recorded = false;
+  std::array<Stepper::Result, 3> slots;
+  // Walk outward from the anchor: forward over the samples at or after theta0,
+  // then backward over those before it (a partial range only). A failed
+  // sample is skipped over: the walk goes on from the last solved one.
+  for (int direction : {+1, -1}) {
+    // The last solved point and the one before it, with their tangents, and
+    // the slot the next step's result goes to: three slots in rotation, so
+    // that no summary is copied to move along.
+    slots[0].solve = anchor;
+    int from = 0, previous = 1, next = 2;
+    double from_theta = theta0;
+    double previous_theta = theta0;
+    bool have_previous = false;
+    auto point = [&](int slot, double theta) {
+      const EquilibriumSummary& s = slots[static_cast<size_t>(slot)].solve;
+      return PathPoint{&s.state, s.has_tangent ? &s.tangent : nullptr, theta};
+    };
+    const int first = direction > 0 ? 0 : N - 1;
+    for (int j = first; j >= 0 && j < N; j += direction) {
+      const double target = summary.samples[static_cast<size_t>(j)].theta_in;
+      if ((direction > 0) != (target >= theta0)) continue;
+      if (target == theta0) {
+        Stepper::Result at_anchor;
+        at_anchor.solve = anchor;
+        at_anchor.status = anchor.status == SolveStatus::converged ? SampleStatus::converged : SampleStatus::failed;
+        at_anchor.iterations = anchor.iterations;
+        anchor_recorded = true;
+        record(j, at_anchor);
+        continue;
+      }
+      const PathPoint before = point(previous, previous_theta);
+      Stepper::Result& r = slots[static_cast<size_t>(next)];
+      r = stepper.step(point(from, from_theta), have_previous ? &before : nullptr, target, 0);
+      record(j, r);
+      if (r.status == SampleStatus::failed) continue;
+      std::tie(previous, from, next) = std::make_tuple(from, next, previous);
+      previous_theta = from_theta;
+      have_previous = r.status != SampleStatus::branch_jump;
+      from_theta = target;
+    }
+  }
+
+  if (!anchor_recorded) summary.total_iterations += anchor.iterations;
+  summarize_samples(summary);
+}
+
+bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& ws, const CycleSummary& nearby,
+                              const CycleOptions& options, CycleSummary& summary) {
+  const int N = options.samples;
+  if (static_cast<int>(nearby.samples.size()) != N || nearby.failed_samples > 0) {
+    return false;
+  }
+  summary.samples.resize(static_cast<size_t>(N));
+  summary.total_iterations = 0;
+  summary.refinements = 0;
+  for (int j = 0; j < N; ++j) {
+    const CycleSample& from = nearby.samples[static_cast<size_t>(j)];
+    if (from.state.theta.size() != model.joints() ||
+        from.state.deformations.size() != model.deformation_count()) {
+      return false;  // another model's cycle
+    }
+    const EquilibriumSummary solve =
+        solve_equilibrium(model, ws, from.theta_in, from.state, {.max_iterations = options.max_iterations_per_step});
+    summary.total_iterations += solve.iterations;
+    // A sample that needs the continuation's help, or that moved far enough
+    // to have crossed onto another branch, sends the caller back to the walk.
+    // The step rule of the walk, applied to the change of geometry: no
+    // passive angle may move by more than max_passive_step. The deformations
+    // count too: where they are cheap (a tiny torsion ratio), a solve can
+    // keep its angles and slide into another local minimum by a large twist
+    // deformation. 400 generic 4R starts at the default settings (before
+    // jumped samples were followed too): a limit of a quarter, a half and
+    // all of max_passive_step gave 1.10, 1.02 and 0.92 ms median per local
+    // minimisation, and 252, 255, 257 verified zeros.
+    const double limit = options.max_passive_step;
+    if (solve.status != SolveStatus::converged || passive_change(model, from.state, solve.state) > limit ||
+        (solve.state.deformations - from.state.deformations).lpNorm<Eigen::Infinity>() > limit) {
+      return false;
+    }
+    CycleSample& s = summary.samples[static_cast<size_t>(j)];
+    s.theta_in = from.theta_in;
+    s.energy = solve.energy;
+    // A sample the walk reached by a jump stays one: its branch is followed
+    // continuously in the geometry, but it is still not joined to the
+    // sample before it.
+    s.status = from.status == SampleStatus::branch_jump ? SampleStatus::branch_jump : SampleStatus::converged;
+    s.solve_status = solve.status;
+    s.iterations = solve.iterations;
+    s.refinements = 0;
+    s.closure_residual = solve.closure_residual;
+    s.state = solve.state;
+  }
+  summarize_samples(summary);
+  return true;
+}
+
+GeometryVector cycle_energy_gradient(const LoopModel& model, EquilibriumWorkspace& ws, const CycleSummary& summary,
+                                     int sample) {
+  const int n = model.joints();
+  const int N = static_cast<int>(summary.samples.size());
+  if (sample >= N) throw std::invalid_argument("cycle_energy_gradient: sample " + std::to_string(sample) + " of " +
+                                               std::to_string(N));
+  GeometryVector gradient = GeometryVector::Zero(3 * n);
+  // The mean weighs every sample by 1/N; one sample's own energy, by 1.
+  const double weight = sample < 0 ? 1.0 / N : 1.0;
+  for (int j = sample < 0 ? 0 : sample; j < (sample < 0 ? N : sample + 1); ++j) {
+    const CycleSample& s = summary.samples[static_cast<size_t>(j)];
+    // Envelope theorem: dE/dp~ = lambda^T dc/dp~ at the solution (the energy
+    // itself does not depend on the geometry in normalised units).
+    deformed_geometry(model, s.state.deformations, ws.deformed);
+    compute_chain(ws.deformed, s.state.theta, ws.chain);
+    for (int k = 0; k < 3 * n; ++k) {
+      gradient[k] += weight * s.state.multipliers.dot(residual_derivative(ws.chain, parameter_element(n, k)));
+    }
+  }
+  Normalization(model).apply(gradient);  // dE/dp = Dᵀ dE/dp~
+  return gradient;
+}
+
+void cycle_weighted_deformations(const LoopModel& model, const CycleSummary& summary, Eigen::VectorXd& r) {
+  const int m = model.deformation_count();
+  const int N = static_cast<int>(summary.samples.size());
+  r.resize(N * m);
+  for (int j = 0; j < N; ++j) {
+    for (int k = 0; k < m; ++k) {
+      r[j * m + k] = std::sqrt(model.deformation_stiffness(k) / N) * summary.samples[static_cast<size_t>(j)].state.deformations[k];
+    }
+  }
+}
+
+Eigen::VectorXd cycle_weighted_deformations(const LoopModel& model, const CycleSummary& summary) {
+  Eigen::VectorXd r;
+  cycle_weighted_deformations(model, summary, r);
+  return r;
+}
+
+void cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& ws, const CycleSummary& summary,
+                                Eigen::MatrixXd& jacobian, Eigen::MatrixXd* angle_jacobian) {
+  const int n = model.joints();
+  const int N = static_cast<int>(summary.samples.size());
+  // Every row is written: each deformation is an unknown.
+  jacobian.resize(N * model.deformation_count(), 3 * n);
+  if (angle_jacobian) angle_jacobian->setZero(N * n, 3 * n);  // the input angle's rows stay zero
+  // One instantiation per loop size and compliance: n - 1 passive angles
+  // and 2n (paper) or 3n (full) deformations.
+  static_assert(kMinJoints == 4 && kMaxJoints == 8 && kMaxUnknowns == 4 * kMaxJoints - 1);
+  const bool full = model.options().compliance == Compliance::full;
+  switch (n) {
+    case 4: return full ? differentiate_cycle<4, 15>(model, ws, summary, jacobian, angle_jacobian)
+                        : differentiate_cycle<4, 11>(model, ws, summary, jacobian, angle_jacobian);
+    case 5: return full ? differentiate_cycle<5, 19>(model, ws, summary, jacobian, angle_jacobian)
+                        : differentiate_cycle<5, 14>(model, ws, summary, jacobian, angle_jacobian);
+    case 6: return full ? differentiate_cycle<6, 23>(model, ws, summary, jacobian, angle_jacobian)
+                        : differentiate_cycle<6, 17>(model, ws, summary, jacobian, angle_jacobian);
+    case 7: return full ? differentiate_cycle<7, 27>(model, ws, summary, jacobian, angle_jacobian)
+                        : differentiate_cycle<7, 20>(model, ws, summary, jacobian, angle_jacobian);
+    case 8: return full ? differentiate_cycle<8, 31>(model, ws, summary, jacobian, angle_jacobian)
+                        : differentiate_cycle<8, 23>(model, ws, summary, jacobian, angle_jacobian);
+    default: throw std::logic_error("cycle_deformation_jacobian: a model of " + std::to_string(n) + " joints");
+  }
+}
+
+Eigen::MatrixXd cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& ws,
+                                           const CycleSummary& summary, Eigen::MatrixXd* angle_jacobian) {
+  Eigen::MatrixXd jacobian;
+  cycle_deformation_jacobian(model, ws, summary, jacobian, angle_jacobian);
+  return jacobian;
+}
+
+}  // namespace loopfarm

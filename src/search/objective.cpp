@@ -1,0 +1,261 @@
+#include "loopfarm/search/objective.hpp"
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <utility>
+
+#include "loopfarm/core/assembly.hpp"
+
+namespace loopfarm {
+
+ObjectiveSettings ObjectiveSettings::from_loop(const LoopSettings& loop) {
+  ObjectiveSettings s;
+  s.equilibrium.compliance = loop.compliance;
+  s.equilibrium.torsion_stiffness_ratio = loop.stiffness_ratio;
+  s.equilibrium.closure_tolerance = loop.closure_tolerance;
+  s.equilibrium.stationarity_tolerance = loop.stationarity_tolerance;
+  s.measure = loop.objective == "max" ? CycleMeasure::max : CycleMeasure::mean;
+  s.cycle.samples = loop.samples;
+  s.cycle.range = loop.range;
+  return s;
+}
+
+std::vector<JointTravel> joint_travel(const CycleSummary& cycle, int joints) {
+  std::vector<JointTravel> out(static_cast<size_t>(joints));
+  if (cycle.samples.empty()) return out;
+  for (int i = 0; i < joints; ++i) {
+    // Unwrapped along the samples, which continuation keeps close together.
+    double angle = cycle.samples[0].state.theta[i];
+    double lo = angle, hi = angle;
+    JointTravel& t = out[static_cast<size_t>(i)];
+    for (size_t j = 1; j < cycle.samples.size(); ++j) {
+      angle += wrap_angle(cycle.samples[j].state.theta[i] - cycle.samples[j - 1].state.theta[i]);
+      if (angle > hi) {
+        hi = angle;
+        t.argmax = static_cast<int>(j);
+      }
+      if (angle < lo) {
+        lo = angle;
+        t.argmin = static_cast<int>(j);
+      }
+    }
+    t.travel = hi - lo;
+  }
+  return out;
+}
+
+CycleObjective::CycleObjective(const ParameterSpace& space, ObjectiveSettings settings, JointVector initial_angles)
+    : space_(space),
+      settings_(std::move(settings)),
+      initial_angles_(std::move(initial_angles)),
+      geometry_jacobian_(space.geometry_jacobian()) {
+  settings_.equilibrium.validate();
+  settings_.cycle.validate();
+  if (initial_angles_.size() != space.joints) {
+    throw std::invalid_argument("CycleObjective: initial_angles has " + std::to_string(initial_angles_.size()) +
+                                " values for " + std::to_string(space.joints) + " joints");
+  }
+}
+
+bool CycleObjective::run_cycle(const Eigen::VectorXd& x) {
+  last_ok_ = run_cycle_at(x);
+  return last_ok_;
+}
+
+bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
+  ++evaluations_;
+  last_x_ = x;
+  // The last successful cycle is the nearby cycle of this one (after a
+  // failed evaluation, the one before it still is).
+  if (last_ok_) {
+    std::swap(nearby_, cycle_);
+    nearby_start_ = start_;
+    have_nearby_ = true;
+  }
+  last_ok_ = false;
+  cycle_.samples.clear();
+  geometry_ = space_.geometry(x);
+  if (!x.allFinite()) return false;
+  try {
+    validate_geometry(geometry_);
+  } catch (const std::invalid_argument&) {
+    return false;  // e.g. a length pushed below zero: no loop to evaluate
+  }
+  model_ = std::make_unique<LoopModel>(geometry_, settings_.equilibrium);
+  workspace_ = std::make_unique<EquilibriumWorkspace>(*model_);
+  if (have_nearby_ && settings_.reuse_nearby_cycle &&
+      cycle_energy_from_nearby(*model_, *workspace_, nearby_, settings_.cycle, cycle_)) {
+    // The start state is the sample at theta0 (the first one of a full turn).
+    if (cycle_.samples.front().theta_in == initial_angles_[0]) {
+      start_ = cycle_.samples.front().state;
+      return std::isfinite(cycle_.E_mean);
+    }
+    const EquilibriumSummary anchor = solve_equilibrium(*model_, *workspace_, initial_angles_[0], nearby_start_,
+                                                        {.max_iterations = settings_.cycle.max_iterations_per_step});
+    if (anchor.status == SolveStatus::converged) {
+      start_ = anchor.state;
+      return std::isfinite(cycle_.E_mean);
+    }
+  }
+  // The start's angles first; where they do not lead to an assembly (the
+  // geometry moved too far from where they fit), the deterministic guesses.
+  EquilibriumSummary start = assemble_from_angles(*model_, *workspace_, initial_angles_);
+  if (start.status != SolveStatus::converged) start = assemble(*model_, *workspace_, initial_angles_[0]);
+  if (start.status != SolveStatus::converged) return false;
+  start_ = start.state;
+  cycle_energy(*model_, *workspace_, initial_angles_[0], start_, settings_.cycle, cycle_);
+  return std::isfinite(cycle_.E_mean);
+}
+
+void CycleObjective::continue_from(const CycleObjective& other) {
+  if (!other.last_ok_ || other.cycle_.samples.empty()) return;
+  nearby_ = other.cycle_;
+  nearby_start_ = other.start_;
+  have_nearby_ = true;
+  last_ok_ = false;  // so that the next evaluation keeps this nearby cycle
+}
+
+double CycleObjective::steering(const Eigen::MatrixXd* angle_jacobian, GeometryVector* gradient) const {
+  const int n = geometry_.joints();
+  double factor = 1.0;
+  GeometryVector log_gradient = GeometryVector::Zero(3 * n);  // d log M / dp
+  const double p = settings_.deflation_power;
+  for (const DeflationTerm& term : settings_.deflation) {
+    GeometryVector dd = GeometryVector::Zero(3 * n);
+    const double dist = std::max(term.distance(geometry_, gradient ? &dd : nullptr), 1e-300);
+    const double inverse = std::pow(dist, -p);
+    const double f = inverse + settings_.deflation_shift;
+    factor *= f;
+    // d/dp log(dist^-p + s) = -p dist^(-p-1) / (dist^-p + s) * d dist / dp
+    if (gradient) log_gradient += (-p * inverse / dist / f) * dd;
+  }
+  if (settings_.nontrivial) {
+    const std::vector<JointTravel> travel = joint_travel(cycle_, n);
+    const double t0 = settings_.min_travel;
+    for (int i = 0; i < n; ++i) {
+      if (i == settings_.equilibrium.input_joint) continue;  // driven: it turns by construction
+      const JointTravel& t = travel[static_cast<size_t>(i)];
+      const double ratio = t0 / std::max(t.travel, 1e-300);
+      const double f = 1.0 + ratio * ratio;
+      factor *= f;
+      if (gradient && angle_jacobian) {
+        // d travel / dp = d theta_i(argmax) / dp - d theta_i(argmin) / dp;
+        // d log f / d travel = -2 ratio^2 / (travel f).
+        const Eigen::VectorXd dtravel = (angle_jacobian->row(t.argmax * n + i) - angle_jacobian->row(t.argmin * n + i)).transpose();
+        log_gradient += (-2.0 * ratio * ratio / (std::max(t.travel, 1e-300) * f)) * dtravel;
+      }
+    }
+  }
+  if (gradient) *gradient = factor * log_gradient;
+  return factor;
+}
+
+ObjectiveValue CycleObjective::cycle_value() const {
+  ObjectiveValue v;
+  v.ok = true;
+  v.E_mean = cycle_.E_mean;
+  v.E_max = cycle_.E_max;
+  v.failed_samples = cycle_.failed_samples;
+  v.branch_jumps = cycle_.branch_jumps;
+  return v;
+}
+
+int CycleObjective::measured_sample() const {
+  if (settings_.measure == CycleMeasure::mean) return -1;
+  int worst = 0;
+  for (int j = 1; j < static_cast<int>(cycle_.samples.size()); ++j) {
+    if (cycle_.samples[static_cast<size_t>(j)].energy > cycle_.samples[static_cast<size_t>(worst)].energy) worst = j;
+  }
+  return worst;
+}
+
+double CycleObjective::measured_energy() const {
+  return settings_.measure == CycleMeasure::mean ? cycle_.E_mean : cycle_.E_max;
+}
+
+void CycleObjective::measured_residuals(Eigen::VectorXd& r) const {
+  cycle_weighted_deformations(*model_, cycle_, r);
+  mask_to_measured_sample(r);
+}
+
+void CycleObjective::mask_to_measured_sample(Eigen::Ref<Eigen::MatrixXd> rows) const {
+  const int worst = measured_sample();
+  if (worst < 0) return;
+  // The stacked rows weigh each sample by sqrt(1/N); the worst sample alone
+  // by 1, so that |r|^2 / 2 is its energy, E_max; the others' rows vanish.
+  const int m = model_->deformation_count();
+  const double scale = std::sqrt(static_cast<double>(cycle_.samples.size()));
+  rows.topRows(worst * m).setZero();
+  rows.middleRows(worst * m, m) *= scale;
+  rows.bottomRows(rows.rows() - (worst + 1) * m).setZero();
+}
+
+ObjectiveValue CycleObjective::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient) {
+  ObjectiveValue v;
+  if (!run_cycle(x)) {
+    v.value = std::numeric_limits<double>::infinity();
+    if (gradient) gradient->setZero(x.size());
+    return v;
+  }
+  v = cycle_value();
+  const int n = geometry_.joints();
+  // The travel term's gradient needs the angles' sensitivities (steering()
+  // reads angle_jacobian_ only then).
+  if (gradient && settings_.nontrivial) {
+    cycle_deformation_jacobian(*model_, *workspace_, cycle_, deformation_jacobian_, &angle_jacobian_);
+  }
+  GeometryVector steering_gradient = GeometryVector::Zero(3 * n);
+  v.steering_factor = steered() ? steering(&angle_jacobian_, gradient ? &steering_gradient : nullptr) : 1.0;
+  const double energy = measured_energy();
+  v.value = v.steering_factor * energy;
+  if (gradient) {
+    const GeometryVector energy_gradient = cycle_energy_gradient(*model_, *workspace_, cycle_, measured_sample());
+    // d(M E)/dp = M dE/dp + E dM/dp, then through the ties to x.
+    const Eigen::VectorXd total = v.steering_factor * energy_gradient + energy * steering_gradient;
+    *gradient = geometry_jacobian_.transpose() * total;
+  }
+  return v;
+}
+
+ObjectiveValue CycleObjective::evaluate_residuals(const Eigen::VectorXd& x, Eigen::VectorXd& r,
+                                                  Eigen::MatrixXd* jacobian) {
+  ObjectiveValue v;
+  if (!run_cycle(x)) {
+    v.value = std::numeric_limits<double>::infinity();
+    r.resize(0);
+    if (jacobian) jacobian->resize(0, x.size());
+    return v;
+  }
+  v = cycle_value();
+  v.steering_factor = steered() ? steering(nullptr, nullptr) : 1.0;
+  v.value = v.steering_factor * measured_energy();
+  // r' = sqrt(M) r, so that |r'|^2 / 2 = M E_mean (or M E_max).
+  measured_residuals(r);
+  r *= std::sqrt(v.steering_factor);
+  if (jacobian) residual_jacobian(*jacobian);
+  return v;
+}
+
+void CycleObjective::residual_jacobian(Eigen::MatrixXd& jacobian) {
+  if (!last_ok_) throw std::logic_error("CycleObjective::residual_jacobian: the last evaluation failed");
+  const int n = geometry_.joints();
+  // Into the buffers of the last call: with the same sizes nothing here
+  // allocates (nor do the steering's family distances).
+  cycle_deformation_jacobian(*model_, *workspace_, cycle_, deformation_jacobian_,
+                             settings_.nontrivial ? &angle_jacobian_ : nullptr);
+  GeometryVector steering_gradient = GeometryVector::Zero(3 * n);
+  const double factor = steered() ? steering(&angle_jacobian_, &steering_gradient) : 1.0;
+  // dr'/dp = sqrt(M) dr/dp + r (dM/dp)ᵀ / (2 sqrt(M)), with r unsteered.
+  const double root = std::sqrt(factor);
+  mask_to_measured_sample(deformation_jacobian_);
+  deformation_jacobian_ *= root;
+  if (steered()) {
+    measured_residuals(weighted_deformations_);
+    deformation_jacobian_.noalias() += weighted_deformations_ * (steering_gradient.transpose() / (2.0 * root));
+  }
+  jacobian.noalias() = deformation_jacobian_ * geometry_jacobian_;
+}
+
+}  // namespace loopfarm

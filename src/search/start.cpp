@@ -1,0 +1,175 @@
+#include "loopfarm/search/start.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <stdexcept>
+#include <vector>
+
+#include "loopfarm/search/sampler.hpp"
+
+namespace loopfarm {
+namespace {
+
+Family family_from_name(const std::string& name) {
+  // Every family family_distance measures (the job parser has checked the
+  // name and the joint count; family_distance checks the count again).
+  const std::optional<Family> family = family_from_string(name);
+  if (!family || !has_family_distance(*family)) {
+    throw std::invalid_argument("unknown family \"" + name + "\" to deflate");
+  }
+  return *family;
+}
+
+}  // namespace
+
+ObjectiveSettings objective_settings(const Job& job) {
+  ObjectiveSettings s = ObjectiveSettings::from_loop(job.loop);
+  for (const std::string& name : job.steering.deflate) {
+    const Family family = family_from_name(name);
+    s.deflation.push_back({name, [family](const LoopGeometry& g, GeometryVector* gradient) {
+                             return family_distance(family, g, gradient);
+                           }});
+  }
+  s.deflation_power = job.steering.deflation_power;
+  s.deflation_shift = job.steering.deflation_shift;
+  s.nontrivial = job.steering.nontrivial;
+  s.min_travel = job.steering.min_travel;
+  s.reuse_nearby_cycle = job.optimizer.reuse_nearby_cycle;
+  return s;
+}
+
+CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
+                                    const Eigen::MatrixXd& jacobian, const StartOptions& options) {
+  return analyse_candidate(geometry, pose, verify_motion(geometry, pose, options.verification), jacobian, options);
+}
+
+CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVector& pose,
+                                    VerificationSummary verification, const Eigen::MatrixXd& jacobian,
+                                    const StartOptions& options) {
+  CandidateAnalysis out;
+  out.verification = std::move(verification);
+  // The family is read on the verified motion: from the given pose when it
+  // lies on it, else from a pose of the circuit that moves.
+  const JointVector classified_pose =
+      out.verification.verified && !out.verification.on_motion ? out.verification.pose() : pose;
+  const JointVector& travel = out.verification.joint_travel;
+  // The joint travel is over the verified motion; a loop that could not be
+  // followed has none (every joint would look frozen and the loop trivial).
+  const std::span<const double> travel_span =
+      out.verification.verified ? std::span<const double>(travel.data(), static_cast<size_t>(travel.size()))
+                                : std::span<const double>();
+  out.classification = classify(geometry, classified_pose, travel_span, options.classification);
+  // Near the meeting of two families (a Bennett loop with tiny twists, a
+  // parallelogram) a loop a distance eps off both closes to about eps^2, the
+  // product of the two distances: a local search stops on such loops, and
+  // they verify. When no family fits at the strict tolerance, a verified loop
+  // is therefore classified again with the conditions met to about the square
+  // root of its rigid residual. Strict first, so that an exact Bennett loop
+  // with twists 1e-7 from planar stays a Bennett loop.
+  if (out.classification.family == Family::unclassified && out.verification.verified) {
+    ClassifyOptions loose = options.classification;
+    loose.tolerance = std::max(loose.tolerance, 10.0 * std::sqrt(out.verification.worst_residual));
+    out.classification = classify(geometry, classified_pose, travel_span, loose);
+  }
+  out.canonical = canonical_form(geometry);
+  out.local_dimension = local_dimension(jacobian, options.rank_tolerance);
+  return out;
+}
+
+StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& options) {
+  StartSummary out;
+  out.index = index;
+  out.algorithm = job.optimizer.algorithm;
+  const StartPoint start = draw_start(job.space, job.search.seed, index);
+  out.initial_geometry = job.space.geometry(start.x);
+  out.initial_angles = start.theta;
+
+  // The unsteered energy at the start, for the record (and for comparing
+  // steered with unsteered runs on the same footing).
+  ObjectiveSettings plain = ObjectiveSettings::from_loop(job.loop);
+  // The analysis of a zero (its local dimension from the Jacobian of every
+  // sample's deformations) needs the whole cycle, whatever the search minimised.
+  plain.measure = CycleMeasure::mean;
+  plain.reuse_nearby_cycle = job.optimizer.reuse_nearby_cycle;
+  CycleObjective unsteered(job.space, plain, start.theta);
+  const ObjectiveValue initial = unsteered.evaluate(start.x, nullptr);
+  out.initial_E_mean = initial.ok ? initial.E_mean : std::numeric_limits<double>::quiet_NaN();
+
+  CycleObjective objective(job.space, objective_settings(job), start.theta);
+  // The search's first evaluation is at the start itself, whose cycle the
+  // record above has just walked (steering does not change the cycle).
+  objective.continue_from(unsteered);
+  LocalSearchOptions search;
+  search.settings = job.optimizer;
+  // NLopt's stochastic algorithms: a seed of their own per start.
+  search.random_seed = job.search.seed * 0x9E3779B97F4A7C15ull + index;
+  search.trace = options.trace;
+  const LocalSearchSummary result = local_minimize(objective, start.x, search);
+  out.status = result.status;
+  out.message = result.message;
+  out.evaluations = result.evaluations;
+  out.seconds = result.seconds;
+  out.objective = result.value;
+  out.final_geometry = job.space.geometry(result.x);
+  if (result.status == SearchStatus::evaluation_failed) {
+    out.E_mean = std::numeric_limits<double>::quiet_NaN();
+    out.E_max = out.E_mean;
+    return out;
+  }
+
+  // The final point without steering: its true energy and pose, on the
+  // branch the search followed to it (which an assembly from the start's
+  // angles at the final geometry may miss).
+  unsteered.continue_from(objective);
+  const ObjectiveValue final_value = unsteered.evaluate(result.x, nullptr);
+  if (!final_value.ok) {
+    out.E_mean = std::numeric_limits<double>::quiet_NaN();
+    out.E_max = out.E_mean;
+    return out;
+  }
+  out.E_mean = final_value.E_mean;
+  out.E_max = final_value.E_max;
+  out.failed_samples = final_value.failed_samples;
+  out.branch_jumps = final_value.branch_jumps;
+  out.final_angles = unsteered.start_state().theta;
+  // A failed sample's energy is that of wherever its solve stopped, often
+  // near zero (docs/stability.md, S4): a cycle with one is never a zero.
+  out.zero = out.E_mean <= job.search.zero_threshold && out.failed_samples == 0;
+  if (!out.zero) return out;
+
+  Eigen::MatrixXd jacobian;
+  unsteered.residual_jacobian(jacobian);
+  std::vector<bool> is_length;
+  for (int index : job.space.free_indices()) {
+    const int kind = index / job.space.joints;
+    is_length.push_back(kind == static_cast<int>(ParameterKind::a) || kind == static_cast<int>(ParameterKind::d));
+  }
+  // A zero's pose is on its motion (the cycle went through it with no
+  // energy): only the circuit through it is traced, in steps of 1 deg of
+  // arclength, with the input's dead points solved for (the other joints'
+  // ranges from the traced points).
+  StartOptions analysis = options;
+  analysis.verification.all_circuits = false;
+  analysis.verification.all_extremes = false;
+  analysis.verification.steps_per_turn = std::min(analysis.verification.steps_per_turn, 360);
+  const Eigen::MatrixXd columns =
+      dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry));
+  out.candidate = analyse_candidate(out.final_geometry, out.final_angles, columns, analysis);
+  // The circuit through the search's pose cannot always be followed from it:
+  // a window's samples may step over a gap in the input's range that holds
+  // theta0 (the pose at theta0 is then elastic, not closed), the tracer may
+  // stall near a singular pose, or a loop with two freedoms may be traced
+  // with a joint held whose curve ends. A zero that is not verified so is
+  // analysed as `loopfarm verify` does it: every circuit, the one covering
+  // theta0 preferred.
+  if (!out.candidate.verification.verified) {
+    StartOptions whole = options;
+    whole.verification.theta0 = out.initial_angles[0];
+    out.candidate = analyse_candidate(out.final_geometry, out.final_angles, columns, whole);
+  }
+  return out;
+}
+
+}  // namespace loopfarm
