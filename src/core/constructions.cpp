@@ -26,16 +26,6 @@ constexpr double kTolerance = 1e-12;
   throw std::invalid_argument(message.str());
 }
 
-LoopGeometry four(double a1, double a2, double a3, double a4, double t1, double t2, double t3, double t4) {
-  LoopGeometry g;
-  g.a.resize(4);
-  g.alpha.resize(4);
-  g.d.setZero(4);
-  g.a << a1, a2, a3, a4;
-  g.alpha << t1, t2, t3, t4;
-  return g;
-}
-
 // ---------------------------------------------------------------------------
 // Four-bars
 
@@ -408,7 +398,7 @@ FourBarKind four_bar_kind(const LoopGeometry& g, int input) {
 LoopGeometry parallelogram_four_bar(double a, double b) {
   if (!(a > 0.0) || !std::isfinite(a)) bad("parallelogram_four_bar: a must be > 0", a);
   if (!(b > 0.0) || !std::isfinite(b)) bad("parallelogram_four_bar: b must be > 0", b);
-  return four(a, b, a, b, 0.0, 0.0, 0.0, 0.0);
+  return planar_four_bar(a, b, a, b);
 }
 
 // ---------------------------------------------------------------------------
@@ -522,7 +512,7 @@ void check_pair(const BennettPairParameters& p, const char* who) {
 
 // Bennett loop (a, alpha), (b, beta), (a, alpha), (b, beta), zero offsets.
 LoopGeometry bennett(double a, double alpha, double b, double beta) {
-  return four(a, b, a, b, alpha, beta, alpha, beta);
+  return four_bar(a, b, a, b, alpha, beta, alpha, beta);
 }
 
 // A closed pose at joint 0's angle t, by the loop's setup.

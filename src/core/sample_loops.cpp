@@ -22,31 +22,31 @@ struct SplitMix64 {
   }
 };
 
-LoopGeometry four(double a1, double a2, double a3, double a4, double t1, double t2, double t3,
-                  double t4) {
+}  // namespace
+
+LoopGeometry four_bar(double a1, double a2, double a3, double a4, double alpha1, double alpha2, double alpha3,
+                      double alpha4) {
   LoopGeometry g;
   g.a.resize(4);
   g.alpha.resize(4);
   g.d.setZero(4);
   g.a << a1, a2, a3, a4;
-  g.alpha << t1, t2, t3, t4;
+  g.alpha << alpha1, alpha2, alpha3, alpha4;
   return g;
 }
 
-}  // namespace
-
 LoopGeometry bennett_loop(double a1, double alpha1, double alpha2) {
   const double a2 = a1 * std::sin(alpha2) / std::sin(alpha1);
-  return four(a1, a2, a1, a2, alpha1, alpha2, alpha1, alpha2);
+  return four_bar(a1, a2, a1, a2, alpha1, alpha2, alpha1, alpha2);
 }
 
 LoopGeometry bennett_loop_line_symmetric(double a1, double alpha1, double alpha2) {
   const double a2 = a1 * std::sin(alpha2) / std::sin(alpha1);
-  return four(a1, a2, a1, a2, alpha1, -alpha2, alpha1, -alpha2);
+  return four_bar(a1, a2, a1, a2, alpha1, -alpha2, alpha1, -alpha2);
 }
 
 LoopGeometry paper_bennett_loop() {
-  return four(2.0, 4.0, 2.0, 4.0, kPi / 6.0, kPi / 2.0, kPi / 6.0, kPi / 2.0);
+  return four_bar(2.0, 4.0, 2.0, 4.0, kPi / 6.0, kPi / 2.0, kPi / 6.0, kPi / 2.0);
 }
 
 JointVector bennett_angles(const LoopGeometry& g, double theta1) {
@@ -66,11 +66,11 @@ JointVector bennett_angles_line_symmetric(const LoopGeometry& g, double theta1) 
 }
 
 LoopGeometry planar_four_bar(double a1, double a2, double a3, double a4) {
-  return four(a1, a2, a3, a4, 0.0, 0.0, 0.0, 0.0);
+  return four_bar(a1, a2, a3, a4, 0.0, 0.0, 0.0, 0.0);
 }
 
 LoopGeometry spherical_four_bar(double alpha1, double alpha2, double alpha3, double alpha4) {
-  return four(0.0, 0.0, 0.0, 0.0, alpha1, alpha2, alpha3, alpha4);
+  return four_bar(0.0, 0.0, 0.0, 0.0, alpha1, alpha2, alpha3, alpha4);
 }
 
 LoopGeometry random_loop(int n, std::uint64_t seed) {

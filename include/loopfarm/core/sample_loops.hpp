@@ -29,6 +29,11 @@ JointVector bennett_angles(const LoopGeometry& bennett, double theta1);
 // theta4 = theta2, tan(theta1/2) tan(theta2/2) = cos((alpha2+alpha1)/2) / cos((alpha2-alpha1)/2).
 JointVector bennett_angles_line_symmetric(const LoopGeometry& bennett, double theta1);
 
+// A 4R with zero offsets: lengths (a1 .. a4) and twists (alpha1 .. alpha4) as
+// given, link i joining axis i to axis i+1.
+LoopGeometry four_bar(double a1, double a2, double a3, double a4, double alpha1, double alpha2, double alpha3,
+                      double alpha4);
+
 // Planar four-bar, all twists zero, link lengths (a1, a2, a3, a4) going around
 // the loop; a1 is the input crank's link.
 LoopGeometry planar_four_bar(double a1, double a2, double a3, double a4);
