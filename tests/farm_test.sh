@@ -221,6 +221,13 @@ refuse)
   ;;
 report)
   run1 --db "$tmp/r.sqlite"
+  # A finished run's database is one file, and a report keeps it one file
+  # (before any sqlite3 below, whose read-write connection would tidy up).
+  companions() { find "$tmp" -maxdepth 1 -name 'r.sqlite-*' -printf '%f ' | sed 's/ $//'; }
+  [[ -z "$(companions)" ]] || fail "after the run the database is not one file: $(companions)"
+  "$loopfarm" report "$tmp/r.sqlite" --summary >/dev/null || fail "report --summary exited with $?"
+  "$loopfarm" report "$tmp/r.sqlite" --format json >/dev/null || fail "report --format json exited with $?"
+  [[ -z "$(companions)" ]] || fail "reading the database left $(companions) beside it"
   n="$(sqlite3 "$tmp/r.sqlite" 'SELECT COUNT(*) FROM candidates')"
   "$loopfarm" report "$tmp/r.sqlite" >"$tmp/table.txt" || fail "report exited with $?"
   [[ "$(wc -l <"$tmp/table.txt")" -eq $((n + 1)) ]] || fail "the table has not $n rows and a header"

@@ -16,6 +16,7 @@
 #include <functional>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -112,6 +113,28 @@ std::string fmt(double x) {
 double real(sqlite3* db, const std::string& sql) {
   const std::string text = value(db, sql);
   return text == "NULL" || text == "no row" ? std::nan("") : std::stod(text);
+}
+
+// The same through a read-only connection of the test's own to the file of
+// `db`, opened for the one query: what any reader of the file sees.
+std::vector<std::vector<std::string>> rows(const ResultsDatabase& db, const std::string& sql) {
+  RawConnection reader(db.path(), SQLITE_OPEN_READONLY);
+  return rows(reader.db, sql);
+}
+
+std::string value(const ResultsDatabase& db, const std::string& sql) {
+  RawConnection reader(db.path(), SQLITE_OPEN_READONLY);
+  return value(reader.db, sql);
+}
+
+std::int64_t count(const ResultsDatabase& db, const std::string& table) {
+  RawConnection reader(db.path(), SQLITE_OPEN_READONLY);
+  return count(reader.db, table);
+}
+
+double real(const ResultsDatabase& db, const std::string& sql) {
+  RawConnection reader(db.path(), SQLITE_OPEN_READONLY);
+  return real(reader.db, sql);
 }
 
 std::string file_bytes(const std::string& path) {
@@ -216,10 +239,14 @@ TEST_F(ResultsDatabaseTest, CreatesTheSchemaWithItsPragmas) {
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
     EXPECT_EQ(db.path(), path);
     EXPECT_EQ(db.mode(), DatabaseMode::write);
-    sqlite3* h = db.handle();
-    EXPECT_EQ(value(h, "PRAGMA foreign_keys"), "1");
-    EXPECT_EQ(value(h, "PRAGMA synchronous"), "1");  // NORMAL
-    EXPECT_EQ(value(h, "PRAGMA busy_timeout"), std::to_string(kDatabaseBusyTimeoutMs));
+    const ConnectionSettings settings = db.connection_settings();
+    EXPECT_TRUE(settings.foreign_keys);
+    EXPECT_EQ(settings.synchronous, 1);  // NORMAL
+    EXPECT_EQ(settings.busy_timeout_ms, kDatabaseBusyTimeoutMs);
+    EXPECT_EQ(settings.journal_mode, "wal");
+    EXPECT_FALSE(settings.query_only);
+    RawConnection raw(path, SQLITE_OPEN_READONLY);
+    EXPECT_EQ(value(raw.db, "PRAGMA journal_mode"), "wal");
   }
   RawConnection raw(path, SQLITE_OPEN_READONLY);
   EXPECT_EQ(value(raw.db, "PRAGMA user_version"), "1");
@@ -272,7 +299,7 @@ TEST_F(ResultsDatabaseTest, ResumeFindsTheRunAndItsCommittedStarts) {
   const std::vector<bool> expected = {true, true, true, false, false, true, false, true, false};
   for (std::uint64_t i = 0; i < expected.size(); ++i) EXPECT_EQ(run.is_committed(i), expected[i]) << i;
   EXPECT_FALSE(run.is_committed(~0ull));
-  EXPECT_EQ(rows(db.handle(), "SELECT starts, job_path, starts_done FROM runs"),
+  EXPECT_EQ(rows(db, "SELECT starts, job_path, starts_done FROM runs"),
             (std::vector<std::vector<std::string>>{{"500", "elsewhere/test.toml", "5"}}));
 }
 
@@ -316,7 +343,7 @@ TEST_F(ResultsDatabaseTest, NewRunAddsARunAndBecomesTheOneResumed) {
   EXPECT_FALSE(resumed.created);
   // Only the latest run resumes: the first job is now "another job".
   EXPECT_NE(error_of([&] { db.open_run(identity()); }).find("holds run 3"), std::string::npos);
-  EXPECT_EQ(value(db.handle(), "SELECT group_concat(job_hash, ' ') FROM runs"),
+  EXPECT_EQ(value(db, "SELECT group_concat(job_hash, ' ') FROM runs"),
             job_hash(identity().job_text) + " " + job_hash("other job") + " " + job_hash("other job"));
 }
 
@@ -326,7 +353,7 @@ TEST_F(ResultsDatabaseTest, DuplicateStartIndexThrowsAndWritesNothing) {
   const std::int64_t run = db.open_run(identity()).run_id;
   db.begin_session(run, 2);
   db.commit(run, {plain_start(0, 1.0), verified_start(1, bennett_canonical(), "k1"), plain_start(5, 1.0)});
-  sqlite3* h = db.handle();
+  const ResultsDatabase& h = db;
   auto snapshot = [&] {
     return std::vector<std::int64_t>{count(h, "starts"), count(h, "candidates"),
                                      std::stoll(value(h, "SELECT starts_done FROM runs")),
@@ -368,7 +395,7 @@ TEST_F(ResultsDatabaseTest, DeduplicationIsIndependentOfCommitOrder) {
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
     const std::int64_t run = db.open_run(identity()).run_id;
     for (const auto& records : commits) db.commit(run, records);
-    return rows(db.handle(), "SELECT * FROM candidates ORDER BY candidate_id");
+    return rows(db, "SELECT * FROM candidates ORDER BY candidate_id");
   };
   const auto forward = build("forward.sqlite", {{early}, {late}, {other}});
   const auto backward = build("backward.sqlite", {{late}, {early}, {other}});
@@ -380,11 +407,11 @@ TEST_F(ResultsDatabaseTest, DeduplicationIsIndependentOfCommitOrder) {
 
   const std::string path = file("forward.sqlite");
   ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
-  EXPECT_EQ(rows(db.handle(), "SELECT candidate_id, canonical_key, first_run, first_start, hits, E_mean, "
+  EXPECT_EQ(rows(db, "SELECT candidate_id, canonical_key, first_run, first_start, hits, E_mean, "
                               "family_residual FROM candidates ORDER BY candidate_id"),
             (std::vector<std::vector<std::string>>{{"1", "key-a", "1", "3", "2", fmt(1e-22), fmt(1e-15 * 4.0)},
                                                    {"2", "key-c", "1", "5", "1", fmt(1e-20), fmt(1e-15 * 6.0)}}));
-  EXPECT_EQ(rows(db.handle(), "SELECT start_index, candidate_id FROM starts ORDER BY start_index"),
+  EXPECT_EQ(rows(db, "SELECT start_index, candidate_id FROM starts ORDER BY start_index"),
             (std::vector<std::vector<std::string>>{{"3", "1"}, {"5", "2"}, {"8", "1"}}));
 }
 
@@ -407,12 +434,12 @@ TEST_F(ResultsDatabaseTest, DeduplicationRules) {
   EXPECT_EQ(summary.zeros, 5);
   EXPECT_EQ(summary.new_candidates, 3);
   EXPECT_EQ(summary.repeat_hits, 2);
-  EXPECT_EQ(rows(db.handle(), "SELECT first_start, hits FROM candidates ORDER BY candidate_id"),
+  EXPECT_EQ(rows(db, "SELECT first_start, hits FROM candidates ORDER BY candidate_id"),
             (std::vector<std::vector<std::string>>{{"0", "2"}, {"2", "2"}, {"4", "1"}}));
   // A looser tolerance merges what a tight one keeps apart, with the nearest
   // candidate: 3e-5 from the second, 5e-5 from the third.
   db.commit(run, {verified_start(5, shifted(bennett_canonical(), -3e-5), "near-2")}, 1e-4);
-  EXPECT_EQ(rows(db.handle(), "SELECT first_start, hits FROM candidates ORDER BY candidate_id"),
+  EXPECT_EQ(rows(db, "SELECT first_start, hits FROM candidates ORDER BY candidate_id"),
             (std::vector<std::vector<std::string>>{{"0", "2"}, {"2", "3"}, {"4", "1"}}));
 }
 
@@ -444,9 +471,9 @@ TEST_F(ResultsDatabaseTest, DeduplicationAcrossGridCellEdgesAndAmongManyEqualVal
   const CommitSummary summary = db.commit(run, records);
   EXPECT_EQ(summary.new_candidates, 1 + 1000);
   EXPECT_EQ(summary.repeat_hits, 2);
-  EXPECT_EQ(rows(db.handle(), "SELECT hits FROM candidates WHERE first_start = 0"),
+  EXPECT_EQ(rows(db, "SELECT hits FROM candidates WHERE first_start = 0"),
             (std::vector<std::vector<std::string>>{{"2"}}));
-  EXPECT_EQ(rows(db.handle(), "SELECT hits FROM candidates WHERE first_start = 510"),
+  EXPECT_EQ(rows(db, "SELECT hits FROM candidates WHERE first_start = 510"),
             (std::vector<std::vector<std::string>>{{"2"}}));
   EXPECT_THROW(db.commit(run, {plain_start(3000, 1.0)}, 1e-3), std::invalid_argument);
 }
@@ -546,7 +573,7 @@ TEST_F(ResultsDatabaseTest, EmptyFileIsInitialised) {
   ASSERT_TRUE(fs::exists(path));
   EXPECT_NE(error_of([&] { ResultsDatabase::open(path, DatabaseMode::read); }).find("empty"), std::string::npos);
   ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
-  EXPECT_EQ(value(db.handle(), "PRAGMA user_version"), "1");
+  EXPECT_EQ(value(db, "PRAGMA user_version"), "1");
 }
 
 // The writer checkpoints before it closes, so that the file alone holds every
@@ -588,16 +615,16 @@ TEST_F(ResultsDatabaseTest, ReadModeWorksWhileAWriterHoldsATransaction) {
                 "VALUES (1, 99, 'failure', 0, 0, 0)");
   {
     ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
-    EXPECT_EQ(count(reader.handle(), "starts"), 2);  // the committed state only
-    EXPECT_EQ(value(reader.handle(), "SELECT COUNT(*) FROM zero_minima"), "0");
+    EXPECT_EQ(count(reader, "starts"), 2);  // the committed state only
+    EXPECT_EQ(value(reader, "SELECT COUNT(*) FROM zero_minima"), "0");
     // A reader never writes.
     EXPECT_NE(error_of([&] { reader.commit(run, {plain_start(2, 1.0)}); }).find("read-only"), std::string::npos);
     EXPECT_NE(error_of([&] { reader.open_run(identity()); }).find("read-only"), std::string::npos);
-    EXPECT_NE(value(reader.handle(), "PRAGMA query_only"), "0");
+    EXPECT_TRUE(reader.connection_settings().query_only);
   }
   exec(busy.db, "COMMIT");
   ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
-  EXPECT_EQ(count(reader.handle(), "starts"), 3);
+  EXPECT_EQ(count(reader, "starts"), 3);
 }
 
 TEST_F(ResultsDatabaseTest, GeometryColumnsAreNullBeyondNAndAboveTheReportThreshold) {
@@ -606,7 +633,7 @@ TEST_F(ResultsDatabaseTest, GeometryColumnsAreNullBeyondNAndAboveTheReportThresh
   StartRecord nan = plain_start(2, std::numeric_limits<double>::quiet_NaN());
   nan.status = "evaluation_failed";
   db.commit(run, {plain_start(0, 1e-7), plain_start(1, 1e-3), nan, verified_start(3, bennett_canonical(), "k")});
-  sqlite3* h = db.handle();
+  const ResultsDatabase& h = db;
   // Which columns hold a value: the first 4 of each list, for starts 0 and 3 only.
   std::string presence = "SELECT start_index";
   for (const char* name : {"a", "alpha", "d"}) {
@@ -645,32 +672,32 @@ TEST_F(ResultsDatabaseTest, SessionsTrackInvocations) {
   const std::string path = file("r.sqlite");
   ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
   const std::int64_t run = db.open_run(identity()).run_id;
-  EXPECT_EQ(value(db.handle(), "SELECT status FROM runs"), "stopped");
+  EXPECT_EQ(value(db, "SELECT status FROM runs"), "stopped");
   EXPECT_EQ(db.begin_session(run, 4), 1);
   EXPECT_NE(error_of([&] { db.begin_session(run, 4); }).find("still open"), std::string::npos);
-  EXPECT_EQ(rows(db.handle(), "SELECT status, ranks, ended_at FROM runs"),
+  EXPECT_EQ(rows(db, "SELECT status, ranks, ended_at FROM runs"),
             (std::vector<std::vector<std::string>>{{"running", "4", "NULL"}}));
   db.commit(run, {plain_start(0, 1.0), plain_start(1, 1e-13)});
   db.end_session(RunStatus::stopped);
   EXPECT_NE(error_of([&] { db.end_session(RunStatus::stopped); }).find("no session"), std::string::npos);
   EXPECT_THROW(db.end_session(RunStatus::running), std::invalid_argument);
-  EXPECT_EQ(rows(db.handle(), "SELECT status, ended_at IS NULL, starts_done FROM runs"),
+  EXPECT_EQ(rows(db, "SELECT status, ended_at IS NULL, starts_done FROM runs"),
             (std::vector<std::vector<std::string>>{{"stopped", "1", "2"}}));
 
   EXPECT_EQ(db.begin_session(run, 2), 2);
   db.commit(run, {plain_start(2, 1.0)});
   db.commit(run, {plain_start(3, 1.0)});
   db.end_session(RunStatus::complete);
-  EXPECT_EQ(rows(db.handle(), "SELECT session_id, run_id, ranks, status, starts_done, ended_at IS NOT NULL, "
+  EXPECT_EQ(rows(db, "SELECT session_id, run_id, ranks, status, starts_done, ended_at IS NOT NULL, "
                               "loopfarm_version FROM sessions ORDER BY 1"),
             (std::vector<std::vector<std::string>>{{"1", "1", "4", "stopped", "2", "1", LOOPFARM_VERSION},
                                                    {"2", "1", "2", "complete", "2", "1", LOOPFARM_VERSION}}));
-  EXPECT_EQ(rows(db.handle(), "SELECT status, ranks, starts_done, ended_at IS NOT NULL, loopfarm_version FROM runs"),
+  EXPECT_EQ(rows(db, "SELECT status, ranks, starts_done, ended_at IS NOT NULL, loopfarm_version FROM runs"),
             (std::vector<std::vector<std::string>>{{"complete", "2", "4", "1", LOOPFARM_VERSION}}));
-  EXPECT_EQ(rows(db.handle(), "SELECT start_index, session_id FROM starts ORDER BY 1"),
+  EXPECT_EQ(rows(db, "SELECT start_index, session_id FROM starts ORDER BY 1"),
             (std::vector<std::vector<std::string>>{{"0", "1"}, {"1", "1"}, {"2", "2"}, {"3", "2"}}));
   // ISO 8601 UTC.
-  const std::string started = value(db.handle(), "SELECT started_at FROM runs");
+  const std::string started = value(db, "SELECT started_at FROM runs");
   EXPECT_EQ(started.size(), 20u) << started;
   EXPECT_EQ(started[10], 'T');
   EXPECT_EQ(started.back(), 'Z');
@@ -684,7 +711,7 @@ TEST_F(ResultsDatabaseTest, ViewsAnswerTheCommonQuestions) {
   db.commit(run, {plain_start(0, 0.5), verified_start(1, bennett_canonical(), "k", 3e-20),
                   verified_start(2, bennett_canonical(), "k", 3e-25), plain_start(3, 0.005), unverified,
                   plain_start(5, 0.0)});
-  sqlite3* h = db.handle();
+  const ResultsDatabase& h = db;
   EXPECT_EQ(rows(h, "SELECT start_index, verified, family FROM zero_minima"),
             (std::vector<std::vector<std::string>>{
                 {"5", "0", "NULL"}, {"2", "1", "bennett"}, {"1", "1", "bennett"}, {"4", "0", "NULL"}}));
@@ -701,13 +728,213 @@ TEST_F(ResultsDatabaseTest, ViewsAnswerTheCommonQuestions) {
 
 TEST_F(ResultsDatabaseTest, MovesKeepTheConnection) {
   ResultsDatabase a = ResultsDatabase::open(file("r.sqlite"), DatabaseMode::write);
-  sqlite3* h = a.handle();
+  const std::int64_t run = a.open_run(identity()).run_id;
+  a.begin_session(run, 1);  // the session belongs to the connection
   ResultsDatabase b = std::move(a);
-  EXPECT_EQ(b.handle(), h);
+  EXPECT_EQ(b.path(), file("r.sqlite"));
   ResultsDatabase c = ResultsDatabase::open(file("s.sqlite"), DatabaseMode::write);
   c = std::move(b);
-  EXPECT_EQ(c.handle(), h);
-  EXPECT_EQ(c.open_run(identity()).run_id, 1);
+  EXPECT_EQ(c.path(), file("r.sqlite"));
+  EXPECT_EQ(c.mode(), DatabaseMode::write);
+  c.commit(run, {plain_start(0, 1.0)});
+  c.end_session(RunStatus::complete);
+  EXPECT_EQ(rows(c, "SELECT starts_done, session_id FROM runs JOIN starts USING (run_id)"),
+            (std::vector<std::vector<std::string>>{{"1", "1"}}));
+  EXPECT_THROW(a.path(), std::logic_error);
+}
+
+// The typed queries a reader has, each against SQL of the test's own on a
+// connection of its own: the two must agree row for row.
+TEST_F(ResultsDatabaseTest, TypedQueriesAgreeWithPlainSql) {
+  const std::string path = file("r.sqlite");
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  const std::int64_t first = db.open_run(identity()).run_id;
+  db.begin_session(first, 3);
+  StartRecord failed = plain_start(6, std::numeric_limits<double>::quiet_NaN());
+  failed.status = "evaluation_failed";
+  db.commit(first, {plain_start(0, 0.5), verified_start(1, bennett_canonical(), "k", 3e-20),
+                    verified_start(2, bennett_canonical(), "k", 3e-25), plain_start(3, 0.005), plain_start(5, 0.0),
+                    failed});
+  db.end_session(RunStatus::stopped);
+  RunIdentity other = identity("other job", 7);
+  other.starts = 5;
+  const std::int64_t second = db.open_run(other, true).run_id;
+  StartRecord planar = verified_start(0, geometry_deg({1, 2, 1, 2}, {0, 0, 0, 0}, {0, 0, 0, 0}), "p", 2e-30);
+  planar.candidate.family = "planar";
+  StartRecord odd = verified_start(1, geometry_deg({1, 3, 1, 3}, {10, 20, 30, 40}, {0, 0, 0, 0}), "u", 1e-21);
+  odd.candidate.family = "unclassified";
+  db.commit(second, {planar, odd, plain_start(2, 2e-4)});
+
+  const std::vector<RunRow> runs = db.runs();
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(rows(db, "SELECT run_id, job_path, seed, starts, starts_done, status, ranks, joints FROM runs"),
+            (std::vector<std::vector<std::string>>{
+                {std::to_string(runs[0].run_id), runs[0].job_path, std::to_string(runs[0].seed),
+                 std::to_string(runs[0].starts), std::to_string(runs[0].starts_done), runs[0].status,
+                 std::to_string(runs[0].ranks), std::to_string(runs[0].joints)},
+                {std::to_string(runs[1].run_id), runs[1].job_path, std::to_string(runs[1].seed),
+                 std::to_string(runs[1].starts), std::to_string(runs[1].starts_done), runs[1].status, "NULL",
+                 std::to_string(runs[1].joints)}}));
+  EXPECT_EQ(runs[0].status, "stopped");
+  EXPECT_EQ(runs[1].seed, 7u);
+  EXPECT_EQ(runs[0].started_at, value(db, "SELECT started_at FROM runs WHERE run_id = 1"));
+
+  for (const std::optional<std::int64_t> run : {std::optional<std::int64_t>{}, std::optional<std::int64_t>{first},
+                                                std::optional<std::int64_t>{second}}) {
+    const std::string where = run ? " WHERE run_id = " + std::to_string(*run) : "";
+    const StartCounts c = db.start_counts(run);
+    EXPECT_EQ(c.starts, count(db, "starts" + where));
+    EXPECT_EQ(c.zeros, std::stoll(value(db, "SELECT COUNT(*) FROM starts" + where + (run ? " AND" : " WHERE") +
+                                                " zero = 1")));
+    EXPECT_EQ(c.verified, std::stoll(value(db, "SELECT COUNT(*) FROM starts" + where + (run ? " AND" : " WHERE") +
+                                                   " verified = 1")));
+    EXPECT_EQ(c.total_seconds, real(db, "SELECT SUM(seconds) FROM starts" + where));
+    EXPECT_DOUBLE_EQ(c.mean_seconds, c.total_seconds / static_cast<double>(c.starts));
+
+    std::vector<std::vector<std::string>> statuses;
+    for (const StatusCount& s : db.status_counts(run)) statuses.push_back({s.status, std::to_string(s.starts)});
+    EXPECT_EQ(statuses, rows(db, "SELECT status, COUNT(*) AS n FROM starts" + where + " GROUP BY status ORDER BY n "
+                                 "DESC, status"));
+
+    const std::string found_first = run ? " WHERE first_run = " + std::to_string(*run) : "";
+    std::vector<std::vector<std::string>> families;
+    for (const FamilyCount& f : db.family_counts(run)) {
+      families.push_back({f.family, std::to_string(f.candidates), std::to_string(f.hits)});
+    }
+    EXPECT_EQ(families, rows(db, "SELECT family, COUNT(*), SUM(hits) FROM candidates" + found_first +
+                                     " GROUP BY family ORDER BY family"));
+
+    // The histogram against the schema's own view (SQLite's log10).
+    const EnergyHistogram h = db.energy_histogram(run);
+    std::vector<std::vector<std::string>> bins;
+    if (h.zeros) bins.push_back({"NULL", std::to_string(h.zeros)});
+    for (const auto& [decade, n] : h.decades) bins.push_back({std::to_string(decade), std::to_string(n)});
+    EXPECT_EQ(bins, rows(db, "SELECT log10_E_mean, SUM(starts) FROM energy_histogram" + where +
+                                 " GROUP BY log10_E_mean ORDER BY log10_E_mean IS NOT NULL, log10_E_mean"));
+    EXPECT_EQ(h.missing, std::stoll(value(db, "SELECT COUNT(*) FROM starts" + where + (run ? " AND" : " WHERE") +
+                                                  " E_mean IS NULL")));
+  }
+  EXPECT_EQ(db.energy_histogram(first).missing, 1);
+  EXPECT_EQ(db.candidate_count(), count(db, "candidates"));
+
+  // Candidates: unclassified first, then by energy; filters and paging.
+  auto ids = [](const std::vector<CandidateRow>& list) {
+    std::vector<std::vector<std::string>> out;
+    for (const CandidateRow& r : list) out.push_back({std::to_string(r.id)});
+    return out;
+  };
+  const std::string order = " ORDER BY family <> 'unclassified', E_mean, candidate_id";
+  EXPECT_EQ(ids(db.candidates({})), rows(db, "SELECT candidate_id FROM candidates" + order));
+  EXPECT_EQ(db.candidates({}).front().family, "unclassified");
+  CandidateFilter bennett;
+  bennett.family = "bennett";
+  EXPECT_EQ(ids(db.candidates(bennett)), rows(db, "SELECT candidate_id FROM candidates WHERE family = 'bennett'"));
+  CandidateFilter low;
+  low.max_energy = 1e-22;
+  EXPECT_EQ(ids(db.candidates(low)), rows(db, "SELECT candidate_id FROM candidates WHERE E_mean <= 1e-22" + order));
+  CandidateFilter by_run;
+  by_run.first_run = second;
+  EXPECT_EQ(ids(db.candidates(by_run)),
+            rows(db, "SELECT candidate_id FROM candidates WHERE first_run = " + std::to_string(second) + order));
+  CandidateFilter page;
+  page.limit = 1;
+  page.offset = 1;
+  EXPECT_EQ(ids(db.candidates(page)), rows(db, "SELECT candidate_id FROM candidates" + order + " LIMIT 1 OFFSET 1"));
+  page.offset = 10;
+  EXPECT_TRUE(db.candidates(page).empty());
+
+  // One row's every field against its columns.
+  const CandidateRow row = db.candidates(bennett).at(0);
+  EXPECT_EQ(rows(db, "SELECT family, setup, detail, hits, first_run, first_start, local_dimension, free_parameters, "
+                     "full_turn, joints FROM candidates WHERE candidate_id = " + std::to_string(row.id)),
+            (std::vector<std::vector<std::string>>{{row.family, row.setup, row.detail, std::to_string(row.hits),
+                                                    std::to_string(row.first_run), std::to_string(row.first_start),
+                                                    std::to_string(row.local_dimension),
+                                                    std::to_string(row.free_parameters), row.full_turn ? "1" : "0",
+                                                    std::to_string(row.joints)}}));
+  const std::string id = " FROM candidates WHERE candidate_id = " + std::to_string(row.id);
+  EXPECT_EQ(row.E_mean, real(db, "SELECT E_mean" + id));
+  EXPECT_EQ(row.family_residual, real(db, "SELECT family_residual" + id));
+  EXPECT_TRUE(std::isnan(row.trivial_residual));  // +inf is stored as NULL
+  ASSERT_EQ(row.a.size(), 4u);
+  ASSERT_EQ(row.alpha_deg.size(), 4u);
+  ASSERT_EQ(row.d.size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    const std::string k = std::to_string(i + 1);
+    EXPECT_EQ(row.a[static_cast<size_t>(i)], real(db, "SELECT a" + k + id));
+    EXPECT_EQ(row.alpha_deg[static_cast<size_t>(i)], real(db, "SELECT alpha" + k + "_deg" + id));
+    EXPECT_EQ(row.d[static_cast<size_t>(i)], real(db, "SELECT d" + k + id));
+  }
+}
+
+// A snapshot sees one committed state while a writer goes on committing.
+TEST_F(ResultsDatabaseTest, ASnapshotSeesOneState) {
+  const std::string path = file("r.sqlite");
+  ResultsDatabase writer = ResultsDatabase::open(path, DatabaseMode::write);
+  const std::int64_t run = writer.open_run(identity()).run_id;
+  writer.commit(run, {plain_start(0, 1.0)});
+  const ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
+  {
+    const ResultsDatabase::Snapshot snapshot = reader.snapshot();
+    EXPECT_EQ(reader.start_counts().starts, 1);
+    writer.commit(run, {plain_start(1, 1.0)});
+    EXPECT_EQ(reader.start_counts().starts, 1);
+  }
+  EXPECT_EQ(reader.start_counts().starts, 2);
+}
+
+// A finished database is one file, and reading it keeps it one file.
+TEST_F(ResultsDatabaseTest, AClosedDatabaseAndItsReadersLeaveOneFile) {
+  const std::string path = file("r.sqlite");
+  auto companions = [&] {
+    std::vector<std::string> out;
+    for (const char* suffix : {"-wal", "-shm", "-journal"}) {
+      if (fs::exists(path + suffix)) out.push_back(suffix);
+    }
+    return out;
+  };
+  const std::vector<std::string> none;
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::int64_t run = db.open_run(identity()).run_id;
+    db.commit(run, {plain_start(0, 1.0), verified_start(1, bennett_canonical(), "k")});
+    EXPECT_EQ(companions(), (std::vector<std::string>{"-wal", "-shm"}));  // WAL while it writes
+    // A reader during the run works, and leaves the writer's files alone.
+    {
+      const ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
+      EXPECT_EQ(reader.start_counts().starts, 2);
+      EXPECT_TRUE(reader.connection_settings().query_only);
+    }
+    EXPECT_EQ(companions(), (std::vector<std::string>{"-wal", "-shm"}));
+  }
+  EXPECT_EQ(companions(), none);
+  const std::string bytes = file_bytes(path);
+  for (int i = 0; i < 2; ++i) {
+    {
+      const ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
+      EXPECT_EQ(reader.candidates({}).size(), 1u);
+      EXPECT_TRUE(reader.connection_settings().query_only);
+      EXPECT_NE(error_of([&] { const_cast<ResultsDatabase&>(reader).commit(1, {plain_start(5, 1.0)}); })
+                    .find("read-only"),
+                std::string::npos);
+    }
+    EXPECT_EQ(companions(), none);
+    EXPECT_EQ(file_bytes(path), bytes);  // read, not written
+  }
+  // A plain read-only connection, by contrast, leaves both behind; a reader
+  // then neither removes them nor fails.
+  {
+    RawConnection raw(path, SQLITE_OPEN_READONLY);
+    EXPECT_EQ(count(raw.db, "starts"), 2);
+  }
+  const std::vector<std::string> left = companions();
+  EXPECT_EQ(left, (std::vector<std::string>{"-wal", "-shm"}));
+  {
+    const ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
+    EXPECT_EQ(reader.start_counts().starts, 2);
+  }
+  EXPECT_EQ(companions(), left);
+  EXPECT_EQ(file_bytes(path), bytes);
 }
 
 }  // namespace

@@ -11,25 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "loopfarm/farm/results_database.hpp"
+
 namespace loopfarm::cli {
 
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// One row of the candidates table, as the report reads it (NULL is NaN).
-struct CandidateRow {
-  long long id = 0;
-  std::string family, setup, detail;
-  double E_mean = kNaN, E_max = kNaN;
-  long long hits = 0, first_run = 0, first_start = 0;
-  int local_dimension = 0, free_parameters = 0;
-  double rigid_residual = kNaN, family_residual = kNaN;
-  double bennett_residual = kNaN, planar_residual = kNaN, spherical_residual = kNaN,
-         trivial_residual = kNaN;
-  bool full_turn = false;
-  double range_lo_deg = kNaN, range_hi_deg = kNaN;
-  int joints = 0;
-  std::vector<double> a, alpha_deg, d;  // canonical geometry, L = 1, twists in degrees
-};
 
 // The dimension of a family (free real parameters, scale included, in the full
 // 3n-parameter space) as docs/families.md and docs/classification.md give it;

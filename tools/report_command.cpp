@@ -6,7 +6,6 @@
 // 2), not listed from whatever its pages happen to hold.
 #include "report_command.hpp"
 
-#include <sqlite3.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -52,50 +51,18 @@ struct ReportArguments {
   bool summary = false;
 };
 
-// An SQLite failure while reading DB: damage the open-time check could not
+// A database error while reading DB: damage the open-time check could not
 // see (or that appeared since) is bad input, exit 2, like a file refused at
 // open; anything else (out of memory, I/O) is a failure.
-[[noreturn]] void throw_read_error(sqlite3* db, const std::string& path) {
-  const int rc = sqlite3_errcode(db) & 0xff;
-  const std::string message = sqlite3_errmsg(db);
-  if (rc == SQLITE_CORRUPT || rc == SQLITE_NOTADB) {
-    throw UsageError("DB", "results database " + path + ": damaged (" + message + ")");
-  }
-  throw EnvironmentError(path + ": " + message);
+[[noreturn]] void rethrow_read_error(const DatabaseError& error) {
+  if (error.cause() == DatabaseError::Cause::refused) throw UsageError("DB", error.what());
+  throw EnvironmentError(error.what());
 }
 
-// A prepared statement that finalises itself; errors name the database.
-class Query {
- public:
-  Query(sqlite3* db, const std::string& path, const std::string& sql) : db_(db), path_(path) {
-    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &statement_, nullptr) != SQLITE_OK) throw_read_error(db, path);
-  }
-  ~Query() { sqlite3_finalize(statement_); }
-  Query(const Query&) = delete;
-  Query& operator=(const Query&) = delete;
-
-  void bind(int i, double v) { sqlite3_bind_double(statement_, i, v); }
-  void bind(int i, long long v) { sqlite3_bind_int64(statement_, i, v); }
-  void bind(int i, const std::string& v) { sqlite3_bind_text(statement_, i, v.c_str(), -1, SQLITE_TRANSIENT); }
-  bool step() {
-    const int rc = sqlite3_step(statement_);
-    if (rc == SQLITE_ROW) return true;
-    if (rc == SQLITE_DONE) return false;
-    throw_read_error(db_, path_);
-  }
-  bool null(int c) const { return sqlite3_column_type(statement_, c) == SQLITE_NULL; }
-  double real(int c) const { return null(c) ? NAN : sqlite3_column_double(statement_, c); }
-  long long integer(int c) const { return sqlite3_column_int64(statement_, c); }
-  std::string text(int c) const {
-    const unsigned char* t = sqlite3_column_text(statement_, c);
-    return t ? reinterpret_cast<const char*>(t) : "";
-  }
-
- private:
-  sqlite3* db_;
-  std::string path_;
-  sqlite3_stmt* statement_ = nullptr;
-};
+std::optional<std::int64_t> run_filter(const ReportArguments& args) {
+  if (args.run.empty()) return std::nullopt;
+  return parse_integer(args.run, "--run");
+}
 
 std::string g(double v, int digits = 3) { return format_significant(v, digits); }
 
@@ -105,63 +72,13 @@ std::string range_text(const CandidateRow& r) {
   return r.full_turn ? "full turn" : "[" + g(r.range_lo_deg, 4) + ", " + g(r.range_hi_deg, 4) + "] deg";
 }
 
-std::vector<CandidateRow> read_candidates(sqlite3* db, const std::string& path, const ReportArguments& args) {
-  std::string sql =
-      "SELECT candidate_id, family, setup, detail, E_mean, E_max, hits, first_run, first_start, local_dimension, "
-      "free_parameters, rigid_residual, family_residual, bennett_residual, planar_residual, spherical_residual, "
-      "trivial_residual, full_turn, range_lo_deg, range_hi_deg, joints";
-  for (const char* kind : {"a%d", "alpha%d_deg", "d%d"}) {
-    for (int i = 1; i <= 8; ++i) {
-      char column[16];
-      std::snprintf(column, sizeof column, kind, i);
-      sql += std::string(", ") + column;
-    }
-  }
-  sql += " FROM candidates WHERE 1";
-  if (!args.family.empty()) sql += " AND family = ?1";
-  if (!args.max_energy.empty()) sql += " AND E_mean <= ?2";
-  if (!args.run.empty()) sql += " AND first_run = ?3";
-  // Unclassified first (a possible new family, or a defect for 4R), then by
-  // energy from zero upwards.
-  sql += " ORDER BY family <> 'unclassified', E_mean, candidate_id LIMIT ?4";
-  Query q(db, path, sql);
-  if (!args.family.empty()) q.bind(1, args.family);
-  if (!args.max_energy.empty()) q.bind(2, parse_number(args.max_energy, "--max-energy"));
-  if (!args.run.empty()) q.bind(3, parse_integer(args.run, "--run"));
-  q.bind(4, parse_integer(args.limit, "--limit"));
-  std::vector<CandidateRow> rows;
-  while (q.step()) {
-    CandidateRow r;
-    int c = 0;
-    r.id = q.integer(c++);
-    r.family = q.text(c++);
-    r.setup = q.text(c++);
-    r.detail = q.text(c++);
-    r.E_mean = q.real(c++);
-    r.E_max = q.real(c++);
-    r.hits = q.integer(c++);
-    r.first_run = q.integer(c++);
-    r.first_start = q.integer(c++);
-    r.local_dimension = static_cast<int>(q.integer(c++));
-    r.free_parameters = static_cast<int>(q.integer(c++));
-    r.rigid_residual = q.real(c++);
-    r.family_residual = q.real(c++);
-    r.bennett_residual = q.real(c++);
-    r.planar_residual = q.real(c++);
-    r.spherical_residual = q.real(c++);
-    r.trivial_residual = q.real(c++);
-    r.full_turn = q.integer(c++) != 0;
-    r.range_lo_deg = q.real(c++);
-    r.range_hi_deg = q.real(c++);
-    r.joints = static_cast<int>(q.integer(c++));
-    for (std::vector<double>* v : {&r.a, &r.alpha_deg, &r.d}) {
-      for (int i = 0; i < 8; ++i, ++c) {
-        if (i < r.joints) v->push_back(q.real(c));
-      }
-    }
-    rows.push_back(std::move(r));
-  }
-  return rows;
+std::vector<CandidateRow> read_candidates(const ResultsDatabase& db, const ReportArguments& args, bool every) {
+  CandidateFilter filter;
+  filter.family = args.family;
+  if (!args.max_energy.empty()) filter.max_energy = parse_number(args.max_energy, "--max-energy");
+  filter.first_run = run_filter(args);
+  filter.limit = every ? -1 : parse_integer(args.limit, "--limit");
+  return db.candidates(filter);
 }
 
 void print_table(const std::vector<CandidateRow>& rows) {
@@ -272,84 +189,49 @@ void print_json(const std::vector<CandidateRow>& rows) {
   std::printf("%s]\n", rows.empty() ? "" : "\n");
 }
 
-// log10 of every start's E_mean, by decade; exact zeros and NaN counted apart.
-struct Histogram {
-  std::map<int, long> decades;  // floor(log10 E)
-  long zeros = 0;               // E_mean exactly 0
-  long missing = 0;             // NULL (could not be evaluated)
-};
-
-Histogram energy_histogram(sqlite3* db, const std::string& path, const ReportArguments& args) {
-  Histogram h;
-  Query q(db, path, std::string("SELECT E_mean FROM starts") + (args.run.empty() ? "" : " WHERE run_id = ?1"));
-  if (!args.run.empty()) q.bind(1, parse_integer(args.run, "--run"));
-  while (q.step()) {
-    const double e = q.real(0);
-    if (std::isnan(e)) {
-      ++h.missing;
-    } else if (e <= 0) {
-      ++h.zeros;
-    } else {
-      ++h.decades[static_cast<int>(std::floor(std::log10(e)))];
-    }
+void print_summary(const ResultsDatabase& db, const ReportArguments& args) {
+  std::printf("database %s\n", db.path().c_str());
+  std::printf("runs\n");
+  for (const RunRow& r : db.runs()) {
+    std::printf("  run %lld  %s  seed %llu  %lld/%lld starts  %s  %lld ranks  %s .. %s\n",
+                static_cast<long long>(r.run_id), r.job_path.c_str(), static_cast<unsigned long long>(r.seed),
+                static_cast<long long>(r.starts_done), static_cast<long long>(r.starts), r.status.c_str(),
+                static_cast<long long>(r.ranks), r.started_at.c_str(), r.updated_at.c_str());
   }
-  return h;
-}
-
-void print_summary(sqlite3* db, const std::string& path, const ReportArguments& args) {
-  std::printf("database %s\n", path.c_str());
-  {
-    Query q(db, path,
-            "SELECT run_id, job_path, seed, starts, starts_done, status, ranks, started_at, updated_at FROM runs ORDER BY "
-            "run_id");
-    std::printf("runs\n");
-    while (q.step()) {
-      std::printf("  run %lld  %s  seed %lld  %lld/%lld starts  %s  %lld ranks  %s .. %s\n", q.integer(0),
-                  q.text(1).c_str(), q.integer(2), q.integer(4), q.integer(3), q.text(5).c_str(), q.integer(6),
-                  q.text(7).c_str(), q.text(8).c_str());
-    }
+  const std::optional<std::int64_t> run = run_filter(args);
+  const StartCounts c = db.start_counts(run);
+  std::printf("starts     %lld, zero minima %lld, verified %lld, mean %.4g s per start, %.4g core-seconds\n",
+              static_cast<long long>(c.starts), static_cast<long long>(c.zeros), static_cast<long long>(c.verified),
+              c.mean_seconds, c.total_seconds);
+  std::printf("by status\n");
+  for (const StatusCount& s : db.status_counts(run)) {
+    std::printf("  %-18s %lld\n", s.status.c_str(), static_cast<long long>(s.starts));
   }
-  const std::string where = args.run.empty() ? "" : " WHERE run_id = ?1";
-  auto bind_run = [&](Query& q) {
-    if (!args.run.empty()) q.bind(1, parse_integer(args.run, "--run"));
-  };
-  {
-    Query q(db, path,
-            "SELECT COUNT(*), SUM(zero), SUM(verified), AVG(seconds), SUM(seconds) FROM starts" + where);
-    bind_run(q);
-    q.step();
-    std::printf("starts     %lld, zero minima %lld, verified %lld, mean %.4g s per start, %.4g core-seconds\n",
-                q.integer(0), q.integer(1), q.integer(2), q.real(3), q.real(4));
+  std::printf("candidates by family (distinct linkages, starts that found them)\n");
+  for (const FamilyCount& f : db.family_counts(run)) {
+    std::printf("  %-23s %6lld %8lld\n", f.family.c_str(), static_cast<long long>(f.candidates),
+                static_cast<long long>(f.hits));
   }
-  {
-    Query q(db, path, "SELECT status, COUNT(*) FROM starts" + where + " GROUP BY status ORDER BY COUNT(*) DESC");
-    bind_run(q);
-    std::printf("by status\n");
-    while (q.step()) std::printf("  %-18s %lld\n", q.text(0).c_str(), q.integer(1));
-  }
-  {
-    Query q(db, path,
-            "SELECT family, COUNT(*), SUM(hits) FROM candidates" +
-                std::string(args.run.empty() ? "" : " WHERE first_run = ?1") + " GROUP BY family ORDER BY family");
-    bind_run(q);
-    std::printf("candidates by family (distinct linkages, starts that found them)\n");
-    while (q.step()) std::printf("  %-23s %6lld %8lld\n", q.text(0).c_str(), q.integer(1), q.integer(2));
-  }
-  const Histogram h = energy_histogram(db, path, args);
-  long most = 1;
+  const EnergyHistogram h = db.energy_histogram(run);
+  std::int64_t most = 1;
   for (const auto& [decade, count] : h.decades) most = std::max(most, count);
   std::printf("histogram of log10(E_mean) over all starts\n");
   for (const auto& [decade, count] : h.decades) {
     const int width = static_cast<int>(std::lround(50.0 * static_cast<double>(count) / static_cast<double>(most)));
-    std::printf("  [%4d, %4d) %7ld %s\n", decade, decade + 1, count, std::string(static_cast<size_t>(width), '#').c_str());
+    std::printf("  [%4d, %4d) %7lld %s\n", decade, decade + 1, static_cast<long long>(count),
+                std::string(static_cast<size_t>(width), '#').c_str());
   }
-  if (h.zeros) std::printf("  exactly 0   %7ld\n", h.zeros);
-  if (h.missing) std::printf("  no value    %7ld (the start could not be evaluated)\n", h.missing);
+  if (h.zeros) std::printf("  exactly 0   %7lld\n", static_cast<long long>(h.zeros));
+  if (h.missing) {
+    std::printf("  no value    %7lld (the start could not be evaluated)\n", static_cast<long long>(h.missing));
+  }
 }
 
-void plot_histogram(const std::filesystem::path& gnuplot, const Histogram& h, const std::filesystem::path& png) {
+void plot_histogram(const std::filesystem::path& gnuplot, const EnergyHistogram& h, const std::filesystem::path& png) {
   ScratchFile data(".dat");
-  for (const auto& [decade, count] : h.decades) std::fprintf(data.stream(), "%d %ld\n", decade, count);
+  for (const auto& [decade, count] : h.decades) {
+    std::fprintf(data.stream(), "%d %lld\n", decade, static_cast<long long>(count));
+  }
   data.close();
   ScratchFile script(".gp");
   std::fprintf(script.stream(),
@@ -387,17 +269,16 @@ void plot_candidates(const std::filesystem::path& gnuplot, const std::vector<Can
 }
 
 // Markdown for the atlas: the database, the selection and its runs.
-std::string atlas_header(sqlite3* db, const std::string& path, const ReportArguments& args) {
-  std::string out = "Database `" + path + "`";
+std::string atlas_header(const ResultsDatabase& db, const ReportArguments& args) {
+  std::string out = "Database `" + db.path() + "`";
   if (!args.family.empty()) out += ", family " + args.family;
   if (!args.run.empty()) out += ", candidates run " + args.run + " found first";
   if (!args.max_energy.empty()) out += ", E_mean <= " + args.max_energy;
   out += ". Runs:\n\n";
-  Query q(db, path, "SELECT run_id, job_path, seed, starts_done, starts, status, joints FROM runs ORDER BY run_id");
-  while (q.step()) {
-    out += "- run " + std::to_string(q.integer(0)) + ": `" + q.text(1) + "`, " + std::to_string(q.integer(6)) +
-           "R, seed " + std::to_string(q.integer(2)) + ", " + std::to_string(q.integer(3)) + " of " +
-           std::to_string(q.integer(4)) + " starts, " + q.text(5) + "\n";
+  for (const RunRow& r : db.runs()) {
+    out += "- run " + std::to_string(r.run_id) + ": `" + r.job_path + "`, " + std::to_string(r.joints) + "R, seed " +
+           std::to_string(r.seed) + ", " + std::to_string(r.starts_done) + " of " + std::to_string(r.starts) +
+           " starts, " + r.status + "\n";
   }
   return out;
 }
@@ -448,35 +329,39 @@ int run_report(const ReportArguments& args) {
   } catch (const DatabaseError& error) {
     throw UsageError("DB", error.what());
   }
-  sqlite3* handle = db->handle();
-  // One read transaction: the summary and the list see the same state even
-  // while a run commits.
-  sqlite3_exec(handle, "BEGIN", nullptr, nullptr, nullptr);
-  if (!args.atlas.empty()) {
-    ReportArguments every = args;
-    every.limit = "-1";  // SQLite: no limit; the atlas counts every candidate selected
-    write_atlas(gnuplot, read_candidates(handle, args.database, every), atlas_header(handle, args.database, args), atlas_dir);
-  } else if (args.summary) {
-    print_summary(handle, args.database, args);
-  } else {
-    const std::vector<CandidateRow> rows = read_candidates(handle, args.database, args);
-    if (args.format == "csv") {
-      print_csv(rows);
-    } else if (args.format == "json") {
-      print_json(rows);
-    } else if (args.format == "markdown") {
-      print_markdown(rows);
+  try {
+    // One read transaction: the summary and the list see the same state even
+    // while a run commits.
+    const ResultsDatabase::Snapshot snapshot = db->snapshot();
+    if (!args.atlas.empty()) {
+      write_atlas(gnuplot, read_candidates(*db, args, true), atlas_header(*db, args), atlas_dir);
+    } else if (args.summary) {
+      print_summary(*db, args);
     } else {
-      print_table(rows);
+      const std::vector<CandidateRow> rows = read_candidates(*db, args, false);
+      if (args.format == "csv") {
+        print_csv(rows);
+      } else if (args.format == "json") {
+        print_json(rows);
+      } else if (args.format == "markdown") {
+        print_markdown(rows);
+      } else {
+        print_table(rows);
+      }
+      if (!args.plot.empty()) {
+        plot_candidates(gnuplot,
+                        std::vector<CandidateRow>(rows.begin(), rows.begin() + std::min<size_t>(rows.size(), 10)),
+                        args.plot);
+      }
     }
-    if (!args.plot.empty()) plot_candidates(gnuplot, std::vector<CandidateRow>(rows.begin(), rows.begin() + std::min<size_t>(rows.size(), 10)), args.plot);
+    if (!args.plot.empty()) {
+      const std::filesystem::path png = std::filesystem::path(args.plot) / "minima_histogram.png";
+      plot_histogram(gnuplot, db->energy_histogram(run_filter(args)), png);
+      std::fprintf(stderr, "loopfarm report: wrote %s\n", png.string().c_str());
+    }
+  } catch (const DatabaseError& error) {
+    rethrow_read_error(error);
   }
-  if (!args.plot.empty()) {
-    const std::filesystem::path png = std::filesystem::path(args.plot) / "minima_histogram.png";
-    plot_histogram(gnuplot, energy_histogram(handle, args.database, args), png);
-    std::fprintf(stderr, "loopfarm report: wrote %s\n", png.string().c_str());
-  }
-  sqlite3_exec(handle, "COMMIT", nullptr, nullptr, nullptr);
   return kExitSuccess;
 }
 

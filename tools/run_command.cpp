@@ -22,7 +22,6 @@
 #include "run_command.hpp"
 
 #include <mpi.h>
-#include <sqlite3.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -377,18 +376,6 @@ struct ResumePlan {
   long candidates = 0;
 };
 
-long count_rows(ResultsDatabase& db, const std::string& sql, std::int64_t run_id) {
-  sqlite3_stmt* statement = nullptr;
-  if (sqlite3_prepare_v2(db.handle(), sql.c_str(), -1, &statement, nullptr) != SQLITE_OK) {
-    throw DatabaseError(db.path() + ": " + sqlite3_errmsg(db.handle()));
-  }
-  if (sql.find('?') != std::string::npos) sqlite3_bind_int64(statement, 1, run_id);
-  long n = 0;
-  if (sqlite3_step(statement) == SQLITE_ROW) n = static_cast<long>(sqlite3_column_int64(statement, 0));
-  sqlite3_finalize(statement);
-  return n;
-}
-
 ResumePlan plan_run(ResultsDatabase& db, const Job& job, bool new_run, int ranks) {
   RunIdentity identity;
   identity.job_path = job.path;
@@ -403,8 +390,8 @@ ResumePlan plan_run(ResultsDatabase& db, const Job& job, bool new_run, int ranks
   plan.run_id = run.run_id;
   plan.pending = PendingCursor(run.committed, identity.starts);
   plan.committed = static_cast<long>(identity.starts - plan.pending.count());
-  plan.zeros = count_rows(db, "SELECT COUNT(*) FROM starts WHERE run_id = ? AND zero = 1", run.run_id);
-  plan.candidates = count_rows(db, "SELECT COUNT(*) FROM candidates", 0);
+  plan.zeros = static_cast<long>(db.start_counts(run.run_id).zeros);
+  plan.candidates = static_cast<long>(db.candidate_count());
   db.begin_session(run.run_id, ranks);
   return plan;
 }

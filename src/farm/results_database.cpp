@@ -7,16 +7,20 @@
 #include "loopfarm/farm/results_database.hpp"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <optional>
 
+#include "candidate_index.hpp"
 #include "loopfarm/core/loop.hpp"
+#include "results_database_impl.hpp"
+#include "results_schema.hpp"
+#include "sqlite_support.hpp"
 
 #ifndef LOOPFARM_VERSION
 #error "LOOPFARM_VERSION is defined by the loopfarm library target"
@@ -25,417 +29,11 @@
 namespace loopfarm {
 namespace {
 
+using namespace store;
+
 constexpr double kDegreesPerRadian = 180.0 / 3.14159265358979323846;
-constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
 // ISO 8601 UTC, evaluated by SQLite once per statement.
 constexpr const char* kNow = "strftime('%Y-%m-%dT%H:%M:%SZ','now')";
-
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
-  throw DatabaseError("results database " + path + ": " + what);
-}
-
-[[noreturn]] void fail_sqlite(const std::string& path, sqlite3* db, const std::string& what) {
-  fail(path, what + ": " + (db ? sqlite3_errmsg(db) : "out of memory"));
-}
-
-std::string hex32(std::int64_t value) {
-  char buffer[16];
-  std::snprintf(buffer, sizeof buffer, "0x%08x", static_cast<unsigned>(static_cast<std::uint32_t>(value)));
-  return buffer;
-}
-
-std::string format_double(double value) {
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
-  return buffer;
-}
-
-// a1..a8, alpha1_deg..alpha8_deg, d1..d8, each with `prefix` and `suffix`;
-// the three lists separated by `list_separator`.
-std::string geometry_columns(const std::string& prefix, const std::string& suffix,
-                             const std::string& list_separator = ", ") {
-  std::string out;
-  for (const char* name : {"a", "alpha", "d"}) {
-    for (int i = 1; i <= kMaxJoints; ++i) {
-      if (!out.empty()) out += i == 1 ? list_separator : ", ";
-      out += prefix + name + std::to_string(i) + (std::string(name) == "alpha" ? "_deg" : "") + suffix;
-    }
-  }
-  return out;
-}
-
-// The candidate columns that describe the representative start, in bind order
-// (the geometry expands to its 24 columns); everything but candidate_id and hits.
-std::vector<std::string> candidate_columns() {
-  std::vector<std::string> out = {"joints", "family", "setup", "detail", "canonical_key"};
-  for (const char* name : {"a", "alpha", "d"}) {
-    for (int i = 1; i <= kMaxJoints; ++i) {
-      out.push_back(name + std::to_string(i) + (std::string(name) == "alpha" ? "_deg" : ""));
-    }
-  }
-  for (const char* name : {"family_residual", "bennett_residual", "planar_residual", "spherical_residual",
-                           "trivial_residual", "rigid_residual", "full_turn", "range_lo_deg", "range_hi_deg",
-                           "local_dimension", "free_parameters", "singular_values", "E_mean", "E_max", "first_run",
-                           "first_start", "grid_cell"}) {
-    out.push_back(name);
-  }
-  return out;
-}
-
-std::string schema_sql() {
-  const std::string geometry = geometry_columns("", " REAL", ",\n  ");
-  const std::string start_geometry = geometry_columns("s.", "", ",\n         ");
-  return
-      "CREATE TABLE runs (\n"
-      "  run_id INTEGER PRIMARY KEY,\n"
-      "  job_path TEXT NOT NULL,\n"
-      "  job_text TEXT NOT NULL,\n"
-      "  job_hash TEXT NOT NULL,\n"
-      "  seed INTEGER NOT NULL,\n"
-      "  starts INTEGER NOT NULL,\n"
-      "  joints INTEGER NOT NULL,\n"
-      "  zero_threshold REAL NOT NULL,\n"
-      "  report_threshold REAL NOT NULL,\n"
-      "  loopfarm_version TEXT NOT NULL,\n"
-      "  ranks INTEGER,\n"
-      "  started_at TEXT NOT NULL,\n"
-      "  updated_at TEXT NOT NULL,\n"
-      "  ended_at TEXT,\n"
-      "  status TEXT NOT NULL CHECK (status IN ('running', 'stopped', 'complete', 'failed')),\n"
-      "  starts_done INTEGER NOT NULL DEFAULT 0\n"
-      ");\n"
-      "CREATE TABLE sessions (\n"
-      "  session_id INTEGER PRIMARY KEY,\n"
-      "  run_id INTEGER NOT NULL REFERENCES runs(run_id),\n"
-      "  ranks INTEGER NOT NULL,\n"
-      "  loopfarm_version TEXT NOT NULL,\n"
-      "  started_at TEXT NOT NULL,\n"
-      "  ended_at TEXT,\n"
-      "  status TEXT NOT NULL CHECK (status IN ('running', 'stopped', 'complete', 'failed')),\n"
-      "  starts_done INTEGER NOT NULL DEFAULT 0\n"
-      ");\n"
-      "CREATE INDEX sessions_by_run ON sessions(run_id);\n"
-      "CREATE TABLE candidates (\n"
-      "  candidate_id INTEGER PRIMARY KEY,\n"
-      "  joints INTEGER NOT NULL,\n"
-      "  family TEXT NOT NULL,\n"
-      "  setup TEXT NOT NULL,\n"
-      "  detail TEXT NOT NULL,\n"
-      "  canonical_key TEXT NOT NULL,\n"
-      "  " + geometry + ",\n"
-      "  family_residual REAL,\n"
-      "  bennett_residual REAL,\n"
-      "  planar_residual REAL,\n"
-      "  spherical_residual REAL,\n"
-      "  trivial_residual REAL,\n"
-      "  rigid_residual REAL,\n"
-      "  full_turn INTEGER NOT NULL CHECK (full_turn IN (0, 1)),\n"
-      "  range_lo_deg REAL,\n"
-      "  range_hi_deg REAL,\n"
-      "  local_dimension INTEGER NOT NULL,\n"
-      "  free_parameters INTEGER NOT NULL,\n"
-      "  singular_values TEXT NOT NULL,\n"
-      "  E_mean REAL,\n"
-      "  E_max REAL,\n"
-      "  first_run INTEGER NOT NULL REFERENCES runs(run_id),\n"
-      "  first_start INTEGER NOT NULL,\n"
-      "  grid_cell TEXT NOT NULL,\n"
-      "  hits INTEGER NOT NULL DEFAULT 1\n"
-      ");\n"
-      "CREATE INDEX candidates_by_joints_family ON candidates(joints, family);\n"
-      "CREATE INDEX candidates_by_key ON candidates(joints, canonical_key);\n"
-      "CREATE INDEX candidates_by_cell ON candidates(joints, grid_cell);\n"
-      // WITHOUT ROWID: the primary key is the table's own b-tree, so a start
-      // costs one row and no separate index (the database is sized per start).
-      "CREATE TABLE starts (\n"
-      "  run_id INTEGER NOT NULL REFERENCES runs(run_id),\n"
-      "  start_index INTEGER NOT NULL,\n"
-      "  session_id INTEGER REFERENCES sessions(session_id),\n"
-      "  status TEXT NOT NULL,\n"
-      "  E_mean REAL,\n"
-      "  E_max REAL,\n"
-      "  objective REAL,\n"
-      "  evaluations INTEGER NOT NULL,\n"
-      "  seconds REAL,\n"
-      "  zero INTEGER NOT NULL CHECK (zero IN (0, 1)),\n"
-      "  verified INTEGER NOT NULL CHECK (verified IN (0, 1)),\n"
-      "  candidate_id INTEGER REFERENCES candidates(candidate_id),\n"
-      "  " + geometry + ",\n"
-      "  PRIMARY KEY (run_id, start_index)\n"
-      ") WITHOUT ROWID;\n"
-      "CREATE INDEX starts_zero_by_energy ON starts(E_mean) WHERE zero = 1;\n"
-      "CREATE INDEX starts_by_candidate ON starts(candidate_id) WHERE candidate_id IS NOT NULL;\n"
-      "CREATE VIEW zero_minima AS\n"
-      "  SELECT s.run_id, s.start_index, s.E_mean, s.E_max, s.objective, s.status, s.evaluations, s.seconds,\n"
-      "         s.verified, s.candidate_id, c.family, c.setup, c.local_dimension, c.family_residual,\n"
-      "         c.rigid_residual,\n"
-      "         " + start_geometry + "\n"
-      "  FROM starts AS s LEFT JOIN candidates AS c ON c.candidate_id = s.candidate_id\n"
-      "  WHERE s.zero = 1\n"
-      "  ORDER BY s.E_mean, s.run_id, s.start_index;\n"
-      "CREATE VIEW family_counts AS\n"
-      "  SELECT family, COUNT(*) AS candidates, SUM(hits) AS hits\n"
-      "  FROM candidates GROUP BY family ORDER BY hits DESC, family;\n"
-      "CREATE VIEW status_counts AS\n"
-      "  SELECT run_id, status, COUNT(*) AS starts, SUM(zero) AS zeros, SUM(verified) AS verified\n"
-      "  FROM starts GROUP BY run_id, status ORDER BY run_id, starts DESC, status;\n"
-      "CREATE VIEW energy_histogram AS\n"
-      "  SELECT run_id, CASE WHEN E_mean > 0 THEN CAST(floor(log10(E_mean)) AS INTEGER) END AS log10_E_mean,\n"
-      "         COUNT(*) AS starts\n"
-      "  FROM starts WHERE E_mean IS NOT NULL\n"
-      "  GROUP BY run_id, log10_E_mean ORDER BY run_id, log10_E_mean;\n"
-      "CREATE VIEW run_summary AS\n"
-      "  SELECT r.run_id, r.job_path, r.seed, r.status, r.starts, r.starts_done,\n"
-      "         (SELECT COUNT(*) FROM starts AS s WHERE s.run_id = r.run_id AND s.zero = 1) AS zeros,\n"
-      "         (SELECT COUNT(*) FROM starts AS s WHERE s.run_id = r.run_id AND s.verified = 1) AS verified,\n"
-      "         (SELECT COUNT(*) FROM candidates AS c WHERE c.first_run = r.run_id) AS new_candidates,\n"
-      "         (SELECT MIN(s.E_mean) FROM starts AS s WHERE s.run_id = r.run_id) AS best_E_mean,\n"
-      "         (SELECT SUM(s.seconds) FROM starts AS s WHERE s.run_id = r.run_id) AS start_seconds,\n"
-      "         r.started_at, r.updated_at, r.ended_at\n"
-      "  FROM runs AS r ORDER BY r.run_id;\n";
-}
-
-// An open sqlite3 connection; closed (with sqlite3_close_v2, so that order
-// against statements does not matter) when it goes.
-struct Connection {
-  sqlite3* db = nullptr;
-
-  Connection() = default;
-  Connection(const Connection&) = delete;
-  Connection& operator=(const Connection&) = delete;
-  ~Connection() { sqlite3_close_v2(db); }
-};
-
-// Opens `path` (or the URI `filename` for it); errors name `path`.
-void open_connection(Connection& c, const std::string& path, int flags, const std::string& filename = {}) {
-  const int rc = sqlite3_open_v2((filename.empty() ? path : filename).c_str(), &c.db, flags, nullptr);
-  if (rc != SQLITE_OK) fail_sqlite(path, c.db, "cannot open");
-  sqlite3_extended_result_codes(c.db, 1);
-  sqlite3_busy_timeout(c.db, kDatabaseBusyTimeoutMs);
-  // The last connection to close a WAL database checkpoints and deletes the
-  // WAL under an EXCLUSIVE lock on the file, and a reader that opens the file
-  // in that moment without a busy timeout (the sqlite3 shell) fails with
-  // "database is locked": 30 of 4696 and 49 of 3768 plain sqlite3 reads
-  // across 40 short runs did (docs/reliability-faults.md). A read-only connection cannot
-  // checkpoint anyway, so it does not try; the writer checkpoints before it
-  // closes (~Impl), without that lock, and keeps it for a few microseconds
-  // only (deleting the empty WAL).
-  if ((flags & SQLITE_OPEN_READONLY) != 0) sqlite3_db_config(c.db, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, nullptr);
-}
-
-// An SQLite URI that opens `path` read-only as immutable: no locks, no WAL,
-// no companion files. '%', '?' and '#' are escaped; an absolute path gets an
-// empty authority ("file:///...").
-std::string immutable_uri(const std::string& path) {
-  std::string uri = path.rfind('/', 0) == 0 ? "file://" : "file:";
-  for (const char c : path) {
-    if (c == '%' || c == '?' || c == '#') {
-      char escaped[4];
-      std::snprintf(escaped, sizeof escaped, "%%%02X", static_cast<unsigned char>(c));
-      uri += escaped;
-    } else {
-      uri += c;
-    }
-  }
-  return uri + "?immutable=1";
-}
-
-// NAME-wal exists and is not empty: commits may be there and not yet in the file.
-bool has_commits_in_wal(const std::string& path) {
-  std::error_code error;
-  const std::uintmax_t size = std::filesystem::file_size(path + "-wal", error);
-  return !error && size > 0;
-}
-
-void exec(const std::string& path, sqlite3* db, const std::string& sql, const char* what) {
-  char* message = nullptr;
-  if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
-    const std::string text = message ? message : sqlite3_errmsg(db);
-    sqlite3_free(message);
-    fail(path, std::string(what) + ": " + text);
-  }
-}
-
-// A prepared statement, reset (bindings cleared) before every use.
-class Statement {
- public:
-  Statement() = default;
-  Statement(const Statement&) = delete;
-  Statement& operator=(const Statement&) = delete;
-  ~Statement() { sqlite3_finalize(stmt_); }
-
-  bool prepared() const { return stmt_ != nullptr; }
-
-  void prepare(const std::string& path, sqlite3* db, const std::string& sql) {
-    path_ = &path;
-    db_ = db;
-    if (sqlite3_prepare_v3(db, sql.c_str(), -1, SQLITE_PREPARE_PERSISTENT, &stmt_, nullptr) != SQLITE_OK) {
-      fail_sqlite(path, db, "cannot prepare \"" + sql.substr(0, 60) + "...\"");
-    }
-  }
-
-  Statement& reset() {
-    sqlite3_reset(stmt_);
-    sqlite3_clear_bindings(stmt_);
-    return *this;
-  }
-
-  void bind_null(int i) { check(sqlite3_bind_null(stmt_, i)); }
-  void bind(int i, std::int64_t value) { check(sqlite3_bind_int64(stmt_, i, value)); }
-  void bind(int i, int value) { check(sqlite3_bind_int64(stmt_, i, value)); }
-  void bind(int i, bool value) { check(sqlite3_bind_int64(stmt_, i, value ? 1 : 0)); }
-  // NaN and infinities are NULL: SQL has no NaN, and a residual that does not
-  // apply (+inf) reads best as "no value".
-  void bind(int i, double value) {
-    check(std::isfinite(value) ? sqlite3_bind_double(stmt_, i, value) : sqlite3_bind_null(stmt_, i));
-  }
-  void bind(int i, const std::string& value) {
-    check(sqlite3_bind_text(stmt_, i, value.data(), static_cast<int>(value.size()), SQLITE_TRANSIENT));
-  }
-  void bind(int i, const char* value) { check(sqlite3_bind_text(stmt_, i, value, -1, SQLITE_TRANSIENT)); }
-
-  // True for a row, false when done; throws on an error (the statement is
-  // reset, so that it holds no lock).
-  bool step(const char* what) {
-    const int rc = sqlite3_step(stmt_);
-    if (rc == SQLITE_ROW) return true;
-    if (rc == SQLITE_DONE) return false;
-    const std::string message = sqlite3_errmsg(db_);
-    sqlite3_reset(stmt_);
-    fail(*path_, std::string(what) + ": " + message);
-  }
-  void run(const char* what) {
-    step(what);
-    sqlite3_reset(stmt_);
-  }
-  // The result code of one step (extended), the statement reset: for callers
-  // that explain particular errors themselves.
-  int step_code(std::string& message) {
-    const int rc = sqlite3_step(stmt_);
-    if (rc != SQLITE_ROW && rc != SQLITE_DONE) message = sqlite3_errmsg(db_);
-    sqlite3_reset(stmt_);
-    return rc;
-  }
-
-  std::int64_t integer(int column) const { return sqlite3_column_int64(stmt_, column); }
-  bool is_null(int column) const { return sqlite3_column_type(stmt_, column) == SQLITE_NULL; }
-  double real(int column) const { return sqlite3_column_double(stmt_, column); }
-  std::string text(int column) const {
-    const auto* bytes = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, column));
-    return bytes ? std::string(bytes, static_cast<size_t>(sqlite3_column_bytes(stmt_, column))) : std::string();
-  }
-
- private:
-  void check(int rc) const {
-    if (rc != SQLITE_OK) fail_sqlite(*path_, db_, "cannot bind a parameter");
-  }
-
-  const std::string* path_ = nullptr;
-  sqlite3* db_ = nullptr;
-  sqlite3_stmt* stmt_ = nullptr;
-};
-
-std::int64_t query_integer(const std::string& path, sqlite3* db, const std::string& sql) {
-  Statement s;
-  s.prepare(path, db, sql);
-  if (!s.step(sql.c_str())) fail(path, sql + " returned no row");
-  return s.integer(0);
-}
-
-std::string query_text(const std::string& path, sqlite3* db, const std::string& sql) {
-  Statement s;
-  s.prepare(path, db, sql);
-  if (!s.step(sql.c_str())) fail(path, sql + " returned no row");
-  return s.text(0);
-}
-
-// SQLite's own words for a damaged file ("database disk image is
-// malformed") do not say which file or that it is the file's fault: say both.
-[[noreturn]] void fail_read(const std::string& path, int rc, const std::string& what, const std::string& message) {
-  if ((rc & 0xff) == SQLITE_NOTADB) fail(path, "not an SQLite database");
-  if ((rc & 0xff) == SQLITE_CORRUPT) fail(path, "damaged (" + what + ": " + message + ")");
-  fail(path, what + ": " + message);
-}
-
-// The schema version of a loopfarm database, or 0 for an empty database (no
-// schema objects, no application_id: a file this program may initialise when
-// `allow_empty`). Refuses everything else. Reads only.
-int check_identity(const std::string& path, sqlite3* db, bool allow_empty) {
-  // The first read of the file: say plainly when it is not SQLite at all, or
-  // damaged where SQLite reads first (the header, page 1, a file cut short).
-  sqlite3_stmt* first = nullptr;
-  int rc = sqlite3_prepare_v2(db, "PRAGMA application_id", -1, &first, nullptr);
-  if (rc == SQLITE_OK) rc = sqlite3_step(first);
-  const std::int64_t application_id = rc == SQLITE_ROW ? sqlite3_column_int64(first, 0) : 0;
-  const std::string message = sqlite3_errmsg(db);
-  sqlite3_finalize(first);
-  if (rc != SQLITE_ROW) fail_read(path, rc, "cannot read PRAGMA application_id", message);
-  const std::int64_t version = query_integer(path, db, "PRAGMA user_version");
-  if (application_id == 0 && version == 0 && query_integer(path, db, "SELECT COUNT(*) FROM sqlite_schema") == 0) {
-    if (allow_empty) return 0;
-    fail(path, "an empty database, not a loopfarm results database");
-  }
-  if (application_id != kDatabaseApplicationId) {
-    fail(path, "not a loopfarm results database (PRAGMA application_id is " + hex32(application_id) + ", expected " +
-                   hex32(kDatabaseApplicationId) + ")");
-  }
-  if (version > kDatabaseSchemaVersion) {
-    fail(path, "schema version " + std::to_string(version) + " is newer than this loopfarm " LOOPFARM_VERSION
-               " knows (" + std::to_string(kDatabaseSchemaVersion) + "): use a newer loopfarm");
-  }
-  if (version != kDatabaseSchemaVersion) fail(path, "unknown schema version " + std::to_string(version));
-  return static_cast<int>(version);
-}
-
-// PRAGMA quick_check: every page of the file read and its b-tree structure
-// checked (not index against table contents, which integrity_check adds at
-// several times the cost). Damage it finds is reported as a few of its
-// problems on one line.
-void check_integrity(const std::string& path, sqlite3* db) {
-  sqlite3_stmt* check = nullptr;
-  int rc = sqlite3_prepare_v2(db, "PRAGMA quick_check", -1, &check, nullptr);
-  std::string problems;
-  int shown = 0;
-  while (rc == SQLITE_OK || rc == SQLITE_ROW) {
-    rc = sqlite3_step(check);
-    if (rc != SQLITE_ROW) break;
-    const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(check, 0));
-    const std::string row = text ? text : "";
-    if (row == "ok" || row.rfind("*** in database", 0) == 0) continue;  // the heading of a list of problems
-    if (shown++ < 3) problems += (problems.empty() ? "" : "; ") + row;
-  }
-  const std::string message = sqlite3_errmsg(db);
-  sqlite3_finalize(check);
-  if (rc != SQLITE_DONE) fail_read(path, rc, "PRAGMA quick_check", message);
-  if (shown == 0) return;
-  for (char& c : problems) {
-    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
-  }
-  if (shown > 3) problems += "; ...";
-  fail(path, "damaged (PRAGMA quick_check: " + problems + ")");
-}
-
-// BEGIN IMMEDIATE on construction; ROLLBACK when it goes without commit().
-class Transaction {
- public:
-  Transaction(const std::string& path, sqlite3* db) : path_(path), db_(db) {
-    exec(path, db, "BEGIN IMMEDIATE", "cannot begin a transaction");
-  }
-  Transaction(const Transaction&) = delete;
-  Transaction& operator=(const Transaction&) = delete;
-  ~Transaction() {
-    if (open_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-  }
-  void commit() {
-    exec(path_, db_, "COMMIT", "cannot commit");
-    open_ = false;
-  }
-
- private:
-  const std::string& path_;
-  sqlite3* db_;
-  bool open_ = true;
-};
 
 std::string json_array(const std::vector<double>& values) {
   std::string out = "[";
@@ -446,96 +44,10 @@ std::string json_array(const std::vector<double>& values) {
   return out + "]";
 }
 
-// What de-duplication compares of one candidate: its canonical geometry as the
-// database holds it (twists through their stored degrees, so that a record
-// compares with a stored row exactly as the row would) and its first start.
-struct CanonicalEntry {
-  std::int64_t id = 0;
-  std::string key;
-  int joints = 0;
-  std::array<double, 3 * kMaxJoints> values{};  // a, alpha [rad], d
-  std::int64_t first_run = 0;
-  std::int64_t first_start = 0;
-};
-
-// The largest difference between two canonical geometries of n joints
-// (twists wrapped), stopping early once it exceeds `tolerance`.
-double canonical_distance(const CanonicalEntry& x, const CanonicalEntry& y, double tolerance) {
-  const int n = x.joints;
-  double distance = 0.0;
-  for (int i = 0; i < 3 * n && distance <= tolerance; ++i) {
-    const double difference = x.values[i] - y.values[i];
-    distance = std::max(distance, std::abs(i >= n && i < 2 * n ? wrap_angle(difference) : difference));
-  }
-  return distance;
-}
-
-// De-duplication looks a record up by the grid cell of its canonical
-// geometry: every value (a and d at L = 1, twists in radians) cut into cells
-// of width kGridCell, twists on a circle of whole cells so that -pi and pi
-// meet. Two geometries within the tolerance (< kGridCell) of each other lie
-// in the same cell or, for each value near a cell edge, the neighbouring one:
-// the lookup tries every such combination (usually one or two cells), so its
-// cost does not grow with the number of candidates, not even when thousands
-// share a value (searches that end on a bound).
-constexpr double kGridCell = 1e-3;
-constexpr long kTwistCells = 6283;  // round(2 pi / kGridCell): twists wrap on whole cells
-constexpr size_t kMaxCellCombinations = 4096;
-
-// Per value, the cells a geometry within `tolerance` may occupy (the first is
-// the value's own).
-std::vector<std::vector<long>> cell_options(const CanonicalEntry& c, double tolerance) {
-  const int n = c.joints;
-  constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
-  std::vector<std::vector<long>> options(static_cast<size_t>(3 * n));
-  for (int i = 0; i < 3 * n; ++i) {
-    const bool twist = i >= n && i < 2 * n;
-    const double width = twist ? kTwoPi / kTwistCells : kGridCell;
-    const double u = twist ? (c.values[i] + kTwoPi / 2) / width : c.values[i] / width;
-    const double cell = std::floor(u);
-    const double offset = (u - cell) * width;  // distance above the cell's lower edge
-    auto wrap = [twist](long k) { return twist ? ((k % kTwistCells) + kTwistCells) % kTwistCells : k; };
-    const long k = static_cast<long>(cell);
-    std::vector<long>& o = options[static_cast<size_t>(i)];
-    o.push_back(wrap(k));
-    if (offset <= tolerance) o.push_back(wrap(k - 1));
-    if (width - offset <= tolerance) o.push_back(wrap(k + 1));
-  }
-  return options;
-}
-
-std::string cell_name(const std::vector<std::vector<long>>& options, const std::vector<size_t>& choice) {
-  std::string out;
-  for (size_t i = 0; i < options.size(); ++i) {
-    if (i > 0) out += ',';
-    out += std::to_string(options[i][choice[i]]);
-  }
-  return out;
-}
-
-// The grid cell a candidate is stored under.
-std::string grid_cell(const CanonicalEntry& c) {
-  const auto options = cell_options(c, 0.0);
-  return cell_name(options, std::vector<size_t>(options.size(), 0));
-}
-
-double stored_twist(double radians) { return radians * kDegreesPerRadian; }
-double twist_from_stored(double degrees) { return degrees * kRadiansPerDegree; }
-
-CanonicalEntry canonical_entry(const StartRecord& r, std::int64_t run_id) {
-  const LoopGeometry& g = r.candidate.canonical_geometry;
-  const int n = g.joints();
-  CanonicalEntry c;
-  c.key = r.candidate.canonical_key;
-  c.joints = n;
-  for (int i = 0; i < n; ++i) {
-    c.values[i] = g.a[i];
-    c.values[n + i] = twist_from_stored(stored_twist(g.alpha[i]));
-    c.values[2 * n + i] = g.d[i];
-  }
-  c.first_run = run_id;
-  c.first_start = static_cast<std::int64_t>(r.index);
-  return c;
+// NAME-wal or NAME-shm exists.
+bool has_companions(const std::string& path) {
+  std::error_code error;
+  return std::filesystem::exists(path + "-wal", error) || std::filesystem::exists(path + "-shm", error);
 }
 
 void check_geometry(const std::string& path, const LoopGeometry& g, const char* what, std::uint64_t index) {
@@ -584,53 +96,6 @@ std::uint64_t RunInfo::committed_prefix() const {
   return !committed.empty() && committed.front().first == 0 ? committed.front().last : 0;
 }
 
-struct ResultsDatabase::Impl {
-  std::string path;
-  DatabaseMode mode = DatabaseMode::read;
-  Connection connection;  // first, so that it is closed after the statements
-
-  Statement insert_start;
-  Statement insert_candidate;
-  Statement replace_candidate;
-  Statement hit_candidate;
-  Statement select_by_key;
-  Statement select_by_cell;
-  Statement select_all;
-
-  std::int64_t session_id = 0;  // 0: no open session
-  std::int64_t session_run = 0;
-  bool checkpoint_on_close = false;  // a writer whose open succeeded
-
-  Impl() = default;
-  Impl(const Impl&) = delete;
-  Impl& operator=(const Impl&) = delete;
-  // Copies every committed page from the WAL into the file and empties the
-  // WAL, so that the file alone holds everything (a copy of it is whole) and
-  // the checkpoint that closing does under an EXCLUSIVE lock finds nothing
-  // left to copy (open_connection). A reader still on an old snapshot delays
-  // it up to 1 s, then it is left to the close or the next writer: the WAL
-  // keeps the commits either way.
-  ~Impl() {
-    if (!checkpoint_on_close || connection.db == nullptr) return;
-    sqlite3_busy_timeout(connection.db, 1000);
-    sqlite3_exec(connection.db, "PRAGMA wal_checkpoint(TRUNCATE)", nullptr, nullptr, nullptr);
-  }
-
-  sqlite3* db() const { return connection.db; }
-
-  void require_write(const char* what) const {
-    if (mode != DatabaseMode::write) fail(path, std::string(what) + ": the database is open read-only");
-  }
-
-  Statement& prepared(Statement& s, const std::string& sql) {
-    if (!s.prepared()) s.prepare(path, db(), sql);
-    return s.reset();
-  }
-
-  std::optional<CanonicalEntry> find_candidate(const CanonicalEntry& incoming, double tolerance);
-  std::int64_t place_candidate(std::int64_t run_id, const StartRecord& r, double tolerance, CommitSummary& summary);
-  void bind_candidate(Statement& s, std::int64_t run_id, const StartRecord& r);
-};
 
 // The stored candidate of the same linkage as `incoming`: the one with its
 // canonical key, else the nearest whose values are all within `tolerance`
@@ -799,7 +264,6 @@ ResultsDatabase::Impl& ResultsDatabase::impl() const {
 
 const std::string& ResultsDatabase::path() const { return impl().path; }
 DatabaseMode ResultsDatabase::mode() const { return impl().mode; }
-sqlite3* ResultsDatabase::handle() const { return impl().db(); }
 
 ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode) {
   auto impl = std::make_unique<Impl>();
@@ -823,7 +287,15 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
 
   if (mode == DatabaseMode::read) {
     if (!exists) fail(path, "no such file");
-    open_connection(impl->connection, path, SQLITE_OPEN_READONLY);
+    // A reader of a database that is one file (no connection has it open:
+    // the last to close removed NAME-wal and NAME-shm) keeps it one file. A
+    // read-only connection to a WAL file creates both and cannot remove them
+    // (that takes a write lock), so such a reader opens the file read-write
+    // with query_only on: its close, the last, removes what it created, and
+    // copies nothing into the file (the WAL is empty). With companions there
+    // (a run writing, or one that crashed) it reads read-only and leaves them.
+    const bool alone = !has_companions(path) && ::access(path.c_str(), W_OK) == 0;
+    open_connection(impl->connection, path, alone ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY);
     exec(path, impl->db(), "PRAGMA query_only = ON", "cannot set query_only");
     check_identity(path, impl->db(), false);
     // A reader checks the whole file too, so that a report never lists what

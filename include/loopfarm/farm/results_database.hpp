@@ -18,7 +18,10 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
+#include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -26,14 +29,20 @@
 
 #include "loopfarm/farm/results.hpp"
 
-struct sqlite3;
-
 namespace loopfarm {
 
-// One line naming the database path and what is wrong.
+// One line naming the database path and what is wrong. `refused`: the file's
+// fault (not a loopfarm database, damaged, a newer schema, another job: bad
+// input); `failed`: the system's (I/O, out of memory, a lock never released).
 class DatabaseError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  enum class Cause { refused, failed };
+  explicit DatabaseError(const std::string& what, Cause cause = Cause::refused)
+      : std::runtime_error(what), cause_(cause) {}
+  Cause cause() const { return cause_; }
+
+ private:
+  Cause cause_;
 };
 
 // PRAGMA application_id of a loopfarm database: "LOOP" in ASCII.
@@ -90,6 +99,84 @@ struct CommitSummary {
   int repeat_hits = 0;     // verified starts that matched an existing candidate
 };
 
+// --- what readers ask of the database -----------------------------------------
+
+// One row of `runs`.
+struct RunRow {
+  std::int64_t run_id = 0;
+  std::string job_path;
+  std::uint64_t seed = 0;
+  std::int64_t starts = 0;       // the target
+  std::int64_t starts_done = 0;  // committed
+  std::string status;            // running, stopped, complete, failed
+  std::int64_t ranks = 0;        // of the last session
+  int joints = 0;
+  std::string started_at, updated_at;  // ISO 8601 UTC
+};
+
+// Counts over the starts of one run, or of every run.
+struct StartCounts {
+  std::int64_t starts = 0;
+  std::int64_t zeros = 0;
+  std::int64_t verified = 0;
+  double mean_seconds = std::numeric_limits<double>::quiet_NaN();   // per start; NaN without starts
+  double total_seconds = std::numeric_limits<double>::quiet_NaN();  // core-seconds
+};
+
+struct StatusCount {
+  std::string status;  // a start's status (an optimiser's end, "evaluation_failed", ...)
+  std::int64_t starts = 0;
+};
+
+struct FamilyCount {
+  std::string family;
+  std::int64_t candidates = 0;  // distinct linkages
+  std::int64_t hits = 0;        // starts that found them
+};
+
+// log10 of every start's E_mean by decade; exact zeros and NULL apart.
+struct EnergyHistogram {
+  std::map<int, std::int64_t> decades;  // floor(log10 E_mean) -> starts
+  std::int64_t zeros = 0;               // E_mean exactly 0
+  std::int64_t missing = 0;             // NULL: the start could not be evaluated
+};
+
+// One row of `candidates` as a reader needs it: the canonical geometry (L = 1,
+// twists in degrees) as lists of `joints` values.
+struct CandidateRow {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  long long id = 0;
+  std::string family, setup, detail;
+  double E_mean = kNaN, E_max = kNaN;
+  long long hits = 0, first_run = 0, first_start = 0;
+  int local_dimension = 0, free_parameters = 0;
+  double rigid_residual = kNaN, family_residual = kNaN;
+  double bennett_residual = kNaN, planar_residual = kNaN, spherical_residual = kNaN, trivial_residual = kNaN;
+  bool full_turn = false;
+  double range_lo_deg = kNaN, range_hi_deg = kNaN;
+  int joints = 0;
+  std::vector<double> a, alpha_deg, d;
+};
+
+// Which candidates, in the report's order: unclassified first (a possible new
+// family, or a defect for 4R), then by E_mean from zero upwards, then by id.
+struct CandidateFilter {
+  std::string family;                     // empty: every family
+  std::optional<double> max_energy;       // E_mean at most this
+  std::optional<std::int64_t> first_run;  // found first by this run
+  std::int64_t limit = -1;                // at most this many; negative: no limit
+  std::int64_t offset = 0;                // skip this many (paging)
+};
+
+// The connection's settings, for the record and for tests.
+struct ConnectionSettings {
+  std::string journal_mode;  // "wal" while open for writing
+  bool foreign_keys = false;
+  int synchronous = 0;  // 1: NORMAL
+  int busy_timeout_ms = 0;
+  bool query_only = false;
+};
+
 // FNV-1a, 64 bit, of the bytes of `text`, as 16 lowercase hex digits: runs.job_hash.
 std::string job_hash(std::string_view text);
 
@@ -110,8 +197,7 @@ class ResultsDatabase {
 
   const std::string& path() const;
   DatabaseMode mode() const;
-  // The connection, for plain SQL (the report tool); owned by this object.
-  sqlite3* handle() const;
+  ConnectionSettings connection_settings() const;
 
   // Decides which run this invocation writes to. No run yet, or new_run: a
   // new run. The latest run with the same job_hash and seed: that run, resumed
@@ -132,6 +218,33 @@ class ResultsDatabase {
   // `dedup_tolerance` bounds the difference of every canonical-geometry value
   // (lengths at length scale 1, twists in radians, wrapped) of one linkage.
   CommitSummary commit(std::int64_t run_id, const std::vector<StartRecord>& records, double dedup_tolerance = 1e-5);
+
+  // --- reading (either mode). A query's failure throws DatabaseError: refused
+  // when SQLite finds the file damaged, failed otherwise. `run_id` empty: every run.
+  std::vector<RunRow> runs() const;
+  StartCounts start_counts(std::optional<std::int64_t> run_id = {}) const;
+  // Most starts first.
+  std::vector<StatusCount> status_counts(std::optional<std::int64_t> run_id = {}) const;
+  // Families in name order, of the candidates `first_run` found first (every candidate if empty).
+  std::vector<FamilyCount> family_counts(std::optional<std::int64_t> first_run = {}) const;
+  EnergyHistogram energy_histogram(std::optional<std::int64_t> run_id = {}) const;
+  std::int64_t candidate_count() const;
+  std::vector<CandidateRow> candidates(const CandidateFilter& filter) const;
+
+  // One read transaction: every query while it lives sees the same committed
+  // state, even while a writer commits. Ends when it goes.
+  class Snapshot {
+   public:
+    Snapshot(Snapshot&&) noexcept;
+    Snapshot& operator=(Snapshot&&) = delete;
+    ~Snapshot();
+
+   private:
+    friend class ResultsDatabase;
+    explicit Snapshot(const ResultsDatabase* db) : db_(db) {}
+    const ResultsDatabase* db_;
+  };
+  Snapshot snapshot() const;
 
  private:
   struct Impl;

@@ -1,0 +1,64 @@
+// The results database's state behind ResultsDatabase (one connection and its
+// prepared statements). Private to the store: results_database.cpp writes,
+// results_queries.cpp reads.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "candidate_index.hpp"
+#include "loopfarm/farm/results_database.hpp"
+#include "sqlite_support.hpp"
+
+namespace loopfarm {
+
+struct ResultsDatabase::Impl {
+  std::string path;
+  DatabaseMode mode = DatabaseMode::read;
+  store::Connection connection;  // first, so that it is closed after the statements
+
+  store::Statement insert_start;
+  store::Statement insert_candidate;
+  store::Statement replace_candidate;
+  store::Statement hit_candidate;
+  store::Statement select_by_key;
+  store::Statement select_by_cell;
+  store::Statement select_all;
+
+  std::int64_t session_id = 0;  // 0: no open session
+  std::int64_t session_run = 0;
+  bool checkpoint_on_close = false;  // a writer whose open succeeded
+
+  Impl() = default;
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+  // Copies every committed page from the WAL into the file and empties the
+  // WAL, so that the file alone holds everything (a copy of it is whole) and
+  // the checkpoint that closing does under an EXCLUSIVE lock finds nothing
+  // left to copy (open_connection). A reader still on an old snapshot delays
+  // it up to 1 s, then it is left to the close or the next writer: the WAL
+  // keeps the commits either way.
+  ~Impl() {
+    if (!checkpoint_on_close || connection.db == nullptr) return;
+    sqlite3_busy_timeout(connection.db, 1000);
+    sqlite3_exec(connection.db, "PRAGMA wal_checkpoint(TRUNCATE)", nullptr, nullptr, nullptr);
+  }
+
+  sqlite3* db() const { return connection.db; }
+
+  void require_write(const char* what) const {
+    if (mode != DatabaseMode::write) store::fail(path, std::string(what) + ": the database is open read-only");
+  }
+
+  store::Statement& prepared(store::Statement& s, const std::string& sql) {
+    if (!s.prepared()) s.prepare(path, db(), sql);
+    return s.reset();
+  }
+
+  std::optional<store::CanonicalEntry> find_candidate(const store::CanonicalEntry& incoming, double tolerance);
+  std::int64_t place_candidate(std::int64_t run_id, const StartRecord& r, double tolerance, CommitSummary& summary);
+  void bind_candidate(store::Statement& s, std::int64_t run_id, const StartRecord& r);
+};
+
+}  // namespace loopfarm

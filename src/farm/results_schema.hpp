@@ -1,0 +1,33 @@
+// The results database's schema (docs/database.md): the SQL that creates it,
+// the column lists the store binds in, and the checks that a file is a sound
+// loopfarm database of this schema version. Private to the store.
+#pragma once
+
+#include <sqlite3.h>
+
+#include <string>
+#include <vector>
+
+namespace loopfarm::store {
+
+// a1..a8, alpha1_deg..alpha8_deg, d1..d8, each with `prefix` and `suffix`;
+// the three lists separated by `list_separator`.
+std::string geometry_columns(const std::string& prefix, const std::string& suffix,
+                             const std::string& list_separator = ", ");
+
+// The candidate columns that describe the representative start, in bind order
+// (the geometry expands to its 24 columns); everything but candidate_id and hits.
+std::vector<std::string> candidate_columns();
+
+// Every CREATE statement of schema version kDatabaseSchemaVersion.
+std::string schema_sql();
+
+// The schema version of a loopfarm database, or 0 for an empty database (no
+// schema objects, no application_id: a file this program may initialise when
+// `allow_empty`). Refuses everything else. Reads only.
+int check_identity(const std::string& path, sqlite3* db, bool allow_empty);
+
+// PRAGMA quick_check; damage is refused with a few of its problems on one line.
+void check_integrity(const std::string& path, sqlite3* db);
+
+}  // namespace loopfarm::store

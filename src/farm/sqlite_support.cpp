@@ -1,0 +1,96 @@
+// SQLite at the store's edge (sqlite_support.hpp).
+#include "sqlite_support.hpp"
+
+#include <cstdio>
+#include <filesystem>
+
+namespace loopfarm::store {
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw DatabaseError("results database " + path + ": " + what);
+}
+
+[[noreturn]] void fail_sqlite(const std::string& path, sqlite3* db, const std::string& what) {
+  fail(path, what + ": " + (db ? sqlite3_errmsg(db) : "out of memory"));
+}
+
+// SQLite's own words for a damaged file ("database disk image is
+// malformed") do not say which file or that it is the file's fault: say both.
+[[noreturn]] void fail_read(const std::string& path, int rc, const std::string& what, const std::string& message) {
+  if ((rc & 0xff) == SQLITE_NOTADB) fail(path, "not an SQLite database");
+  if ((rc & 0xff) == SQLITE_CORRUPT) fail(path, "damaged (" + what + ": " + message + ")");
+  throw DatabaseError("results database " + path + ": " + what + ": " + message, DatabaseError::Cause::failed);
+}
+
+std::string format_double(double value) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.17g", value);
+  return buffer;
+}
+
+// Opens `path` (or the URI `filename` for it); errors name `path`.
+void open_connection(Connection& c, const std::string& path, int flags, const std::string& filename) {
+  const int rc = sqlite3_open_v2((filename.empty() ? path : filename).c_str(), &c.db, flags, nullptr);
+  if (rc != SQLITE_OK) fail_sqlite(path, c.db, "cannot open");
+  sqlite3_extended_result_codes(c.db, 1);
+  sqlite3_busy_timeout(c.db, kDatabaseBusyTimeoutMs);
+  // The last connection to close a WAL database checkpoints and deletes the
+  // WAL under an EXCLUSIVE lock on the file, and a reader that opens the file
+  // in that moment without a busy timeout (the sqlite3 shell) fails with
+  // "database is locked": 30 of 4696 and 49 of 3768 plain sqlite3 reads
+  // across 40 short runs did (docs/reliability-faults.md). A read-only connection cannot
+  // checkpoint anyway, so it does not try; the writer checkpoints before it
+  // closes (~Impl), without that lock, and keeps it for a few microseconds
+  // only (deleting the empty WAL).
+  if ((flags & SQLITE_OPEN_READONLY) != 0) sqlite3_db_config(c.db, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, nullptr);
+}
+
+// An SQLite URI that opens `path` read-only as immutable: no locks, no WAL,
+// no companion files. '%', '?' and '#' are escaped; an absolute path gets an
+// empty authority ("file:///...").
+std::string immutable_uri(const std::string& path) {
+  std::string uri = path.rfind('/', 0) == 0 ? "file://" : "file:";
+  for (const char c : path) {
+    if (c == '%' || c == '?' || c == '#') {
+      char escaped[4];
+      std::snprintf(escaped, sizeof escaped, "%%%02X", static_cast<unsigned char>(c));
+      uri += escaped;
+    } else {
+      uri += c;
+    }
+  }
+  return uri + "?immutable=1";
+}
+
+// NAME-wal exists and is not empty: commits may be there and not yet in the file.
+bool has_commits_in_wal(const std::string& path) {
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path + "-wal", error);
+  return !error && size > 0;
+}
+
+void exec(const std::string& path, sqlite3* db, const std::string& sql, const char* what) {
+  char* message = nullptr;
+  if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
+    const std::string text = message ? message : sqlite3_errmsg(db);
+    sqlite3_free(message);
+    fail(path, std::string(what) + ": " + text);
+  }
+}
+
+
+std::int64_t query_integer(const std::string& path, sqlite3* db, const std::string& sql) {
+  Statement s;
+  s.prepare(path, db, sql);
+  if (!s.step(sql.c_str())) fail(path, sql + " returned no row");
+  return s.integer(0);
+}
+
+std::string query_text(const std::string& path, sqlite3* db, const std::string& sql) {
+  Statement s;
+  s.prepare(path, db, sql);
+  if (!s.step(sql.c_str())) fail(path, sql + " returned no row");
+  return s.text(0);
+}
+
+}  // namespace loopfarm::store
