@@ -9,10 +9,12 @@
 #
 #   loop_test               the loop's geometry and frames (loop.cpp, sample_loops.cpp)
 #   equilibrium_test        the equilibrium solve and assembly (equilibrium.cpp, assembly.cpp)
-#   sampler_test            the job's parameter space and sampler (job.cpp, parameter_space.cpp, sampler.cpp)
+#   sampler_test            the job's parameter space and sampler (job.cpp, job_space.cpp, toml_hazard.cpp,
+#                           parameter_space.cpp, sampler.cpp)
 #   results_database_test   the results database, SQLite's C API (results_database.cpp)
 #   cycle_start_test        the rigid motion's tracer and the cycle started on it
-#                           (motion.cpp, cycle.cpp, cycle_start.cpp, constructions.cpp)
+#                           (closure_solver.cpp, circuit_trace.cpp, motion.cpp, motion_start.cpp, cycle.cpp,
+#                           cycle_derivatives.cpp, cycle_start.cpp, constructions.cpp)
 #
 # The parsers are sanitized by the fuzzers (fuzz/), the rest only by
 # tools/test.sh --sanitize. A link error here means a test needs a source more:
@@ -36,7 +38,8 @@ loopfarm_add_sanitized_test(loop_test ${loopfarm_geometry})
 loopfarm_add_sanitized_test(equilibrium_test ${loopfarm_geometry}
   ${PROJECT_SOURCE_DIR}/src/core/equilibrium.cpp ${PROJECT_SOURCE_DIR}/src/core/assembly.cpp)
 loopfarm_add_sanitized_test(sampler_test
-  ${PROJECT_SOURCE_DIR}/src/search/job.cpp ${PROJECT_SOURCE_DIR}/src/search/parameter_space.cpp
+  ${PROJECT_SOURCE_DIR}/src/search/job.cpp ${PROJECT_SOURCE_DIR}/src/search/job_space.cpp
+  ${PROJECT_SOURCE_DIR}/src/search/toml_hazard.cpp ${PROJECT_SOURCE_DIR}/src/search/parameter_space.cpp
   ${PROJECT_SOURCE_DIR}/src/search/sampler.cpp ${PROJECT_SOURCE_DIR}/src/search/nlopt_algorithms.cpp
   ${PROJECT_SOURCE_DIR}/src/core/loop.cpp)
 target_link_libraries(sampler_test PRIVATE tomlplusplus::tomlplusplus NLopt::nlopt)
@@ -45,5 +48,7 @@ loopfarm_add_sanitized_test(results_database_test ${PROJECT_SOURCE_DIR}/src/farm
 target_link_libraries(results_database_test PRIVATE SQLite::SQLite3)
 loopfarm_add_sanitized_test(cycle_start_test ${loopfarm_geometry}
   ${PROJECT_SOURCE_DIR}/src/core/equilibrium.cpp ${PROJECT_SOURCE_DIR}/src/core/assembly.cpp
-  ${PROJECT_SOURCE_DIR}/src/core/motion.cpp ${PROJECT_SOURCE_DIR}/src/core/cycle.cpp
+  ${PROJECT_SOURCE_DIR}/src/core/closure_solver.cpp ${PROJECT_SOURCE_DIR}/src/core/circuit_trace.cpp
+  ${PROJECT_SOURCE_DIR}/src/core/motion.cpp ${PROJECT_SOURCE_DIR}/src/core/motion_start.cpp
+  ${PROJECT_SOURCE_DIR}/src/core/cycle.cpp ${PROJECT_SOURCE_DIR}/src/core/cycle_derivatives.cpp
   ${PROJECT_SOURCE_DIR}/src/core/cycle_start.cpp ${PROJECT_SOURCE_DIR}/src/core/constructions.cpp)

@@ -1,0 +1,690 @@
+// The conditions of the known families on one representation of a loop
+// (classify.hpp), written once as templates over where the parameters come
+// from and where the conditions go. Internal to the search.
+//
+// Two paths share one set of condition formulas (the templates below):
+//
+// - the reporting path (classify, family_distance_report) writes out every
+//   writing of the loop as a LoopGeometry and keeps every condition of the
+//   best one with its name: what a report lists;
+// - the numeric path (family_distance, called on every evaluation of a
+//   steered search) looks each writing's parameters up in small tables filled
+//   once per call, keeps only the running sum of squares, gives a writing up
+//   as soon as it cannot beat the best so far, and writes out only the best
+//   writing, to differentiate it. It builds no string and allocates nothing.
+//
+// Both evaluate the same formulas on the same numbers in the same order, so
+// they pick the same writing and return the same distance bit for bit.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "loopfarm/core/loop.hpp"
+#include "loopfarm/search/classify.hpp"
+
+namespace loopfarm::detail {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kPi = 3.14159265358979323846;  // as representation.cpp's twist offsets
+
+inline std::string label(const char* name, int k) { return name + std::to_string(k + 1); }
+
+// Helpers for conditions built from x / L, L the length scale.
+struct Scale {
+  double L;
+  GeometryVector dL;  // empty on the numeric path's search, which takes no gradients
+  int n;
+  // d(x_i / L) for parameter index i (a or d); x_i its value.
+  GeometryVector ratio_gradient(int i, double x) const {
+    assert(dL.size() == 3 * n);
+    GeometryVector g = -(x / (L * L)) * dL;
+    g[i] += 1.0 / L;
+    return g;
+  }
+};
+
+inline Scale scale_of(const LoopGeometry& g) { return {length_scale(g), length_scale_gradient(g), g.joints()}; }
+
+// ---------------------------------------------------------------------------
+// Writings as the conditions read them: parameters a(k), alpha(k), d(k) in
+// the writing's labels, sin and cos of the twists, and the length scale.
+
+// A writing written out (detail::apply, or the geometry as written) with its
+// length scale and gradient.
+struct WrittenOut {
+  LoopGeometry g;
+  Scale s;
+  explicit WrittenOut(const LoopGeometry& geometry) : g(geometry), s(scale_of(g)) {}
+  int joints() const { return g.joints(); }
+  double a(int k) const { return g.a[k]; }
+  double alpha(int k) const { return g.alpha[k]; }
+  double d(int k) const { return g.d[k]; }
+  double sin_alpha(int k) const { return std::sin(g.alpha[k]); }
+  double cos_alpha(int k) const { return std::cos(g.alpha[k]); }
+  const Scale& scale() const { return s; }
+};
+
+// ---------------------------------------------------------------------------
+// Sinks: where a family's conditions go. Each condition comes as three lazy
+// parts, its name, its value and its gradient with respect to the writing's
+// (a, alpha, d); a sink evaluates only the parts it keeps.
+
+// The sum of the squared values in the order they come; every norm here is its sqrt.
+inline double sum_of_squares(std::span<const double> values) {
+  double s = 0.0;
+  for (double v : values) s += v * v;
+  return s;
+}
+
+// d norm / dp, where the norm is not zero.
+template <class Gradients>
+GeometryVector norm_gradient_of(std::span<const double> values, const Gradients& gradients, int size) {
+  GeometryVector g = GeometryVector::Zero(size);
+  const double n = std::sqrt(sum_of_squares(values));
+  if (n == 0.0) return g;
+  for (size_t i = 0; i < values.size(); ++i) g += (values[i] / n) * gradients[i];
+  return g;
+}
+
+// Reporting: every part of every condition.
+struct Conditions {
+  std::vector<std::string> names;
+  std::vector<double> values;
+  std::vector<GeometryVector> gradients;
+
+  template <class Name, class Value, class Gradient>
+  void add(const Name& name, const Value& value, const Gradient& gradient) {
+    names.emplace_back(name());
+    values.push_back(value());
+    gradients.push_back(gradient());
+  }
+  double max_abs() const {
+    double m = 0.0;
+    for (double v : values) m = std::max(m, std::abs(v));
+    return m;
+  }
+  double norm() const { return std::sqrt(sum_of_squares(values)); }
+  GeometryVector norm_gradient(int size) const { return norm_gradient_of(values, gradients, size); }
+};
+
+// The numeric path's best writing: values and gradients, no names, in fixed
+// storage (at most 2n conditions, the spherical family's).
+struct FixedConditions {
+  static constexpr int kCapacity = 2 * kMaxJoints;
+  int count = 0;
+  std::array<double, kCapacity> values;
+  std::array<GeometryVector, kCapacity> gradients;
+
+  template <class Name, class Value, class Gradient>
+  void add(const Name&, const Value& value, const Gradient& gradient) {
+    assert(count < kCapacity);
+    values[static_cast<size_t>(count)] = value();
+    gradients[static_cast<size_t>(count)] = gradient();
+    ++count;
+  }
+  std::span<const double> kept() const { return {values.data(), static_cast<size_t>(count)}; }
+  double norm() const { return std::sqrt(sum_of_squares(kept())); }
+  GeometryVector norm_gradient(int size) const { return norm_gradient_of(kept(), gradients, size); }
+};
+
+// The numeric path's search: only the running sum of squares, summed as
+// sum_of_squares sums it, and given up once it reaches `bound` (the best
+// writing's sum so far). A writing given up cannot be strictly better than
+// the best: adding a square never makes a floating-point sum smaller, and
+// sqrt is monotone.
+struct SquaredNorm {
+  double bound = kInf;
+  double sum = 0.0;
+  bool abandoned = false;
+
+  template <class Name, class Value, class Gradient>
+  void add(const Name&, const Value& value, const Gradient&) {
+    if (abandoned) return;
+    const double v = value();
+    sum += v * v;
+    abandoned = sum >= bound;
+  }
+};
+
+// ---------------------------------------------------------------------------
+// The conditions of each family on one writing `w`, into sink `c`.
+
+// Bennett conditions (n = 4) that both setups share: opposite links and
+// twists equal, no offsets.
+template <class Writing, class Sink>
+void bennett_common_conditions(const Writing& w, Sink& c) {
+  const int n = 4;
+  const Scale& s = w.scale();
+  auto length_difference = [&](int i, int j) {  // (a_i - a_j) / L
+    c.add([&] { return label("a", i) + " - " + label("a", j); }, [&] { return (w.a(i) - w.a(j)) / s.L; },
+          [&]() -> GeometryVector { return s.ratio_gradient(i, w.a(i)) - s.ratio_gradient(j, w.a(j)); });
+  };
+  auto twist_difference = [&](int i, int j) {
+    c.add([&] { return label("alpha", i) + " - " + label("alpha", j); },
+          [&] { return wrap_angle(w.alpha(i) - w.alpha(j)); },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[n + i] = 1.0;
+            grad[n + j] = -1.0;
+            return grad;
+          });
+  };
+  length_difference(0, 2);
+  length_difference(1, 3);
+  twist_difference(0, 2);
+  twist_difference(1, 3);
+  for (int k = 0; k < n; ++k) {
+    c.add([&] { return label("d", k); }, [&] { return w.d(k) / s.L; },
+          [&] { return s.ratio_gradient(2 * n + k, w.d(k)); });
+  }
+}
+
+// The Bennett condition of one setup; setup_sign +1 asymmetric, -1 line-symmetric.
+template <class Writing, class Sink>
+void bennett_setup_condition(const Writing& w, double setup_sign, Sink& c) {
+  const int n = 4;
+  const Scale& s = w.scale();
+  // (a2 sin alpha1 - +- a1 sin alpha2) / L, paper labels (1-based).
+  auto product = [&] { return w.a(1) * w.sin_alpha(0) - setup_sign * w.a(0) * w.sin_alpha(1); };
+  c.add([&] { return setup_sign > 0 ? "a2 sin(alpha1) - a1 sin(alpha2)" : "a2 sin(alpha1) + a1 sin(alpha2)"; },
+        [&] { return product() / s.L; },
+        [&] {
+          GeometryVector grad = -(product() / (s.L * s.L)) * s.dL;
+          grad[1] += w.sin_alpha(0) / s.L;
+          grad[0] += -setup_sign * w.sin_alpha(1) / s.L;
+          grad[n + 0] += w.a(1) * w.cos_alpha(0) / s.L;
+          grad[n + 1] += -setup_sign * w.a(0) * w.cos_alpha(1) / s.L;
+          return grad;
+        });
+}
+
+template <class Writing, class Sink>
+void bennett_conditions(const Writing& w, double setup_sign, Sink& c) {
+  bennett_common_conditions(w, c);
+  bennett_setup_condition(w, setup_sign, c);
+}
+
+template <class Writing, class Sink>
+void planar_conditions(const Writing& w, Sink& c) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  double sign = 1.0, sum = 0.0;
+  std::array<double, kMaxJoints> signs;  // the sign of each offset in the sum
+  for (int k = 0; k < n; ++k) {
+    c.add([&] { return "sin(" + label("alpha", k) + ")"; }, [&] { return w.sin_alpha(k); },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[n + k] = w.cos_alpha(k);
+            return grad;
+          });
+    // The offset d_k points along z_k, which is +-z_1 for parallel axes.
+    sum += sign * w.d(k);
+    signs[static_cast<size_t>(k)] = sign;
+    if (w.cos_alpha(k) < 0.0) sign = -sign;
+  }
+  c.add([] { return "signed sum of d / L"; }, [&] { return sum / s.L; },
+        [&]() -> GeometryVector {
+          GeometryVector dsum = GeometryVector::Zero(3 * n);
+          for (int k = 0; k < n; ++k) dsum[2 * n + k] = signs[static_cast<size_t>(k)];
+          return dsum / s.L - (sum / (s.L * s.L)) * s.dL;
+        });
+}
+
+// On the geometry as written (no writings): lengths in units of L when
+// `normalised`, else in the geometry's own units.
+template <class Sink>
+void spherical_conditions(const LoopGeometry& g, bool normalised, Sink& c) {
+  const int n = g.joints();
+  const double L = normalised ? length_scale(g) : 1.0;
+  for (int k = 0; k < n; ++k) {
+    c.add([&] { return label("a", k); }, [&] { return g.a[k] / L; },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[k] = 1.0 / L;  // (used unnormalised only, where L = 1)
+            return grad;
+          });
+  }
+  for (int k = 0; k < n; ++k) {
+    c.add([&] { return label("d", k); }, [&] { return g.d[k] / L; },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[2 * n + k] = 1.0 / L;
+            return grad;
+          });
+  }
+}
+
+// Axes 1 and 2 of this writing coincide: a1 = 0 and sin(alpha1) = 0.
+template <class Writing, class Sink>
+void adjacent_coaxial_conditions(const Writing& w, Sink& c) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  c.add([] { return "a1"; }, [&] { return w.a(0) / s.L; }, [&] { return s.ratio_gradient(0, w.a(0)); });
+  c.add([] { return "sin(alpha1)"; }, [&] { return w.sin_alpha(0); },
+        [&] {
+          GeometryVector grad = GeometryVector::Zero(3 * n);
+          grad[n] = w.cos_alpha(0);
+          return grad;
+        });
+}
+
+// Axes 1 and 3 of a 4R writing coincide (docs/design.md, "Trivial").
+template <class Writing, class Sink>
+void coaxial_13_conditions(const Writing& w, Sink& c) {
+  const int n = 4;
+  const Scale& s = w.scale();
+  c.add([] { return "a1 - a2"; }, [&] { return (w.a(0) - w.a(1)) / s.L; },
+        [&]() -> GeometryVector { return s.ratio_gradient(0, w.a(0)) - s.ratio_gradient(1, w.a(1)); });
+  c.add([] { return "a3 - a4"; }, [&] { return (w.a(2) - w.a(3)) / s.L; },
+        [&]() -> GeometryVector { return s.ratio_gradient(2, w.a(2)) - s.ratio_gradient(3, w.a(3)); });
+  for (int pair : {0, 2}) {
+    c.add([&] { return label("alpha", pair) + " - " + label("alpha", pair + 1); },
+          [&] { return wrap_angle(w.alpha(pair) - w.alpha(pair + 1)); },
+          [&] {
+            GeometryVector grad = GeometryVector::Zero(3 * n);
+            grad[n + pair] = 1.0;
+            grad[n + pair + 1] = -1.0;
+            return grad;
+          });
+  }
+  c.add([] { return "d2"; }, [&] { return w.d(1) / s.L; }, [&] { return s.ratio_gradient(2 * n + 1, w.d(1)); });
+  c.add([] { return "d4"; }, [&] { return w.d(3) / s.L; }, [&] { return s.ratio_gradient(2 * n + 3, w.d(3)); });
+  c.add([] { return "d1 + d3"; }, [&] { return (w.d(0) + w.d(2)) / s.L; },
+        [&]() -> GeometryVector { return s.ratio_gradient(2 * n, w.d(0)) + s.ratio_gradient(2 * n + 2, w.d(2)); });
+}
+
+
+// ---------------------------------------------------------------------------
+// 5R and 6R families (docs/families.md). Helpers for the conditions they
+// share: a length difference, a twist sum or difference, an offset or a sum
+// of offsets, and a Bennett product.
+
+// (a_i + sign a_j) / L, or a_i / L alone when j < 0.
+template <class Writing, class Sink>
+void add_length(const Writing& w, Sink& c, const char* text, int i, int j, double sign) {
+  const Scale& s = w.scale();
+  c.add([&] { return std::string(text); },
+        [&] { return (w.a(i) + (j >= 0 ? sign * w.a(j) : 0.0)) / s.L; },
+        [&]() -> GeometryVector {
+          GeometryVector g = s.ratio_gradient(i, w.a(i));
+          if (j >= 0) g += sign * s.ratio_gradient(j, w.a(j));
+          return g;
+        });
+}
+
+// (d_i + sign d_j) / L, or d_i / L alone when j < 0.
+template <class Writing, class Sink>
+void add_offset(const Writing& w, Sink& c, const char* text, int i, int j, double sign) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  c.add([&] { return std::string(text); },
+        [&] { return (w.d(i) + (j >= 0 ? sign * w.d(j) : 0.0)) / s.L; },
+        [&]() -> GeometryVector {
+          GeometryVector g = s.ratio_gradient(2 * n + i, w.d(i));
+          if (j >= 0) g += sign * s.ratio_gradient(2 * n + j, w.d(j));
+          return g;
+        });
+}
+
+// wrap(alpha_i + sign alpha_j - shift) [rad].
+template <class Writing, class Sink>
+void add_twist(const Writing& w, Sink& c, const char* text, int i, int j, double sign, double shift = 0.0) {
+  const int n = w.joints();
+  c.add([&] { return std::string(text); }, [&] { return wrap_angle(w.alpha(i) + sign * w.alpha(j) - shift); },
+        [&] {
+          GeometryVector g = GeometryVector::Zero(3 * n);
+          g[n + i] += 1.0;
+          g[n + j] += sign;
+          return g;
+        });
+}
+
+// The Bennett product of links i and j: (a_i sin alpha_j - sign a_j sin alpha_i) / L,
+// zero when sin(alpha_i)/a_i = sign sin(alpha_j)/a_j.
+template <class Writing, class Sink>
+void add_bennett_product(const Writing& w, Sink& c, const char* text, int i, int j, double sign) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  auto product = [&] { return w.a(i) * w.sin_alpha(j) - sign * w.a(j) * w.sin_alpha(i); };
+  c.add([&] { return std::string(text); }, [&] { return product() / s.L; },
+        [&] {
+          GeometryVector g = -(product() / (s.L * s.L)) * s.dL;
+          g[i] += w.sin_alpha(j) / s.L;
+          g[j] += -sign * w.sin_alpha(i) / s.L;
+          g[n + j] += w.a(i) * w.cos_alpha(j) / s.L;
+          g[n + i] += -sign * w.a(j) * w.cos_alpha(i) / s.L;
+          return g;
+        });
+}
+
+// cos(alpha_i): zero when the twist is a right angle (either sign).
+template <class Writing, class Sink>
+void add_right_twist(const Writing& w, Sink& c, const char* text, int i) {
+  const int n = w.joints();
+  c.add([&] { return std::string(text); }, [&] { return w.cos_alpha(i); },
+        [&] {
+          GeometryVector g = GeometryVector::Zero(3 * n);
+          g[n + i] = -w.sin_alpha(i);
+          return g;
+        });
+}
+
+// Goldberg 5R (n = 5): two Bennett loops (b, beta, a, alpha) and
+// (b, beta, c, gamma) sharing the link (b, beta), written as links
+// 1 (b, beta), 2 (a, alpha), 3 (c, gamma), 4 (b, beta) and 5, the two
+// collinear links fused: (a + c, alpha + gamma) when they lie on opposite
+// sides of the removed joint, (a - c, alpha - gamma) on the same side. Set
+// bits: 0 the first loop's setup (sin alpha/a = -sin beta/b when set), 1 the
+// second's, 2 the same-side (subtractive) fusion.
+template <class Writing, class Sink>
+void goldberg_conditions(int set, const Writing& w, Sink& c) {
+  const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0;
+  const bool subtractive = (set & 4) != 0;
+  add_length(w, c, "a1 - a4", 0, 3, -1.0);
+  add_twist(w, c, "alpha1 - alpha4", 0, 3, -1.0);
+  static constexpr const char* kOffsets[] = {"d1", "d2", "d3", "d4", "d5"};
+  for (int k = 0; k < 5; ++k) add_offset(w, c, kOffsets[k], k, -1, 0.0);
+  add_bennett_product(w, c, s1 > 0 ? "a1 sin(alpha2) - a2 sin(alpha1)" : "a1 sin(alpha2) + a2 sin(alpha1)", 0, 1, s1);
+  add_bennett_product(w, c, s2 > 0 ? "a1 sin(alpha3) - a3 sin(alpha1)" : "a1 sin(alpha3) + a3 sin(alpha1)", 0, 2, s2);
+  // a5 - (a2 +- a3), alpha5 - (alpha2 +- alpha3).
+  const double f = subtractive ? 1.0 : -1.0;  // sign of a3 in a5 - a2 + f a3
+  const Scale& s = w.scale();
+  const int n = 5;
+  c.add([&] { return subtractive ? "a5 - (a2 - a3)" : "a5 - (a2 + a3)"; },
+        [&] { return (w.a(4) - w.a(1) + f * w.a(2)) / s.L; },
+        [&]() -> GeometryVector {
+          return s.ratio_gradient(4, w.a(4)) - s.ratio_gradient(1, w.a(1)) + f * s.ratio_gradient(2, w.a(2));
+        });
+  c.add([&] { return subtractive ? "alpha5 - (alpha2 - alpha3)" : "alpha5 - (alpha2 + alpha3)"; },
+        [&] { return wrap_angle(w.alpha(4) - w.alpha(1) + f * w.alpha(2)); },
+        [&] {
+          GeometryVector g = GeometryVector::Zero(3 * n);
+          g[n + 4] = 1.0;
+          g[n + 1] = -1.0;
+          g[n + 2] = f;
+          return g;
+        });
+}
+
+// Myard 5R: the Goldberg 5R whose two Bennett loops are mirror images,
+// which makes it plane-symmetric: a2 = a3, alpha3 = -alpha2 (bit 3 clear)
+// or pi - alpha2 (bit 3 set), and the shared link's twist a right angle.
+// Bits 0-2 as goldberg_conditions.
+template <class Writing, class Sink>
+void myard_conditions(int set, const Writing& w, Sink& c) {
+  goldberg_conditions(set & 7, w, c);
+  const double pi_shift = (set & 8) ? kPi : 0.0;
+  add_length(w, c, "a2 - a3", 1, 2, -1.0);
+  add_twist(w, c, (set & 8) ? "alpha2 + alpha3 - pi" : "alpha2 + alpha3", 1, 2, 1.0, pi_shift);
+  add_right_twist(w, c, "cos(alpha1)", 0);
+}
+
+// Goldberg's 5R with the two links fused at any angle psi about the removed
+// joint's axis (docs/families.md, "Goldberg 5R, bent fused link"). Links 1-4
+// as goldberg_conditions; the fused link 5 (a5, alpha5) and the offsets d1,
+// d5 it leaves at joints 1 and 5 are those of the screw product
+// Rx(-alpha3) Tx(-a3) Rz(psi) Tx(a2) Rx(alpha2). Its dual-angle cosine rule
+// with psi eliminated, and the Bennett relations sin(alpha2)/a2 = kappa,
+// sin(alpha3)/a3 = sigma kappa (sigma = +1 when both Bennett loops are in the
+// same setup, -1 otherwise), give three conditions:
+//   d1 - sigma d5 = 0
+//   a5 sin(alpha2) sin(alpha5) - a2 (sigma cos(alpha2) + cos(alpha3)) (1 - sigma cos(alpha5)) = 0
+//   sin(alpha2)^2 d5^2 (1 + sigma cos(alpha5))^2 - a2^2 G = 0,
+// G = 1 - cos^2(alpha2) - cos^2(alpha3) - cos^2(alpha5) + 2 cos(alpha2) cos(alpha3) cos(alpha5)
+// (= sin^2(alpha2) sin^2(alpha3) sin^2(psi)); the last is squared so that it
+// stays smooth where psi = 0 or pi (Goldberg's own loops, d1 = d5 = 0).
+// Bits 0 and 1 of `set` as goldberg_conditions (the fusion side is psi).
+template <class Writing, class Sink>
+void goldberg_bent_conditions(int set, const Writing& w, Sink& c) {
+  const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0, sigma = s1 * s2;
+  const int n = 5;
+  const Scale& s = w.scale();
+  add_length(w, c, "a1 - a4", 0, 3, -1.0);
+  add_twist(w, c, "alpha1 - alpha4", 0, 3, -1.0);
+  add_offset(w, c, "d2", 1, -1, 0.0);
+  add_offset(w, c, "d3", 2, -1, 0.0);
+  add_offset(w, c, "d4", 3, -1, 0.0);
+  add_bennett_product(w, c, s1 > 0 ? "a1 sin(alpha2) - a2 sin(alpha1)" : "a1 sin(alpha2) + a2 sin(alpha1)", 0, 1, s1);
+  add_bennett_product(w, c, s2 > 0 ? "a1 sin(alpha3) - a3 sin(alpha1)" : "a1 sin(alpha3) + a3 sin(alpha1)", 0, 2, s2);
+  add_offset(w, c, sigma > 0 ? "d1 - d5" : "d1 + d5", 0, 4, -sigma);
+  // The fused link's length (the dual part of the cosine rule).
+  auto length_term = [&] {
+    return w.a(4) * w.sin_alpha(1) * w.sin_alpha(4) -
+           w.a(1) * (sigma * w.cos_alpha(1) + w.cos_alpha(2)) * (1.0 - sigma * w.cos_alpha(4));
+  };
+  c.add([&] {
+          return sigma > 0 ? "a5 sin(alpha2) sin(alpha5) - a2 (cos(alpha2) + cos(alpha3)) (1 - cos(alpha5))"
+                           : "a5 sin(alpha2) sin(alpha5) - a2 (cos(alpha3) - cos(alpha2)) (1 + cos(alpha5))";
+        },
+        [&] { return length_term() / s.L; },
+        [&] {
+          const double P = sigma * w.cos_alpha(1) + w.cos_alpha(2), Q = 1.0 - sigma * w.cos_alpha(4);
+          GeometryVector g = -(length_term() / (s.L * s.L)) * s.dL;
+          g[4] += w.sin_alpha(1) * w.sin_alpha(4) / s.L;
+          g[1] += -P * Q / s.L;
+          g[n + 1] += (w.a(4) * w.cos_alpha(1) * w.sin_alpha(4) + w.a(1) * sigma * w.sin_alpha(1) * Q) / s.L;
+          g[n + 2] += w.a(1) * w.sin_alpha(2) * Q / s.L;
+          g[n + 4] += (w.a(4) * w.sin_alpha(1) * w.cos_alpha(4) - w.a(1) * P * sigma * w.sin_alpha(4)) / s.L;
+          return g;
+        });
+  // The offsets against the fusion angle: sin^2(psi) from the real cosine rule, G.
+  auto gram = [&] {
+    const double c2 = w.cos_alpha(1), c3 = w.cos_alpha(2), c5 = w.cos_alpha(4);
+    return 1.0 - c2 * c2 - c3 * c3 - c5 * c5 + 2.0 * c2 * c3 * c5;
+  };
+  auto offset_term = [&] {
+    const double k = w.sin_alpha(1) * w.d(4) * (1.0 + sigma * w.cos_alpha(4));
+    return k * k - w.a(1) * w.a(1) * gram();
+  };
+  c.add([&] {
+          return sigma > 0 ? "(sin(alpha2) d5 (1 + cos(alpha5)))^2 - a2^2 G, over L^2"
+                           : "(sin(alpha2) d5 (1 - cos(alpha5)))^2 - a2^2 G, over L^2";
+        },
+        [&] { return offset_term() / (s.L * s.L); },
+        [&] {
+          const double c2 = w.cos_alpha(1), c3 = w.cos_alpha(2), c5 = w.cos_alpha(4);
+          const double s2v = w.sin_alpha(1), s3v = w.sin_alpha(2), s5v = w.sin_alpha(4);
+          const double R = 1.0 + sigma * c5, k = s2v * w.d(4) * R, a2 = w.a(1), G = gram();
+          const double L2 = s.L * s.L;
+          GeometryVector g = -(2.0 * offset_term() / (L2 * s.L)) * s.dL;
+          // dG/dalpha_i = 2 sin(alpha_i) (cos(alpha_i) - product of the other two cosines).
+          g[n + 1] += (2.0 * k * c2 * w.d(4) * R - a2 * a2 * 2.0 * s2v * (c2 - c3 * c5)) / L2;
+          g[n + 2] += (-a2 * a2 * 2.0 * s3v * (c3 - c2 * c5)) / L2;
+          g[n + 4] += (2.0 * k * s2v * w.d(4) * (-sigma * s5v) - a2 * a2 * 2.0 * s5v * (c5 - c2 * c3)) / L2;
+          g[2 * n + 4] += 2.0 * k * s2v * R / L2;
+          g[1] += -2.0 * a2 * G / L2;
+          return g;
+        });
+}
+
+// Bricard line-symmetric 6R: a_i = a_{i+3}, alpha_i = alpha_{i+3}, d_i = d_{i+3}.
+template <class Writing, class Sink>
+void bricard_line_conditions(const Writing& w, Sink& c) {
+  static constexpr const char* kA[] = {"a1 - a4", "a2 - a5", "a3 - a6"};
+  static constexpr const char* kAlpha[] = {"alpha1 - alpha4", "alpha2 - alpha5", "alpha3 - alpha6"};
+  static constexpr const char* kD[] = {"d1 - d4", "d2 - d5", "d3 - d6"};
+  for (int i = 0; i < 3; ++i) add_length(w, c, kA[i], i, i + 3, -1.0);
+  for (int i = 0; i < 3; ++i) add_twist(w, c, kAlpha[i], i, i + 3, -1.0);
+  for (int i = 0; i < 3; ++i) add_offset(w, c, kD[i], i, i + 3, -1.0);
+}
+
+// Bricard plane-symmetric 6R, the plane through joints 1 and 4: a1 = a6,
+// a2 = a5, a3 = a4, alpha1 = -alpha6, alpha2 = -alpha5, alpha3 = -alpha4,
+// d1 = d4 = 0, d2 = -d6, d3 = -d5 (in this project's convention; the
+// literature's "alpha12 + alpha61 = pi" is the same loop in its own).
+template <class Writing, class Sink>
+void bricard_plane_conditions(const Writing& w, Sink& c) {
+  static constexpr const char* kA[] = {"a1 - a6", "a2 - a5", "a3 - a4"};
+  static constexpr const char* kAlpha[] = {"alpha1 + alpha6", "alpha2 + alpha5", "alpha3 + alpha4"};
+  for (int i = 0; i < 3; ++i) add_length(w, c, kA[i], i, 5 - i, -1.0);
+  for (int i = 0; i < 3; ++i) add_twist(w, c, kAlpha[i], i, 5 - i, 1.0);
+  add_offset(w, c, "d1", 0, -1, 0.0);
+  add_offset(w, c, "d4", 3, -1, 0.0);
+  add_offset(w, c, "d2 + d6", 1, 5, 1.0);
+  add_offset(w, c, "d3 + d5", 2, 4, 1.0);
+}
+
+// Bricard trihedral 6R: every twist a right angle, every offset zero, and
+// a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2 (in units of L^2).
+template <class Writing, class Sink>
+void bricard_trihedral_conditions(const Writing& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  static constexpr const char* kCos[] = {"cos(alpha1)", "cos(alpha2)", "cos(alpha3)",
+                                         "cos(alpha4)", "cos(alpha5)", "cos(alpha6)"};
+  static constexpr const char* kD[] = {"d1", "d2", "d3", "d4", "d5", "d6"};
+  for (int k = 0; k < n; ++k) add_right_twist(w, c, kCos[k], k);
+  for (int k = 0; k < n; ++k) add_offset(w, c, kD[k], k, -1, 0.0);
+  auto squares = [&] {
+    double q = 0.0;
+    for (int k = 0; k < n; ++k) q += (k % 2 == 0 ? 1.0 : -1.0) * w.a(k) * w.a(k);
+    return q;
+  };
+  c.add([] { return "(a1^2 - a2^2 + a3^2 - a4^2 + a5^2 - a6^2) / L^2"; },
+        [&] { return squares() / (s.L * s.L); },
+        [&] {
+          const double q = squares();
+          GeometryVector g = -(2.0 * q / (s.L * s.L * s.L)) * s.dL;
+          for (int k = 0; k < n; ++k) g[k] += (k % 2 == 0 ? 2.0 : -2.0) * w.a(k) / (s.L * s.L);
+          return g;
+        });
+}
+
+// Two Bennett loops sharing a link, the shared link removed and nothing fused
+// (6R): loop 1 (A B C D) = (a, alpha, b, beta) and loop 2 (A F E D) =
+// (c, gamma, b, beta) share the link DA = (b, beta) and its axes A and D; the
+// 6R A B C D E F keeps every joint, so each loop still turns about the shared
+// link on its own: two degrees of freedom (docs/families.md). Written as
+// links 1 (a, alpha), 2 (b, beta), 3 (a, alpha), 4 (c, gamma), 5 (b, beta),
+// 6 (c, gamma), every offset zero (joints 1 and 4 are A and D). Set bits: 0
+// loop 1's setup (sin alpha/a = -sin beta/b when set), 1 loop 2's.
+template <class Writing, class Sink>
+void bennett_pair_conditions(int set, const Writing& w, Sink& c) {
+  const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0;
+  add_length(w, c, "a1 - a3", 0, 2, -1.0);
+  add_twist(w, c, "alpha1 - alpha3", 0, 2, -1.0);
+  add_length(w, c, "a4 - a6", 3, 5, -1.0);
+  add_twist(w, c, "alpha4 - alpha6", 3, 5, -1.0);
+  add_length(w, c, "a2 - a5", 1, 4, -1.0);
+  add_twist(w, c, "alpha2 - alpha5", 1, 4, -1.0);
+  static constexpr const char* kOffsets[] = {"d1", "d2", "d3", "d4", "d5", "d6"};
+  for (int k = 0; k < 6; ++k) add_offset(w, c, kOffsets[k], k, -1, 0.0);
+  add_bennett_product(w, c, s1 > 0 ? "a1 sin(alpha2) - a2 sin(alpha1)" : "a1 sin(alpha2) + a2 sin(alpha1)", 0, 1, s1);
+  add_bennett_product(w, c, s2 > 0 ? "a4 sin(alpha5) - a5 sin(alpha4)" : "a4 sin(alpha5) + a5 sin(alpha4)", 3, 4, s2);
+}
+
+// Two Bennett dyads joined by two equal links (6R, docs/families.md; found
+// by the generic 6R search): links 1, 2 with Bennett's ratio kappa1 =
+// sin(alpha1)/a1 = sin(alpha2)/a2 and no offset between them (d2 = 0), links
+// 4, 5 likewise (kappa2, d5 = 0), the same (cos alpha + cos beta) / kappa for
+// both dyads, links 3 and 6 equal, and each dyad's two end joints the same
+// offset (d1 = d3, d4 = d6).
+template <class Writing, class Sink>
+void bennett_dyads_conditions(const Writing& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  add_length(w, c, "a3 - a6", 2, 5, -1.0);
+  add_twist(w, c, "alpha3 - alpha6", 2, 5, -1.0);
+  add_offset(w, c, "d2", 1, -1, 0.0);
+  add_offset(w, c, "d5", 4, -1, 0.0);
+  add_offset(w, c, "d1 - d3", 0, 2, -1.0);
+  add_offset(w, c, "d4 - d6", 3, 5, -1.0);
+  add_bennett_product(w, c, "a1 sin(alpha2) - a2 sin(alpha1)", 0, 1, 1.0);
+  add_bennett_product(w, c, "a4 sin(alpha5) - a5 sin(alpha4)", 3, 4, 1.0);
+  // (cos alpha1 + cos alpha2) / kappa1 = (cos alpha4 + cos alpha5) / kappa2,
+  // times sin(alpha1) sin(alpha4), over L.
+  auto value = [&] {
+    return (w.cos_alpha(0) + w.cos_alpha(1)) * w.a(0) * w.sin_alpha(3) -
+           (w.cos_alpha(3) + w.cos_alpha(4)) * w.a(3) * w.sin_alpha(0);
+  };
+  c.add([] { return "((cos(alpha1) + cos(alpha2)) a1 sin(alpha4) - (cos(alpha4) + cos(alpha5)) a4 sin(alpha1)) / L"; },
+        [&] { return value() / s.L; },
+        [&] {
+          GeometryVector g = -(value() / (s.L * s.L)) * s.dL;
+          const double c12 = w.cos_alpha(0) + w.cos_alpha(1), c45 = w.cos_alpha(3) + w.cos_alpha(4);
+          g[0] += c12 * w.sin_alpha(3) / s.L;
+          g[3] += -c45 * w.sin_alpha(0) / s.L;
+          g[n + 0] += (-w.sin_alpha(0) * w.a(0) * w.sin_alpha(3) - c45 * w.a(3) * w.cos_alpha(0)) / s.L;
+          g[n + 1] += -w.sin_alpha(1) * w.a(0) * w.sin_alpha(3) / s.L;
+          g[n + 3] += (c12 * w.a(0) * w.cos_alpha(3) + w.sin_alpha(3) * w.a(3) * w.sin_alpha(0)) / s.L;
+          g[n + 4] += w.sin_alpha(4) * w.a(3) * w.sin_alpha(0) / s.L;
+          return g;
+        });
+}
+
+// The 5R families built from two Bennett loops sharing a link: Goldberg's,
+// its symmetric case Myard's and its bent-link variant.
+constexpr bool goldberg_type(Family family) {
+  return family == Family::goldberg || family == Family::myard || family == Family::goldberg_bent;
+}
+
+// The condition sets of a writing that a family's score takes the best of,
+// numbered: for Bennett loops set 0 is the asymmetric setup and set 1 the
+// line-symmetric one; for trivial loops set 0 is axes 1 and 2 coinciding and
+// set 1 (n = 4) axes 1 and 3; planar loops have one set; Goldberg and Myard
+// sets as goldberg_conditions and myard_conditions say; Bricard loops one.
+inline int condition_sets(Family family, int joints) {
+  switch (family) {
+    case Family::bennett: return 2;
+    case Family::planar: return 1;
+    case Family::trivial: return joints == 4 ? 2 : 1;
+    case Family::goldberg: return 8;
+    case Family::myard: return 16;
+    case Family::goldberg_bent: return 4;
+    case Family::bennett_pair: return 4;
+    case Family::bennett_dyads:
+    case Family::bricard_line_symmetric:
+    case Family::bricard_plane_symmetric:
+    case Family::bricard_trihedral: return 1;
+    case Family::spherical:
+    case Family::degenerate:
+    case Family::unclassified: break;
+  }
+  return 0;  // no writings
+}
+
+// Whether a family's conditions read cosines of twists (the numeric path
+// tabulates them only then).
+constexpr bool reads_cosines(Family family) {
+  return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
+         family == Family::bricard_trihedral || family == Family::bennett_dyads;
+}
+
+template <Family F, class Writing, class Sink>
+void condition_set(int set, const Writing& w, Sink& c) {
+  static_assert(F != Family::spherical && F != Family::degenerate && F != Family::unclassified);
+  if constexpr (F == Family::bennett) {
+    bennett_conditions(w, set == 0 ? 1.0 : -1.0, c);
+  } else if constexpr (F == Family::planar) {
+    planar_conditions(w, c);
+  } else if constexpr (F == Family::goldberg) {
+    goldberg_conditions(set, w, c);
+  } else if constexpr (F == Family::myard) {
+    myard_conditions(set, w, c);
+  } else if constexpr (F == Family::goldberg_bent) {
+    goldberg_bent_conditions(set, w, c);
+  } else if constexpr (F == Family::bricard_line_symmetric) {
+    bricard_line_conditions(w, c);
+  } else if constexpr (F == Family::bricard_plane_symmetric) {
+    bricard_plane_conditions(w, c);
+  } else if constexpr (F == Family::bricard_trihedral) {
+    bricard_trihedral_conditions(w, c);
+  } else if constexpr (F == Family::bennett_pair) {
+    bennett_pair_conditions(set, w, c);
+  } else if constexpr (F == Family::bennett_dyads) {
+    bennett_dyads_conditions(w, c);
+  } else if (set == 0) {
+    adjacent_coaxial_conditions(w, c);
+  } else {
+    coaxial_13_conditions(w, c);
+  }
+}
+
+}  // namespace loopfarm::detail
