@@ -43,7 +43,7 @@
       # Waldron's hybrid: two Bennett loops ABCD, AEFG sharing the axis A, links AB, AE fused and
       # DA, GA fused, joint A removed: the 6R B C D G F E; verified with loopfarm
 
-Classes, tested on every shift and reversal of the canonical writing, each equality to 1e-6
+Classes, tested on every shift and reversal of the canonical representation, each equality to 1e-6
 (lengths in L, twists in degrees / 57.3; k_i = |sin alpha_i| / a_i, Bennett's ratio; a link
 equals another when a and the twist agree up to sign and pi):
   pair  links 1 = 3, 4 = 6, 2 = 5, k1 = k2, k4 = k5, every d = 0 (bennett_pair's pattern)
@@ -76,7 +76,7 @@ def same_kappa(a, al, i, k):
     return abs(kappa(a, al, i) - kappa(a, al, k)) < TOL * max(1.0, kappa(a, al, i))
 
 
-def writings(a, al, d):
+def representations(a, al, d):
     for s in range(6):
         A = [a[(i + s) % 6] for i in range(6)]
         AL = [al[(i + s) % 6] for i in range(6)]
@@ -110,7 +110,7 @@ PATTERNS = [('pair', is_pair), ('P9', is_p9), ('T7', is_t7), ('B8', is_b8)]
 
 def classify(a, al, d):
     for name, test in PATTERNS:
-        if any(test(*w) for w in writings(a, al, d)):
+        if any(test(*w) for w in representations(a, al, d)):
             return name
     return 'none'
 
@@ -220,7 +220,7 @@ def jacobian(a, al, d, loopfarm):
                   f"{len(values)} poses")
 
 
-def p9_writing(a, al, d):
+def p9_representation(a, al, d):
     for s in range(6):
         A = [a[(i + s) % 6] for i in range(6)]
         AL = [al[(i + s) % 6] for i in range(6)]
@@ -240,7 +240,7 @@ def cmd_normal(db, start, loopfarm, eps=1e-4):
     con = sqlite3.connect(db)
     v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
                     "WHERE s.start_index = ?", (int(start),)).fetchone()
-    A, AL, D = p9_writing(list(v[0:6]), list(v[6:12]), list(v[12:18]))
+    A, AL, D = p9_representation(list(v[0:6]), list(v[6:12]), list(v[12:18]))
     R = math.radians
     p = {'kappa1': math.sin(R(AL[0])) / A[0], 'alpha1': R(AL[0]), 'alpha2': R(AL[1]), 'kappa2': math.sin(R(AL[3])) / A[3],
          'alpha4': R(AL[3]), 'alpha5': R(AL[4]), 'a3': A[2], 'alpha3': R(AL[2]), 'd1': D[0], 'd4': D[3]}
@@ -277,7 +277,7 @@ def cmd_invariants(db):
     R = math.radians
     sums = []
     for r in rows(db, 'AND rigid_residual <= 1e-11'):
-        w = p9_writing(list(r[6:12]), list(r[12:18]), list(r[18:24]))
+        w = p9_representation(list(r[6:12]), list(r[12:18]), list(r[18:24]))
         if not w:
             continue
         A, AL, D = w
@@ -628,8 +628,8 @@ def report_built(label, a, al, d, th, loopfarm):
     print_mobius('  motion', mobius_summary(a, al, d, 100))
 
 
-def t7_writing(a, al, d):
-    for s in range(6):  # a cyclic shift is a writing of the same loop (no reversal: signs would change)
+def t7_representation(a, al, d):
+    for s in range(6):  # a cyclic shift is a representation of the same loop (no reversal: signs would change)
         A, AL, D = ([v[(i + s) % 6] for i in range(6)] for v in (a, al, d))
         if is_t7(A, AL, D):
             return A, AL, D
@@ -648,7 +648,7 @@ def cmd_t7_normal(db, start, loopfarm, eps=1e-5):
     con = sqlite3.connect(f'file:{db}?mode=ro', uri=True)
     v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
                     "WHERE s.start_index = ?", (int(start),)).fetchone()
-    A, AL, D = t7_writing(list(v[0:6]), list(v[6:12]), list(v[12:18]))
+    A, AL, D = t7_representation(list(v[0:6]), list(v[6:12]), list(v[12:18]))
     R = [math.radians(x) for x in AL]
     p = [math.sin(R[0]) / A[0], R[0], R[1], R[2], math.sin(R[3]) / A[3], R[3], R[4], R[5], D[0]]
     sign = 1.0 if abs(D[3] - D[0]) < 1e-6 else -1.0
@@ -690,7 +690,7 @@ def cmd_t7_offsets(db):
     """Each T7 loop with its offsets d1, d4 scaled by f = 0 and 2: assembled (the script's rigid closure, up to 5 x 100
     random guesses) and its motion followed (80 steps; every pose closes to <= 1e-10)?"""
     for r in rows(db, 'AND rigid_residual <= 1e-11'):
-        w = t7_writing(list(r[6:12]), list(r[12:18]), list(r[18:24]))
+        w = t7_representation(list(r[6:12]), list(r[12:18]), list(r[18:24]))
         if not w:
             continue
         A, AL, D = w

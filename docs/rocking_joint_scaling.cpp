@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
   std::printf("projected: distance %.2e, |x - x_L| = %.2e\n", family_distance(Family::bennett, four_r(job.space.geometry(x))), (x0 - x).norm());
   Eigen::VectorXd xL = x;
   { Eigen::VectorXd dx = x0 - xL; std::printf("x (search labels, a1..a5 then alpha1..alpha5 [rad]):"); for (int j = 0; j < x.size(); ++j) std::printf(" %.5f", x0[j]); std::printf("\ndx/|dx|:"); for (int j = 0; j < x.size(); ++j) std::printf(" %+.3f", dx[j] / dx.norm()); std::printf("\n"); }
-  ObjectiveSettings plain = ObjectiveSettings::from_loop(job.loop);
+  ObjectiveOptions plain = ObjectiveOptions::from_loop(job.loop);
   plain.measure = CycleMeasure::mean;
   // The singular values of the cycle's deformation Jacobian (local_dimension's
   // input, lengths times L) at the search's point and at its projection.

@@ -15,7 +15,7 @@ namespace {
 
 using testing::rad;
 
-// Another writing of the same loop, built with loop.hpp's own operations
+// Another representation of the same loop, built with loop.hpp's own operations
 // (independent of the canonical form's internal maps): a relabelling, maybe
 // a reversal, some axis flips and a scale, chosen from `seed`.
 struct Rewritten {
@@ -52,7 +52,7 @@ Rewritten rewrite(const LoopGeometry& g, const JointVector& theta, std::uint64_t
   return r;
 }
 
-TEST(Canonical, EveryWritingOfALoopHasTheSameKey) {
+TEST(Canonical, EveryRepresentationOfALoopHasTheSameKey) {
   for (int n = 4; n <= 8; ++n) {
     for (std::uint64_t seed = 1; seed <= 6; ++seed) {
       const LoopGeometry g = random_loop(n, 100 * n + seed);

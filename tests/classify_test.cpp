@@ -20,7 +20,7 @@ using testing::rad;
 
 constexpr double kTwoPi = 2 * 3.14159265358979323846;
 
-// A writing of the same loop by loop.hpp's operations (shift, reversal, flips).
+// A representation of the same loop by loop.hpp's operations (shift, reversal, flips).
 LoopGeometry rewritten(const LoopGeometry& g, int shift, bool reverse, unsigned flips) {
   LoopGeometry out = relabelled(g, shift);
   if (reverse) out = reversed(out);
@@ -61,7 +61,7 @@ TEST(Families, TableListsEveryFamilyAndAgreesWithFamilyDistance) {
   EXPECT_FALSE(family_dimension(Family::bennett, 5).has_value());
 }
 
-TEST(Classify, BennettLoopsInBothSetupsAndAnyWriting) {
+TEST(Classify, BennettLoopsInBothSetupsAndAnyRepresentation) {
   for (double a1 : {1.0, 2.0, 3.5}) {
     for (auto [alpha1, alpha2] : {std::pair{30.0, 90.0}, std::pair{50.0, 120.0}, std::pair{100.0, 20.0}}) {
       const LoopGeometry asym = bennett_loop(a1, rad(alpha1), rad(alpha2));
@@ -74,7 +74,7 @@ TEST(Classify, BennettLoopsInBothSetupsAndAnyWriting) {
       EXPECT_EQ(cl.family, Family::bennett);
       EXPECT_EQ(cl.setup, BennettSetup::line_symmetric);
       EXPECT_LT(cl.residual, 1e-12);
-      // Any writing of the loop is still a Bennett loop.
+      // Any representation of the loop is still a Bennett loop.
       for (unsigned flips : {0u, 5u, 6u, 13u}) {
         const LoopGeometry w = rewritten(asym, static_cast<int>(flips % 4), flips % 2 == 1, flips);
         EXPECT_EQ(classify(w, JointVector::Zero(4), kMoving).family, Family::bennett) << flips;
@@ -151,7 +151,7 @@ TEST(Classify, GenericAndNearlyMovableLoopsAreUnclassified) {
   EXPECT_NE(c.detail.find("bennett"), std::string::npos) << c.detail;
 }
 
-TEST(FamilyDistance, ZeroOnTheFamilyPositiveOffItInvariantUnderWriting) {
+TEST(FamilyDistance, ZeroOnTheFamilyPositiveOffItInvariantUnderRepresentation) {
   struct Case {
     Family family;
     LoopGeometry member;
@@ -197,7 +197,7 @@ TEST(FamilyDistance, GradientAgreesWithCentralDifferences) {
 // Geometries for comparing the numeric and the reporting path of
 // family_distance: generic loops, twists far outside (-pi, pi], loops near
 // (and on) each family, and exact special values (zero and negative-zero
-// lengths and offsets, twists of 0, +-pi/2, +-pi) where many writings tie.
+// lengths and offsets, twists of 0, +-pi/2, +-pi) where many representations tie.
 LoopGeometry comparison_geometry(int n, std::uint64_t seed) {
   constexpr double kPi = 3.14159265358979323846;
   std::mt19937_64 rng(seed);
@@ -251,8 +251,8 @@ LoopGeometry comparison_geometry(int n, std::uint64_t seed) {
   return g;
 }
 
-// The numeric path (family_distance) picks the same writing as the reporting
-// path (family_distance_report, which writes every writing out and names its
+// The numeric path (family_distance) picks the same representation as the reporting
+// path (family_distance_report, which writes every representation out and names its
 // conditions: the algorithm as it was) and returns the same distance and
 // gradient. Required to 1e-14 relative; by construction (the same formulas
 // on the same numbers, in the same order) they agree bit for bit.
@@ -285,8 +285,8 @@ TEST(FamilyDistance, NumericPathEqualsTheReportingPath) {
   EXPECT_EQ(identical, compared) << "the paths should agree bit for bit";
 }
 
-// The reporting path names the best writing's conditions.
-TEST(FamilyDistance, ReportListsTheBestWritingsConditions) {
+// The reporting path names the best representation's conditions.
+TEST(FamilyDistance, ReportListsTheBestRepresentationsConditions) {
   LoopGeometry g = planar_four_bar(1.0, 3.0, 2.5, 3.5);
   g.d << 0.3, 0.1, 0.0, 0.0;
   const FamilyCheck planar = family_distance_report(Family::planar, g);
@@ -301,7 +301,7 @@ TEST(FamilyDistance, ReportListsTheBestWritingsConditions) {
 }
 
 // The steered search calls family_distance on every evaluation: after the
-// first call for a joint count (which builds its table of writings), a call
+// first call for a joint count (which builds its table of representations), a call
 // allocates nothing, with or without the gradient.
 TEST(FamilyDistance, RepeatedCallsDoNotAllocate) {
   if (!testing::kCountsAllocations) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";

@@ -1,7 +1,7 @@
 // Tests of the constructions with known motions (constructions.hpp) against
 // independent computations: closure residuals of loop.hpp's product, brute
 // force scans of the closed forms, Grashof's rule from the lengths, loop.hpp's
-// rewritings, the rank of the closure Jacobian, and a Levenberg-Marquardt
+// representations, the rank of the closure Jacobian, and a Levenberg-Marquardt
 // assembly of the rigid closure from random guesses (a generic 6R with its
 // input held cannot be assembled at all).
 #include <algorithm>
@@ -79,7 +79,7 @@ TEST(Constructions, DhFromAxesReadsAKnownLoopAndItsPoseOffItsAxes) {
       EXPECT_NEAR(angle_distance(read.theta[k], pose[k]), 0.0, 1e-12) << k;
     }
   }
-  // An axis reversed is the loop with that axis flipped (loop.hpp's rewriting).
+  // An axis reversed is the loop with that axis flipped (loop.hpp's representations).
   for (int j = 1; j < 4; ++j) {
     std::vector<Axis> axes = joint_axes(g, theta);
     axes[static_cast<size_t>(j)].direction = -axes[static_cast<size_t>(j)].direction;
@@ -438,7 +438,7 @@ TEST(Constructions, TrihedralBricardMovesWithOneDegreeOfFreedom) {
 
 TEST(Constructions, TrihedralBricardParityDecidesWhetherSomeLengthsMove) {
   // The 64 patterns are two loops: flips change two twists at a time, so the
-  // parity of the number of -90 deg twists is kept by every writing. For
+  // parity of the number of -90 deg twists is kept by every representation. For
   // these lengths no branch of even parity exists, and the assembly from
   // random guesses finds no pose at any of 24 inputs in two even patterns
   // (all +90 deg, and two -90 deg), while odd patterns (one -90 deg, Baker's

@@ -1,7 +1,7 @@
 // Property tests of the 5R and 6R families (docs/families.md): members built
 // from random parameters by each family's construction, each one checked
 // movable by the rigid closure along a motion (verify_motion, which shares
-// nothing with the classifier) and classified as its family in any writing;
+// nothing with the classifier) and classified as its family in any representation;
 // near-misses (one parameter moved by 1e-3 ... 1e-6) checked rigid and not
 // classified as the family.
 //
@@ -66,7 +66,7 @@ JointVector bennett_pose(const LoopGeometry& g, double t) {
   return asymmetric ? bennett_angles(g, t) : bennett_angles_line_symmetric(g, t);
 }
 
-// A writing of the same loop by loop.hpp's operations (shift, reversal,
+// A representation of the same loop by loop.hpp's operations (shift, reversal,
 // flips), with its angles.
 Posed rewritten(const Posed& p, int shift, bool reverse, unsigned flips) {
   Posed out{relabelled(p.geometry, shift), relabelled_angles(p.theta, shift)};
@@ -77,9 +77,9 @@ Posed rewritten(const Posed& p, int shift, bool reverse, unsigned flips) {
   return out;
 }
 
-// A random writing, one in which no joint of `locked` (which the motion does
+// A random representation, one in which no joint of `locked` (which the motion does
 // not turn) is joint 1, the input that verify_motion drives.
-Posed random_writing(const Posed& p, std::mt19937_64& rng, const std::vector<int>& locked = {}) {
+Posed random_representation(const Posed& p, std::mt19937_64& rng, const std::vector<int>& locked = {}) {
   const int n = p.geometry.joints();
   std::uniform_int_distribution<int> shift(0, n - 1), flips(0, (1 << n) - 1), coin(0, 1);
   for (;;) {
@@ -197,7 +197,7 @@ LoopGeometry bricard_trihedral_geometry(std::mt19937_64& rng) {
 // ratio kappa1 and d2 = 0, links 4, 5 with kappa2 and d5 = 0, the same
 // (cos alpha + cos beta) / kappa (alpha5 solved from it), links 3 and 6
 // equal and free, d1 = d3 and d4 = d6 free. Twists negative (the searches'
-// canonical writing; other writings are the test's random ones).
+// canonical representation; other representations are the test's random ones).
 LoopGeometry bennett_dyads_geometry(std::mt19937_64& rng) {
   for (;;) {
     const double k1 = -uniform(rng, 0.4, 1.5), k2 = -uniform(rng, 0.4, 1.5);
@@ -254,12 +254,12 @@ Classification classified(const Posed& p, const VerificationSummary& v) {
 }
 
 // The member is movable (rigid closure followed along at least 10 degrees of
-// input, closing to round-off) and, in a random writing, classified as its
+// input, closing to round-off) and, in a random representation, classified as its
 // family with a residual at round-off.
 void expect_movable_member(const Posed& member, Family family, std::mt19937_64& rng, const std::string& tag,
                            const std::vector<int>& locked = {}) {
   ASSERT_LT(closure_error(member), 1e-12) << tag;
-  const Posed w = random_writing(member, rng, locked);
+  const Posed w = random_representation(member, rng, locked);
   ASSERT_LT(closure_error(w), 1e-12) << tag;
   const VerificationSummary v = verify_from(w.geometry, w.theta);
   EXPECT_TRUE(v.verified) << tag << ": " << v.limit;
@@ -680,7 +680,7 @@ TEST(Families, GoldbergOnAFoldingBennettLoopIsDegenerateWhateverTheWalk) {
         EXPECT_LT(check.residual, 1e-10) << tag;
       }
     }
-    // A random writing; where joint F (4) went.
+    // A random representation; where joint F (4) went.
     const int shift = static_cast<int>(rng() % 5);
     const bool reverse = rng() % 2 == 1;
     const Posed w = rewritten(p, shift, reverse, static_cast<unsigned>(rng() % 32));
@@ -783,7 +783,7 @@ TEST(Families, BricardPlaneSymmetricMovesAndIsClassified) {
 TEST(Families, BricardPlaneSymmetricNeedsTheTwistsOpposite) {
   // The literature's alpha12 + alpha61 = pi written in this project's
   // convention is alpha1 + alpha6 = 0; with the sums pi instead (an even
-  // number of the three sums changed by pi is only another writing) the loop
+  // number of the three sums changed by pi is only another representation) the loop
   // does not even assemble.
   std::mt19937_64 rng(23);
   LoopGeometry g = bricard_plane_geometry(rng);
@@ -797,7 +797,7 @@ TEST(Families, BricardTrihedralMovesAndIsClassified) {
 }
 
 // Two Bennett loops sharing a link (removed, nothing fused): built in space,
-// movable, every offset zero, classified bennett_pair in any writing with
+// movable, every offset zero, classified bennett_pair in any representation with
 // residual at round-off; two degrees of freedom (the closure's Jacobian has
 // a two-dimensional null space); near-misses rigid. Its geometry is
 // unclassified without the family; the generic 6R search's start 398 lies
@@ -826,7 +826,7 @@ TEST(Families, TwoBennettLoopsSharingALinkMoveAndAreABennettPair) {
 // The 9-parameter class the generic 6R search finds most (docs/discovery-5r-6r.md):
 // members built from the conditions, closed by the rigid closure from
 // random guesses (a generic 6R cannot be assembled with its input held),
-// verified movable, classified in random writings; near-misses a1, alpha2,
+// verified movable, classified in random representations; near-misses a1, alpha2,
 // d3 rigid. Unclassified before the family.
 // Many members are rockers over a few tens of degrees, or have no real
 // assembly at all (docs/families.md), so more are built than for Bricard's.
@@ -996,7 +996,7 @@ TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
     EXPECT_LT(family_distance(c.family, c.member), 1e-12) << to_string(c.family);
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
       // Near the member every parameter moved a little (one alone can keep a
-      // symmetry of the family, and two writings tie: a kink of the minimum).
+      // symmetry of the family, and two representations tie: a kink of the minimum).
       LoopGeometry near = c.member;
       for (int p = 0; p < 3 * n; ++p) near = perturbed(near, p, uniform(rng, -1e-3, 1e-3));
       for (const LoopGeometry& g : {random_loop(n, seed), near}) {
@@ -1027,7 +1027,7 @@ TEST(Families, DistanceNeedsTheRightJointCountAndIsAllocationFree) {
   if (!testing::kCountsAllocations) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
   const LoopGeometry g5 = random_loop(5, 2), g6 = random_loop(6, 2);
   GeometryVector gradient;
-  // Warm: the writing tables are built on the first call per joint count.
+  // Warm: the representation tables are built on the first call per joint count.
   family_distance(Family::goldberg, g5, &gradient);
   family_distance(Family::bricard_trihedral, g6, &gradient);
   const long before = testing::allocations();

@@ -29,7 +29,7 @@ using testing::rad;
 constexpr double kPi = 3.14159265358979323846;
 
 // The set the expensive checks run on: 12 cases per family cover every
-// planar variant and trivial writing 4 times and every perturbed parameter
+// planar variant and trivial representation 4 times and every perturbed parameter
 // at least 3 times, in well under a second.
 constexpr int kCasesPerFamily = 12;
 constexpr int kGenericLoops = 12;
@@ -113,7 +113,7 @@ TEST(GroundTruth, EveryMovableCaseClosesMovesOverAFullTurnAndIsClassifiedInItsFa
     EXPECT_EQ(k.family, expected_classification(c)) << k.detail;
     EXPECT_EQ(k.setup, c.setup) << k.detail;
     if (c.family == GroundTruthFamily::trivial) {
-      // The coaxial 1-3 motion in every writing: joints 2 and 4 frozen.
+      // The coaxial 1-3 motion in every representation: joints 2 and 4 frozen.
       EXPECT_EQ(k.detail, "axes 1 and 3 coincide; joints 2, 4 frozen");
     }
   }

@@ -71,11 +71,11 @@ TEST(Job, EquilibriumTolerancesDefaultToTheSolversAndCanBeSet) {
   EXPECT_EQ(set.loop.closure_tolerance, 1e-9);
   EXPECT_EQ(set.loop.stationarity_tolerance, 1e-7);
   EXPECT_EQ(defaults.loop.objective, "mean");
-  EXPECT_EQ(ObjectiveSettings::from_loop(defaults.loop).measure, CycleMeasure::mean);
-  EXPECT_EQ(ObjectiveSettings::from_loop(parse_job("[loop]\nobjective = \"max\"\n", "m.toml").loop).measure,
+  EXPECT_EQ(ObjectiveOptions::from_loop(defaults.loop).measure, CycleMeasure::mean);
+  EXPECT_EQ(ObjectiveOptions::from_loop(parse_job("[loop]\nobjective = \"max\"\n", "m.toml").loop).measure,
             CycleMeasure::max);
   // ... and reach the solver of every cycle the search evaluates.
-  const ObjectiveSettings objective = ObjectiveSettings::from_loop(set.loop);
+  const ObjectiveOptions objective = ObjectiveOptions::from_loop(set.loop);
   EXPECT_EQ(objective.equilibrium.closure_tolerance, 1e-9);
   EXPECT_EQ(objective.equilibrium.stationarity_tolerance, 1e-7);
 }

@@ -28,10 +28,10 @@ double bennett_condition(const Eigen::VectorXd& x) {
 }
 
 LocalSearchSummary minimise(const Job& job, const Eigen::VectorXd& x0) {
-  CycleObjective objective(job.space, ObjectiveSettings::from_loop(job.loop),
+  CycleObjective objective(job.space, ObjectiveOptions::from_loop(job.loop),
                            job.space.initial_angles(Eigen::VectorXd()));
   LocalSearchOptions options;
-  options.settings = job.optimizer;
+  options.optimizer = job.optimizer;
   return local_minimize(objective, x0, options);
 }
 
@@ -47,10 +47,10 @@ TEST(GaussNewton, ReachesTheBennettFamilyQuadratically) {
   ASSERT_GT(std::abs(bennett_condition(x0)), 1e-2);
   int accepted = 0;
   std::vector<double> values;
-  CycleObjective objective(job.space, ObjectiveSettings::from_loop(job.loop),
+  CycleObjective objective(job.space, ObjectiveOptions::from_loop(job.loop),
                            job.space.initial_angles(Eigen::VectorXd()));
   LocalSearchOptions options;
-  options.settings = job.optimizer;
+  options.optimizer = job.optimizer;
   options.trace = [&](const SearchTraceRow& row) {
     if (row.accepted) {
       ++accepted;

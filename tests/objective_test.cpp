@@ -64,7 +64,7 @@ Eigen::VectorXd central_gradient(CycleObjective& objective, const Eigen::VectorX
 TEST(Objective, GradientThroughTiesAgreesWithCentralDifferences) {
   TiedFixture f;
   ASSERT_EQ(f.job.space.free_count(), 8);
-  CycleObjective objective(f.job.space, ObjectiveSettings::from_loop(f.job.loop), f.theta);
+  CycleObjective objective(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
   Eigen::VectorXd gradient;
   const ObjectiveValue v = objective.evaluate(f.x0(), &gradient);
   ASSERT_TRUE(v.ok);
@@ -77,7 +77,7 @@ TEST(Objective, GradientThroughTiesAgreesWithCentralDifferences) {
 
 TEST(Objective, ResidualsAndJacobianAgreeWithValueAndCentralDifferences) {
   TiedFixture f;
-  CycleObjective objective(f.job.space, ObjectiveSettings::from_loop(f.job.loop), f.theta);
+  CycleObjective objective(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
   Eigen::VectorXd r, gradient;
   Eigen::MatrixXd J;
   const ObjectiveValue v = objective.evaluate_residuals(f.x0(), r, &J);
@@ -113,17 +113,17 @@ double twist_gap(const LoopGeometry& g, GeometryVector* gradient) {
 
 TEST(Objective, SteeredGradientAndJacobianAgreeWithCentralDifferences) {
   TiedFixture f;
-  ObjectiveSettings settings = ObjectiveSettings::from_loop(f.job.loop);
-  settings.deflation.push_back({"twist gap", twist_gap});
-  settings.deflation_power = 2.0;
-  settings.deflation_shift = 0.5;
-  settings.nontrivial = true;
-  settings.min_travel = rad(60);  // large, so that the travel term is far from 1
+  ObjectiveOptions options = ObjectiveOptions::from_loop(f.job.loop);
+  options.deflation.push_back({"twist gap", twist_gap});
+  options.deflation_power = 2.0;
+  options.deflation_shift = 0.5;
+  options.nontrivial = true;
+  options.min_travel = rad(60);  // large, so that the travel term is far from 1
   // Every evaluation from the assembly, so that the value and the residuals
   // at x0 come from the same cycle to the last bit (a cycle reused from the
   // differences' neighbours agrees to the solve's tolerance only).
-  settings.reuse_nearby_cycle = false;
-  CycleObjective objective(f.job.space, settings, f.theta);
+  options.reuse_nearby_cycle = false;
+  CycleObjective objective(f.job.space, options, f.theta);
   Eigen::VectorXd gradient, r;
   Eigen::MatrixXd J;
   const ObjectiveValue v = objective.evaluate(f.x0(), &gradient);
@@ -144,13 +144,13 @@ TEST(Objective, SteeredGradientAndJacobianAgreeWithCentralDifferences) {
 TEST(Objective, SteeringFactorIsTheDocumentedFormula) {
   TiedFixture f;
   for (const double power : {1.0, 2.0, 3.0}) {
-    ObjectiveSettings settings = ObjectiveSettings::from_loop(f.job.loop);
-    settings.deflation.push_back({"twist gap", twist_gap});
-    settings.deflation_power = power;
-    settings.deflation_shift = 0.5;
-    settings.nontrivial = true;
-    settings.min_travel = rad(60);
-    CycleObjective objective(f.job.space, settings, f.theta);
+    ObjectiveOptions options = ObjectiveOptions::from_loop(f.job.loop);
+    options.deflation.push_back({"twist gap", twist_gap});
+    options.deflation_power = power;
+    options.deflation_shift = 0.5;
+    options.nontrivial = true;
+    options.min_travel = rad(60);
+    CycleObjective objective(f.job.space, options, f.theta);
     const ObjectiveValue v = objective.evaluate(f.x0(), nullptr);
     ASSERT_TRUE(v.ok);
 
@@ -182,15 +182,15 @@ TEST(Objective, MaxMeasureHasTheWorstSamplesGradientAndResiduals) {
   // residuals carry E_max exactly.
   TiedFixture f;
   for (bool steered : {false, true}) {
-    ObjectiveSettings settings = ObjectiveSettings::from_loop(f.job.loop);
-    settings.measure = CycleMeasure::max;
-    settings.reuse_nearby_cycle = false;  // bit-identical cycles at x0, as above
+    ObjectiveOptions options = ObjectiveOptions::from_loop(f.job.loop);
+    options.measure = CycleMeasure::max;
+    options.reuse_nearby_cycle = false;  // bit-identical cycles at x0, as above
     if (steered) {
-      settings.deflation.push_back({"twist gap", twist_gap});
-      settings.nontrivial = true;
-      settings.min_travel = rad(60);
+      options.deflation.push_back({"twist gap", twist_gap});
+      options.nontrivial = true;
+      options.min_travel = rad(60);
     }
-    CycleObjective objective(f.job.space, settings, f.theta);
+    CycleObjective objective(f.job.space, options, f.theta);
     Eigen::VectorXd gradient, r;
     Eigen::MatrixXd J;
     const ObjectiveValue v = objective.evaluate(f.x0(), &gradient);
@@ -211,10 +211,10 @@ TEST(Objective, MaxMeasureHasTheWorstSamplesGradientAndResiduals) {
 // solve's tolerance, at a fraction of the Newton iterations.
 TEST(Objective, ReusedNearbyCyclesAgreeWithFreshOnesAndCostFewerIterations) {
   TiedFixture f;
-  ObjectiveSettings fresh_settings = ObjectiveSettings::from_loop(f.job.loop);
-  fresh_settings.reuse_nearby_cycle = false;
-  CycleObjective fresh(f.job.space, fresh_settings, f.theta);
-  CycleObjective reused(f.job.space, ObjectiveSettings::from_loop(f.job.loop), f.theta);
+  ObjectiveOptions fresh_options = ObjectiveOptions::from_loop(f.job.loop);
+  fresh_options.reuse_nearby_cycle = false;
+  CycleObjective fresh(f.job.space, fresh_options, f.theta);
+  CycleObjective reused(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
   Eigen::VectorXd direction(f.job.space.free_count());
   direction << 0.3, -0.2, 0.1, rad(2), rad(-1), rad(1.5), 0.05, 0.02;
   long long fresh_iterations = 0, reused_iterations = 0;
@@ -238,10 +238,10 @@ TEST(Objective, ReusedNearbyCyclesAgreeWithFreshOnesAndCostFewerIterations) {
 // and gives the fresh value exactly.
 TEST(Objective, AFarStepFallsBackToTheFreshCycle) {
   TiedFixture f;
-  ObjectiveSettings fresh_settings = ObjectiveSettings::from_loop(f.job.loop);
-  fresh_settings.reuse_nearby_cycle = false;
-  CycleObjective fresh(f.job.space, fresh_settings, f.theta);
-  CycleObjective reused(f.job.space, ObjectiveSettings::from_loop(f.job.loop), f.theta);
+  ObjectiveOptions fresh_options = ObjectiveOptions::from_loop(f.job.loop);
+  fresh_options.reuse_nearby_cycle = false;
+  CycleObjective fresh(f.job.space, fresh_options, f.theta);
+  CycleObjective reused(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
   Eigen::VectorXd far = f.x0();
   far[0] = 4.5;  // a1 from 2.1
   far[4] = rad(120);  // alpha3 from 25 deg
@@ -264,10 +264,10 @@ TEST(Objective, DeflationLiftsTheZerosOfTheDeflatedFamilyOnly) {
     return std::abs(g.a[1] * std::sin(g.alpha[0]) - g.a[0] * std::sin(g.alpha[1]));
   };
   const FamilyDistance elsewhere = [](const LoopGeometry&, GeometryVector*) { return 0.7; };
-  ObjectiveSettings plain = ObjectiveSettings::from_loop(job.loop);
+  ObjectiveOptions plain = ObjectiveOptions::from_loop(job.loop);
   CycleObjective zero(job.space, plain, theta);
   EXPECT_LT(zero.evaluate(x, nullptr).value, 1e-20);
-  ObjectiveSettings deflated = plain;
+  ObjectiveOptions deflated = plain;
   deflated.deflation.push_back({"on", on_family});
   CycleObjective lifted(job.space, deflated, theta);
   // E ~ dist^2 near the family and the factor ~ dist^-2: a point 1e-4 off
@@ -277,7 +277,7 @@ TEST(Objective, DeflationLiftsTheZerosOfTheDeflatedFamilyOnly) {
   const ObjectiveValue near = lifted.evaluate(off, nullptr);
   EXPECT_LT(near.E_mean, 1e-7);
   EXPECT_GT(near.value, 1e-3);
-  ObjectiveSettings other = plain;
+  ObjectiveOptions other = plain;
   other.deflation.push_back({"elsewhere", elsewhere});
   CycleObjective kept(job.space, other, theta);
   EXPECT_LT(kept.evaluate(x, nullptr).value, 1e-20);

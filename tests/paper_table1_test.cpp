@@ -107,7 +107,7 @@ TEST(PaperTable1, EveryZeroIsABennettLoopAndTheZerosFormAFamily) {
 TEST(PaperTable1, ThePapersPointIsOnTheFamilyAndThePosePinsIt) {
   // (2, 4, 30, 90) is a zero of the same objective.
   const Job& job = table1_job();
-  CycleObjective objective(job.space, ObjectiveSettings::from_loop(job.loop), job.space.initial_angles(Eigen::VectorXd()));
+  CycleObjective objective(job.space, ObjectiveOptions::from_loop(job.loop), job.space.initial_angles(Eigen::VectorXd()));
   Eigen::VectorXd paper(4);
   paper << 2.0, 4.0, rad(30), rad(90);
   const ObjectiveValue v = objective.evaluate(paper, nullptr);

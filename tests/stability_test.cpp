@@ -49,7 +49,7 @@ constexpr double kPi = 3.14159265358979323846;
 // default job's zero threshold is 1e-20 (jobs/default.toml): a movable loop
 // must be below it with room to spare, and a rigid loop far above it.
 constexpr double kZero = 1e-20;
-// The built-in zero threshold of a job that does not set one (SearchSettings).
+// The built-in zero threshold of a job that does not set one (SearchSection).
 constexpr double kBuiltInZeroThreshold = 1e-12;
 
 // ---------------------------------------------------------------------------
@@ -246,19 +246,19 @@ LocalSearchSummary search(const ParameterSpace& space, const LoopGeometry& g0, c
   const std::string what = "search " + algorithm;
   LocalSearchSummary s;
   try {
-    ObjectiveSettings settings;
-    settings.equilibrium = eo;
-    settings.cycle.samples = 16;
-    settings.reuse_nearby_cycle = reuse_nearby_cycle;
-    CycleObjective objective(space, settings, space.initial_angles(Eigen::VectorXd()));
+    ObjectiveOptions objective_options;
+    objective_options.equilibrium = eo;
+    objective_options.cycle.samples = 16;
+    objective_options.reuse_nearby_cycle = reuse_nearby_cycle;
+    CycleObjective objective(space, objective_options, space.initial_angles(Eigen::VectorXd()));
     LocalSearchOptions options;
-    options.settings.algorithm = algorithm;
-    options.settings.max_evaluations = kMaxEvaluations;
+    options.optimizer.algorithm = algorithm;
+    options.optimizer.max_evaluations = kMaxEvaluations;
     // A guard against a hang only, far above any search's time: the
     // assertion below says the evaluation limit stops first. 20 s was too
     // little for LBFGS from the near-spherical loop in the sanitized build
     // (tools/test.sh --sanitize) on a loaded machine.
-    options.settings.time_limit = 300.0;
+    options.optimizer.time_limit = 300.0;
     s = local_minimize(objective, space.free_values(g0), options);
     if (final_cycle != nullptr) *final_cycle = objective.cycle();
   } catch (const std::exception& e) {

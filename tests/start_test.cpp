@@ -221,7 +221,7 @@ LoopGeometry from_degrees(std::vector<double> a, std::vector<double> alpha_deg, 
 // on a member (the examples of docs/families.md), not on a generic loop of
 // the same size. The job parser keeps its own list of these names (it stands
 // alone for the fuzzers); this checks that start.cpp maps each of them.
-TEST(ObjectiveSettings, EveryDeflatableFamilyMeasuresItsDistance) {
+TEST(ObjectiveOptions, EveryDeflatableFamilyMeasuresItsDistance) {
   const double s3 = std::sqrt(3.0);
   struct Case {
     const char* family;
@@ -255,29 +255,29 @@ TEST(ObjectiveSettings, EveryDeflatableFamilyMeasuresItsDistance) {
     const Job job = parse_job("[loop]\njoints = " + std::to_string(n) + "\n[steering]\ndeflate = [\"" + c.family +
                                   "\", \"planar\"]\n",
                               "deflate.toml");
-    const ObjectiveSettings settings = objective_settings(job);
-    ASSERT_EQ(settings.deflation.size(), 2u) << c.family;
-    EXPECT_EQ(settings.deflation[0].family, c.family);
+    const ObjectiveOptions options = objective_options(job);
+    ASSERT_EQ(options.deflation.size(), 2u) << c.family;
+    EXPECT_EQ(options.deflation[0].family, c.family);
     GeometryVector gradient;
-    EXPECT_LT(settings.deflation[0].distance(c.member, &gradient), 1e-12) << c.family;
-    const double generic = settings.deflation[0].distance(random_loop(n, 11), nullptr);
+    EXPECT_LT(options.deflation[0].distance(c.member, &gradient), 1e-12) << c.family;
+    const double generic = options.deflation[0].distance(random_loop(n, 11), nullptr);
     EXPECT_GT(generic, 1e-3) << c.family;
-    EXPECT_GT(settings.deflation[1].distance(c.member, nullptr), 1e-3) << c.family << ": planar";
+    EXPECT_GT(options.deflation[1].distance(c.member, nullptr), 1e-3) << c.family << ": planar";
   }
 }
 
 // The job parser's own list of deflatable names (it stands alone for the
 // fuzzers) against classify's: a family is accepted in [steering] deflate,
 // for a loop of its joint count, exactly where family_distance measures it.
-TEST(ObjectiveSettings, DeflatableNamesAreTheFamiliesWithADistance) {
+TEST(ObjectiveOptions, DeflatableNamesAreTheFamiliesWithADistance) {
   for (Family f : kAllFamilies) {
     const int n = family_joints(f) != 0 ? family_joints(f) : 5;
     const std::string text =
         "[loop]\njoints = " + std::to_string(n) + "\n[steering]\ndeflate = [\"" + to_string(f) + "\"]\n";
     if (has_family_distance(f)) {
-      const ObjectiveSettings settings = objective_settings(parse_job(text, "deflate.toml"));
-      ASSERT_EQ(settings.deflation.size(), 1u) << to_string(f);
-      EXPECT_EQ(settings.deflation[0].family, to_string(f));
+      const ObjectiveOptions options = objective_options(parse_job(text, "deflate.toml"));
+      ASSERT_EQ(options.deflation.size(), 1u) << to_string(f);
+      EXPECT_EQ(options.deflation[0].family, to_string(f));
     } else {
       EXPECT_ANY_THROW(parse_job(text, "deflate.toml")) << to_string(f);
     }

@@ -139,7 +139,7 @@ TEST(Tradeoff, ALooseZeroThresholdReadsPerturbedLoopsAsZero) {
 TEST(Tradeoff, AWindowReadsMovableLoopsAsZeroAndPerturbedOnesLower) {
   const Job base = parse_job(kJob, "job.toml");
   const auto truth = generate_ground_truth(small_options().ground_truth);
-  LoopSettings window = base.loop;
+  LoopSection window = base.loop;
   window.range = 90.0 / 360.0 * (2.0 * 3.14159265358979323846);
   const std::vector<double> full = ground_truth_energies(truth, base.loop);
   const std::vector<double> part = ground_truth_energies(truth, window);
@@ -157,7 +157,7 @@ TEST(Tradeoff, AWindowReadsMovableLoopsAsZeroAndPerturbedOnesLower) {
   EXPECT_GE(lower, rigid / 2);
 }
 
-TEST(Tradeoff, GroundTruthEnergiesOfTheSameLoopSettingsServeEveryAxisThatKeepsThem) {
+TEST(Tradeoff, GroundTruthEnergiesOfTheSameLoopSectionServeEveryAxisThatKeepsIt) {
   // What run_tradeoff does for the algorithm, ftol_rel, objective and
   // zero-threshold axes: the base's energies, read with another threshold,
   // give what evaluating them afresh gives.

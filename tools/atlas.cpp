@@ -320,7 +320,7 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
   std::string md = "# Family atlas\n\n" + header + "\n";
   md +=
       "Per family: the candidates (distinct verified movable linkages) and the starts that found them (hits); "
-      "the spread of their canonical parameters (length scale L = 1, twists in degrees, the writing that gives "
+      "the spread of their canonical parameters (length scale L = 1, twists in degrees, the representation that gives "
       "the canonical key); the local dimension found and the family's known dimension. Both count free real "
       "parameters **including the scale**: the known one in the full 3n-parameter space (docs/families.md, "
       "docs/classification.md), the found one (`candidates.local_dimension`) among the search's free "

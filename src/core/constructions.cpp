@@ -68,14 +68,14 @@ void check_joint(int joint, const char* name) {
 // opposite to axis 0's are flipped (axis_flipped), so their angles change
 // sign. `flipped[k]` says which; `closes` is false when the twists cannot be
 // made 0 (an odd number of pi) or the offsets do not sum to zero.
-struct PlanarWriting {
+struct PlanarRepresentation {
   LoopGeometry geometry;
   std::array<bool, 4> flipped{};
   bool closes = true;
 };
 
-PlanarWriting planar_writing(const LoopGeometry& g) {
-  PlanarWriting w;
+PlanarRepresentation planar_representation(const LoopGeometry& g) {
+  PlanarRepresentation w;
   w.geometry = g;
   bool opposite = false;  // axis k's direction against axis 0's
   for (int k = 1; k < 4; ++k) {
@@ -194,7 +194,7 @@ std::array<std::vector<AngleInterval>, 4> joint_sets(const LoopGeometry& g, Four
   std::array<std::vector<AngleInterval>, 4> sets;
   LoopGeometry written = g;
   if (type == FourBarType::planar) {
-    const PlanarWriting w = planar_writing(g);
+    const PlanarRepresentation w = planar_representation(g);
     if (!w.closes) return sets;
     written = w.geometry;  // flips change angles' signs only, and the sets are symmetric
   }
@@ -294,7 +294,7 @@ std::vector<JointVector> four_bar_poses(const LoopGeometry& g, int input, double
   // Solve with the input as joint 0 (relabelled), then map the angles back.
   std::vector<JointVector> poses;
   if (type == FourBarType::planar) {
-    const PlanarWriting w = planar_writing(relabelled(g, input));
+    const PlanarRepresentation w = planar_representation(relabelled(g, input));
     if (!w.closes) return {};
     for (JointVector t : planar_poses_at_zero(w.geometry, input_angle)) {  // joint 0 is never flipped
       for (int k = 0; k < 4; ++k) {

@@ -57,7 +57,7 @@ AxisPair nearest_coincident_axes(const LoopGeometry& g, const JointVector& pose)
 // sin((alpha2 - alpha1)/2) (asymmetric setup) or cos(..) / cos(..)
 // (line-symmetric) with a zero denominator. Such a "Bennett loop" only folds,
 // so the 5R has no Goldberg motion (docs/discovery-5r-6r.md). It folds in two
-// ways. Folded with the joint next to the fused link locked at pi (writing
+// ways. Folded with the joint next to the fused link locked at pi (representation
 // joint 5 when the second loop folds, joint 1 when the first does), the two
 // axes at its other ends coincide with the removed axis A and the loop turns
 // about it freely: the 5R moves as the other Bennett loop with that joint
@@ -66,7 +66,7 @@ AxisPair nearest_coincident_axes(const LoopGeometry& g, const JointVector& pose)
 // (trivial). Both motions meet where the loop folds both ways, and a walk
 // through that pose can switch or stray between them, so no joint's travel
 // need look frozen (docs/discovery-5r-6r.md, "Goldberg geometries on a
-// folding Bennett loop"). Checked in the family's best writing, links 1 and 2
+// folding Bennett loop"). Checked in the family's best representation, links 1 and 2
 // (first loop) and 1 and 3 (second), to `tolerance` (lengths over L).
 struct FoldingGoldberg {
   bool folds = false;
@@ -79,7 +79,7 @@ FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double fa
   FoldingGoldberg out;
   if (!goldberg_type(family)) return out;
   const Best best = best_for(family, g, false);
-  const LoopGeometry w = detail::apply(*best.writing, g);
+  const LoopGeometry w = detail::apply(*best.representation, g);
   const double L = length_scale(w);
   auto fold = [&](int loop, double& length, double& denominator) {
     const int link = loop + 1;
@@ -94,10 +94,10 @@ FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double fa
     if (!fold(loop, length, denominator)) continue;
     out.folds = true;
     out.residual = std::max({family_residual, std::abs(length), std::abs(denominator)});
-    // The links of the folding loop in the 5R (writing links 1, 2 or 3, and 4,
+    // The links of the folding loop in the 5R (representation links 1, 2 or 3, and 4,
     // which equals 1) and the joint it locks, in the loop's own labels; the
-    // other Bennett loop (writing links 1 and 3 or 2, twice) is the 4R left.
-    const detail::Representation& r = *best.writing;
+    // other Bennett loop (representation links 1 and 3 or 2, twice) is the 4R left.
+    const detail::Representation& r = *best.representation;
     const int folded_link = loop == 0 ? 1 : 2;
     const int other_link = loop == 0 ? 2 : 1;
     std::vector<int> links = {r.index[0], r.index[static_cast<size_t>(folded_link)], r.index[3]};
@@ -128,10 +128,10 @@ FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double fa
 // The detail line of a 5R or 6R family found.
 std::string special_detail(Family family, const LoopGeometry& g) {
   if (family == Family::goldberg_bent) {
-    // The fusion angle |psi| from the real cosine rule of the best writing:
+    // The fusion angle |psi| from the real cosine rule of the best representation:
     // cos(alpha5) = cos(alpha2) cos(alpha3) + sin(alpha2) sin(alpha3) cos(psi).
-    const Best best = best_over_writings<Family::goldberg_bent>(g, false);
-    const LoopGeometry w = detail::apply(*best.writing, g);
+    const Best best = best_over_representations<Family::goldberg_bent>(g, false);
+    const LoopGeometry w = detail::apply(*best.representation, g);
     const double cos_psi = (std::cos(w.alpha[4]) - std::cos(w.alpha[1]) * std::cos(w.alpha[2])) /
                            (std::sin(w.alpha[1]) * std::sin(w.alpha[2]));
     const double psi_deg = std::acos(std::clamp(cos_psi, -1.0, 1.0)) * 180.0 / kPi;
@@ -144,24 +144,24 @@ std::string special_detail(Family family, const LoopGeometry& g) {
     return buffer;
   }
   if (family == Family::bennett_pair) {
-    const Best best = best_over_writings<Family::bennett_pair>(g, false);
-    const LoopGeometry w = detail::apply(*best.writing, g);
-    char buffer[200];
+    const Best best = best_over_representations<Family::bennett_pair>(g, false);
+    const LoopGeometry w = detail::apply(*best.representation, g);
+    char buffer[256];
     std::snprintf(buffer, sizeof buffer,
-                  "two Bennett loops (links 1-3 and 4-6 of the best writing) sharing a removed link (%.4g L, "
+                  "two Bennett loops (links 1-3 and 4-6 of the best representation) sharing a removed link (%.4g L, "
                   "%.4g deg) between joints 1 and 4, in %s setups; two degrees of freedom",
                   w.a[1] / length_scale(w), w.alpha[1] * 180.0 / kPi,
                   ((best.set & 1) != 0) == ((best.set & 2) != 0) ? "the same" : "different");
     return buffer;
   }
   if (family == Family::bennett_dyads) {
-    const Best best = best_over_writings<Family::bennett_dyads>(g, false);
-    const LoopGeometry w = detail::apply(*best.writing, g);
+    const Best best = best_over_representations<Family::bennett_dyads>(g, false);
+    const LoopGeometry w = detail::apply(*best.representation, g);
     const double L = length_scale(w);
-    char buffer[240];
+    char buffer[256];
     std::snprintf(buffer, sizeof buffer,
-                  "Bennett dyads (links 1-2 and 4-5 of the best writing, (cos alpha + cos beta) / kappa = %.4g L) "
-                  "joined by two equal links (%.4g L, %.4g deg), offsets %.4g L and %.4g L at the dyads' ends",
+                  "Bennett dyads (links 1-2 and 4-5 of the best representation, (cos alpha + cos beta) / kappa = "
+                  "%.4g L) joined by two equal links (%.4g L, %.4g deg), offsets %.4g L and %.4g L at the dyads' ends",
                   (std::cos(w.alpha[0]) + std::cos(w.alpha[1])) * w.a[0] / std::sin(w.alpha[0]) / L, w.a[2] / L,
                   w.alpha[2] * 180.0 / kPi, w.d[0] / L, w.d[3] / L);
     return buffer;
@@ -169,17 +169,17 @@ std::string special_detail(Family family, const LoopGeometry& g) {
   if (family != Family::goldberg && family != Family::myard) {
     switch (family) {
       case Family::bricard_line_symmetric: return "line symmetry: link i and joint i as link and joint i + 3";
-      case Family::bricard_plane_symmetric: return "plane symmetry through joints 1 and 4 of the best writing";
+      case Family::bricard_plane_symmetric: return "plane symmetry through joints 1 and 4 of the best representation";
       case Family::bricard_trihedral: return "right-angle twists, no offsets, a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2";
       default: return "";
     }
   }
-  const Best best = family == Family::goldberg ? best_over_writings<Family::goldberg>(g, false)
-                                               : best_over_writings<Family::myard>(g, false);
+  const Best best = family == Family::goldberg ? best_over_representations<Family::goldberg>(g, false)
+                                               : best_over_representations<Family::myard>(g, false);
   std::string d = (best.set & 4) ? "fused links on the same side (a5 = a2 - a3)"
                                  : "fused links on opposite sides (a5 = a2 + a3)";
   d += std::string(", Bennett loops ") + ((best.set & 1) ? "line-symmetric" : "asymmetric") + " and " +
-       ((best.set & 2) ? "line-symmetric" : "asymmetric") + " in the best writing";
+       ((best.set & 2) ? "line-symmetric" : "asymmetric") + " in the best representation";
   return d;
 }
 
@@ -197,12 +197,12 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   }
   Classification out;
 
-  // Bennett: the best writing; the setup as written when it fits as written.
+  // Bennett: the best representation; the setup as written when it fits as written.
   FamilyCheck bennett;
   bennett.family = Family::bennett;
   bennett.residual = kInf;
   if (n == 4) {
-    const Best best = best_over_writings<Family::bennett>(geometry, false);
+    const Best best = best_over_representations<Family::bennett>(geometry, false);
     bennett = check_from(Family::bennett, best);
     bennett.setup = best.setup_sign > 0 ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
     const WrittenOut as_written(geometry);
@@ -215,7 +215,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
       bennett.setup = as_written_asym <= as_written_line ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
     }
   }
-  FamilyCheck planar = check_from(Family::planar, best_over_writings<Family::planar>(geometry, false));
+  FamilyCheck planar = check_from(Family::planar, best_over_representations<Family::planar>(geometry, false));
   Best spherical_best;
   spherical_conditions(geometry, true, spherical_best.conditions);
   spherical_best.score = spherical_best.conditions.max_abs();

@@ -5,16 +5,16 @@
 // Two paths share one set of condition formulas (the templates below):
 //
 // - the reporting path (classify, family_distance_report) writes out every
-//   writing of the loop as a LoopGeometry and keeps every condition of the
+//   representation of the loop as a LoopGeometry and keeps every condition of the
 //   best one with its name: what a report lists;
 // - the numeric path (family_distance, called on every evaluation of a
-//   steered search) looks each writing's parameters up in small tables filled
-//   once per call, keeps only the running sum of squares, gives a writing up
+//   steered search) looks each representation's parameters up in small tables filled
+//   once per call, keeps only the running sum of squares, gives a representation up
 //   as soon as it cannot beat the best so far, and writes out only the best
-//   writing, to differentiate it. It builds no string and allocates nothing.
+//   representation, to differentiate it. It builds no string and allocates nothing.
 //
 // Both evaluate the same formulas on the same numbers in the same order, so
-// they pick the same writing and return the same distance bit for bit.
+// they pick the same representation and return the same distance bit for bit.
 #pragma once
 
 #include <algorithm>
@@ -53,10 +53,10 @@ struct Scale {
 inline Scale scale_of(const LoopGeometry& g) { return {length_scale(g), length_scale_gradient(g), g.joints()}; }
 
 // ---------------------------------------------------------------------------
-// Writings as the conditions read them: parameters a(k), alpha(k), d(k) in
-// the writing's labels, sin and cos of the twists, and the length scale.
+// Representations as the conditions read them: parameters a(k), alpha(k), d(k) in
+// the representation's labels, sin and cos of the twists, and the length scale.
 
-// A writing written out (detail::apply, or the geometry as written) with its
+// A representation written out (detail::apply, or the geometry as written) with its
 // length scale and gradient.
 struct WrittenOut {
   LoopGeometry g;
@@ -73,7 +73,7 @@ struct WrittenOut {
 
 // ---------------------------------------------------------------------------
 // Sinks: where a family's conditions go. Each condition comes as three lazy
-// parts, its name, its value and its gradient with respect to the writing's
+// parts, its name, its value and its gradient with respect to the representation's
 // (a, alpha, d); a sink evaluates only the parts it keeps.
 
 // The sum of the squared values in the order they come; every norm here is its sqrt.
@@ -114,7 +114,7 @@ struct Conditions {
   GeometryVector norm_gradient(int size) const { return norm_gradient_of(values, gradients, size); }
 };
 
-// The numeric path's best writing: values and gradients, no names, in fixed
+// The numeric path's best representation: values and gradients, no names, in fixed
 // storage (at most 2n conditions, the spherical family's).
 struct FixedConditions {
   static constexpr int kCapacity = 2 * kMaxJoints;
@@ -136,7 +136,7 @@ struct FixedConditions {
 
 // The numeric path's search: only the running sum of squares, summed as
 // sum_of_squares sums it, and given up once it reaches `bound` (the best
-// writing's sum so far). A writing given up cannot be strictly better than
+// representation's sum so far). A representation given up cannot be strictly better than
 // the best: adding a square never makes a floating-point sum smaller, and
 // sqrt is monotone.
 struct SquaredNorm {
@@ -154,12 +154,12 @@ struct SquaredNorm {
 };
 
 // ---------------------------------------------------------------------------
-// The conditions of each family on one writing `w`, into sink `c`.
+// The conditions of each family on one representation `w`, into sink `c`.
 
 // Bennett conditions (n = 4) that both setups share: opposite links and
 // twists equal, no offsets.
-template <class Writing, class Sink>
-void bennett_common_conditions(const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void bennett_common_conditions(const RepresentationView& w, Sink& c) {
   const int n = 4;
   const Scale& s = w.scale();
   auto length_difference = [&](int i, int j) {  // (a_i - a_j) / L
@@ -187,8 +187,8 @@ void bennett_common_conditions(const Writing& w, Sink& c) {
 }
 
 // The Bennett condition of one setup; setup_sign +1 asymmetric, -1 line-symmetric.
-template <class Writing, class Sink>
-void bennett_setup_condition(const Writing& w, double setup_sign, Sink& c) {
+template <class RepresentationView, class Sink>
+void bennett_setup_condition(const RepresentationView& w, double setup_sign, Sink& c) {
   const int n = 4;
   const Scale& s = w.scale();
   // (a2 sin alpha1 - +- a1 sin alpha2) / L, paper labels (1-based).
@@ -205,14 +205,14 @@ void bennett_setup_condition(const Writing& w, double setup_sign, Sink& c) {
         });
 }
 
-template <class Writing, class Sink>
-void bennett_conditions(const Writing& w, double setup_sign, Sink& c) {
+template <class RepresentationView, class Sink>
+void bennett_conditions(const RepresentationView& w, double setup_sign, Sink& c) {
   bennett_common_conditions(w, c);
   bennett_setup_condition(w, setup_sign, c);
 }
 
-template <class Writing, class Sink>
-void planar_conditions(const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void planar_conditions(const RepresentationView& w, Sink& c) {
   const int n = w.joints();
   const Scale& s = w.scale();
   double sign = 1.0, sum = 0.0;
@@ -237,7 +237,7 @@ void planar_conditions(const Writing& w, Sink& c) {
         });
 }
 
-// On the geometry as written (no writings): lengths in units of L when
+// On the geometry as written (no representations): lengths in units of L when
 // `normalised`, else in the geometry's own units.
 template <class Sink>
 void spherical_conditions(const LoopGeometry& g, bool normalised, Sink& c) {
@@ -261,9 +261,9 @@ void spherical_conditions(const LoopGeometry& g, bool normalised, Sink& c) {
   }
 }
 
-// Axes 1 and 2 of this writing coincide: a1 = 0 and sin(alpha1) = 0.
-template <class Writing, class Sink>
-void adjacent_coaxial_conditions(const Writing& w, Sink& c) {
+// Axes 1 and 2 of this representation coincide: a1 = 0 and sin(alpha1) = 0.
+template <class RepresentationView, class Sink>
+void adjacent_coaxial_conditions(const RepresentationView& w, Sink& c) {
   const int n = w.joints();
   const Scale& s = w.scale();
   c.add([] { return "a1"; }, [&] { return w.a(0) / s.L; }, [&] { return s.ratio_gradient(0, w.a(0)); });
@@ -275,9 +275,9 @@ void adjacent_coaxial_conditions(const Writing& w, Sink& c) {
         });
 }
 
-// Axes 1 and 3 of a 4R writing coincide (docs/design.md, "Trivial").
-template <class Writing, class Sink>
-void coaxial_13_conditions(const Writing& w, Sink& c) {
+// Axes 1 and 3 of a 4R representation coincide (docs/design.md, "Trivial").
+template <class RepresentationView, class Sink>
+void coaxial_13_conditions(const RepresentationView& w, Sink& c) {
   const int n = 4;
   const Scale& s = w.scale();
   c.add([] { return "a1 - a2"; }, [&] { return (w.a(0) - w.a(1)) / s.L; },
@@ -307,8 +307,8 @@ void coaxial_13_conditions(const Writing& w, Sink& c) {
 // of offsets, and a Bennett product.
 
 // (a_i + sign a_j) / L, or a_i / L alone when j < 0.
-template <class Writing, class Sink>
-void add_length(const Writing& w, Sink& c, const char* text, int i, int j, double sign) {
+template <class RepresentationView, class Sink>
+void add_length(const RepresentationView& w, Sink& c, const char* text, int i, int j, double sign) {
   const Scale& s = w.scale();
   c.add([&] { return std::string(text); },
         [&] { return (w.a(i) + (j >= 0 ? sign * w.a(j) : 0.0)) / s.L; },
@@ -320,8 +320,8 @@ void add_length(const Writing& w, Sink& c, const char* text, int i, int j, doubl
 }
 
 // (d_i + sign d_j) / L, or d_i / L alone when j < 0.
-template <class Writing, class Sink>
-void add_offset(const Writing& w, Sink& c, const char* text, int i, int j, double sign) {
+template <class RepresentationView, class Sink>
+void add_offset(const RepresentationView& w, Sink& c, const char* text, int i, int j, double sign) {
   const int n = w.joints();
   const Scale& s = w.scale();
   c.add([&] { return std::string(text); },
@@ -334,8 +334,8 @@ void add_offset(const Writing& w, Sink& c, const char* text, int i, int j, doubl
 }
 
 // wrap(alpha_i + sign alpha_j - shift) [rad].
-template <class Writing, class Sink>
-void add_twist(const Writing& w, Sink& c, const char* text, int i, int j, double sign, double shift = 0.0) {
+template <class RepresentationView, class Sink>
+void add_twist(const RepresentationView& w, Sink& c, const char* text, int i, int j, double sign, double shift = 0.0) {
   const int n = w.joints();
   c.add([&] { return std::string(text); }, [&] { return wrap_angle(w.alpha(i) + sign * w.alpha(j) - shift); },
         [&] {
@@ -348,8 +348,8 @@ void add_twist(const Writing& w, Sink& c, const char* text, int i, int j, double
 
 // The Bennett product of links i and j: (a_i sin alpha_j - sign a_j sin alpha_i) / L,
 // zero when sin(alpha_i)/a_i = sign sin(alpha_j)/a_j.
-template <class Writing, class Sink>
-void add_bennett_product(const Writing& w, Sink& c, const char* text, int i, int j, double sign) {
+template <class RepresentationView, class Sink>
+void add_bennett_product(const RepresentationView& w, Sink& c, const char* text, int i, int j, double sign) {
   const int n = w.joints();
   const Scale& s = w.scale();
   auto product = [&] { return w.a(i) * w.sin_alpha(j) - sign * w.a(j) * w.sin_alpha(i); };
@@ -365,8 +365,8 @@ void add_bennett_product(const Writing& w, Sink& c, const char* text, int i, int
 }
 
 // cos(alpha_i): zero when the twist is a right angle (either sign).
-template <class Writing, class Sink>
-void add_right_twist(const Writing& w, Sink& c, const char* text, int i) {
+template <class RepresentationView, class Sink>
+void add_right_twist(const RepresentationView& w, Sink& c, const char* text, int i) {
   const int n = w.joints();
   c.add([&] { return std::string(text); }, [&] { return w.cos_alpha(i); },
         [&] {
@@ -383,8 +383,8 @@ void add_right_twist(const Writing& w, Sink& c, const char* text, int i) {
 // sides of the removed joint, (a - c, alpha - gamma) on the same side. Set
 // bits: 0 the first loop's setup (sin alpha/a = -sin beta/b when set), 1 the
 // second's, 2 the same-side (subtractive) fusion.
-template <class Writing, class Sink>
-void goldberg_conditions(int set, const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void goldberg_conditions(int set, const RepresentationView& w, Sink& c) {
   const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0;
   const bool subtractive = (set & 4) != 0;
   add_length(w, c, "a1 - a4", 0, 3, -1.0);
@@ -417,8 +417,8 @@ void goldberg_conditions(int set, const Writing& w, Sink& c) {
 // which makes it plane-symmetric: a2 = a3, alpha3 = -alpha2 (bit 3 clear)
 // or pi - alpha2 (bit 3 set), and the shared link's twist a right angle.
 // Bits 0-2 as goldberg_conditions.
-template <class Writing, class Sink>
-void myard_conditions(int set, const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void myard_conditions(int set, const RepresentationView& w, Sink& c) {
   goldberg_conditions(set & 7, w, c);
   const double pi_shift = (set & 8) ? kPi : 0.0;
   add_length(w, c, "a2 - a3", 1, 2, -1.0);
@@ -441,8 +441,8 @@ void myard_conditions(int set, const Writing& w, Sink& c) {
 // (= sin^2(alpha2) sin^2(alpha3) sin^2(psi)); the last is squared so that it
 // stays smooth where psi = 0 or pi (Goldberg's own loops, d1 = d5 = 0).
 // Bits 0 and 1 of `set` as goldberg_conditions (the fusion side is psi).
-template <class Writing, class Sink>
-void goldberg_bent_conditions(int set, const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void goldberg_bent_conditions(int set, const RepresentationView& w, Sink& c) {
   const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0, sigma = s1 * s2;
   const int n = 5;
   const Scale& s = w.scale();
@@ -505,8 +505,8 @@ void goldberg_bent_conditions(int set, const Writing& w, Sink& c) {
 }
 
 // Bricard line-symmetric 6R: a_i = a_{i+3}, alpha_i = alpha_{i+3}, d_i = d_{i+3}.
-template <class Writing, class Sink>
-void bricard_line_conditions(const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void bricard_line_conditions(const RepresentationView& w, Sink& c) {
   static constexpr const char* kA[] = {"a1 - a4", "a2 - a5", "a3 - a6"};
   static constexpr const char* kAlpha[] = {"alpha1 - alpha4", "alpha2 - alpha5", "alpha3 - alpha6"};
   static constexpr const char* kD[] = {"d1 - d4", "d2 - d5", "d3 - d6"};
@@ -519,8 +519,8 @@ void bricard_line_conditions(const Writing& w, Sink& c) {
 // a2 = a5, a3 = a4, alpha1 = -alpha6, alpha2 = -alpha5, alpha3 = -alpha4,
 // d1 = d4 = 0, d2 = -d6, d3 = -d5 (in this project's convention; the
 // literature's "alpha12 + alpha61 = pi" is the same loop in its own).
-template <class Writing, class Sink>
-void bricard_plane_conditions(const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void bricard_plane_conditions(const RepresentationView& w, Sink& c) {
   static constexpr const char* kA[] = {"a1 - a6", "a2 - a5", "a3 - a4"};
   static constexpr const char* kAlpha[] = {"alpha1 + alpha6", "alpha2 + alpha5", "alpha3 + alpha4"};
   for (int i = 0; i < 3; ++i) add_length(w, c, kA[i], i, 5 - i, -1.0);
@@ -533,8 +533,8 @@ void bricard_plane_conditions(const Writing& w, Sink& c) {
 
 // Bricard trihedral 6R: every twist a right angle, every offset zero, and
 // a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2 (in units of L^2).
-template <class Writing, class Sink>
-void bricard_trihedral_conditions(const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void bricard_trihedral_conditions(const RepresentationView& w, Sink& c) {
   const int n = 6;
   const Scale& s = w.scale();
   static constexpr const char* kCos[] = {"cos(alpha1)", "cos(alpha2)", "cos(alpha3)",
@@ -565,8 +565,8 @@ void bricard_trihedral_conditions(const Writing& w, Sink& c) {
 // links 1 (a, alpha), 2 (b, beta), 3 (a, alpha), 4 (c, gamma), 5 (b, beta),
 // 6 (c, gamma), every offset zero (joints 1 and 4 are A and D). Set bits: 0
 // loop 1's setup (sin alpha/a = -sin beta/b when set), 1 loop 2's.
-template <class Writing, class Sink>
-void bennett_pair_conditions(int set, const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void bennett_pair_conditions(int set, const RepresentationView& w, Sink& c) {
   const double s1 = (set & 1) ? -1.0 : 1.0, s2 = (set & 2) ? -1.0 : 1.0;
   add_length(w, c, "a1 - a3", 0, 2, -1.0);
   add_twist(w, c, "alpha1 - alpha3", 0, 2, -1.0);
@@ -586,8 +586,8 @@ void bennett_pair_conditions(int set, const Writing& w, Sink& c) {
 // 4, 5 likewise (kappa2, d5 = 0), the same (cos alpha + cos beta) / kappa for
 // both dyads, links 3 and 6 equal, and each dyad's two end joints the same
 // offset (d1 = d3, d4 = d6).
-template <class Writing, class Sink>
-void bennett_dyads_conditions(const Writing& w, Sink& c) {
+template <class RepresentationView, class Sink>
+void bennett_dyads_conditions(const RepresentationView& w, Sink& c) {
   const int n = 6;
   const Scale& s = w.scale();
   add_length(w, c, "a3 - a6", 2, 5, -1.0);
@@ -625,7 +625,7 @@ constexpr bool goldberg_type(Family family) {
   return family == Family::goldberg || family == Family::myard || family == Family::goldberg_bent;
 }
 
-// The condition sets of a writing that a family's score takes the best of,
+// The condition sets of a representation that a family's score takes the best of,
 // numbered: for Bennett loops set 0 is the asymmetric setup and set 1 the
 // line-symmetric one; for trivial loops set 0 is axes 1 and 2 coinciding and
 // set 1 (n = 4) axes 1 and 3; planar loops have one set; Goldberg and Myard
@@ -647,7 +647,7 @@ inline int condition_sets(Family family, int joints) {
     case Family::degenerate:
     case Family::unclassified: break;
   }
-  return 0;  // no writings
+  return 0;  // no representations
 }
 
 // Whether a family's conditions read cosines of twists (the numeric path
@@ -657,8 +657,8 @@ constexpr bool reads_cosines(Family family) {
          family == Family::bricard_trihedral || family == Family::bennett_dyads;
 }
 
-template <Family F, class Writing, class Sink>
-void condition_set(int set, const Writing& w, Sink& c) {
+template <Family F, class RepresentationView, class Sink>
+void condition_set(int set, const RepresentationView& w, Sink& c) {
   static_assert(F != Family::spherical && F != Family::degenerate && F != Family::unclassified);
   if constexpr (F == Family::bennett) {
     bennett_conditions(w, set == 0 ? 1.0 : -1.0, c);

@@ -25,44 +25,44 @@ using namespace detail;
 namespace {
 
 // ---------------------------------------------------------------------------
-// The numeric path: the writings looked up, not written out.
+// The numeric path: the representations looked up, not written out.
 
 // The twist offsets detail::representations puts on a twist: none, one axis
 // flipped (pi), both axes flipped (pi + pi).
 constexpr std::array<double, 3> kTwistOffsets = {0.0, kPi, kPi + kPi};
 
-// One writing as indices into the values of one call (Tables).
-struct CompiledWriting {
+// One representation as indices into the values of one call (Tables).
+struct CompiledRepresentation {
   std::array<std::uint8_t, kMaxJoints> a{};      // a'_k = Tables::a[a[k]]
   std::array<std::uint8_t, kMaxJoints> twist{};  // alpha'_k = Tables::twist[twist[k]], likewise sin, cos
   std::array<std::uint8_t, kMaxJoints> d{};      // d'_k = Tables::d[d[k]]
 };
 
-// The writings of an n-joint loop in detail::representations order: for each
+// The representations of an n-joint loop in detail::representations order: for each
 // of the 2n (shift, reversal) orders, its 2^n sets of axis flips, which
 // change signs and twist offsets but move no parameter.
-struct WritingTable {
+struct RepresentationTable {
   const std::vector<detail::Representation>* representations = nullptr;
-  std::vector<CompiledWriting> writings;
+  std::vector<CompiledRepresentation> compiled;
 };
 
-// Whether two writings take their lengths and offsets from the same joints.
-[[maybe_unused]] bool same_places(const CompiledWriting& w, const CompiledWriting& v, int n) {
+// Whether two representations take their lengths and offsets from the same joints.
+[[maybe_unused]] bool same_places(const CompiledRepresentation& w, const CompiledRepresentation& v, int n) {
   for (size_t k = 0; k < static_cast<size_t>(n); ++k) {
     if (w.a[k] != v.a[k] || w.d[k] / 2 != v.d[k] / 2) return false;
   }
   return true;
 }
 
-WritingTable build_writing_table(int n) {
-  WritingTable table;
+RepresentationTable build_representation_table(int n) {
+  RepresentationTable table;
   table.representations = &detail::representations(n);
   [[maybe_unused]] const size_t flips = size_t{1} << n;
-  table.writings.reserve(table.representations->size());
+  table.compiled.reserve(table.representations->size());
   for (size_t i = 0; i < table.representations->size(); ++i) {
     const detail::Representation& r = (*table.representations)[i];
     assert(r.flips == i % flips);
-    CompiledWriting w;
+    CompiledRepresentation w;
     for (int k = 0; k < n; ++k) {
       const auto ia = static_cast<size_t>(k), it = static_cast<size_t>(n + k), id = static_cast<size_t>(2 * n + k);
       // a'_k = 1 * a_j + 0.
@@ -79,37 +79,37 @@ WritingTable build_writing_table(int n) {
       assert(std::abs(r.sign[id]) == 1.0 && r.offset[id] == 0.0 && std::signbit(r.offset[id]) == negated);
       w.d[ia] = static_cast<std::uint8_t>(2 * (r.index[id] - 2 * n) + (negated ? 1 : 0));
     }
-    // Flips move no parameter, so a writing's lengths, and L, are those of its order's first writing.
-    assert(same_places(w, i % flips == 0 ? w : table.writings[i - i % flips], n));
-    table.writings.push_back(w);
+    // Flips move no parameter, so a representation's lengths, and L, are those of its order's first representation.
+    assert(same_places(w, i % flips == 0 ? w : table.compiled[i - i % flips], n));
+    table.compiled.push_back(w);
   }
   return table;
 }
 
 // Built on first use, once per joint count (thread-safe static initialisation).
 template <int N>
-const WritingTable& writing_table_for() {
-  static const WritingTable table = build_writing_table(N);
+const RepresentationTable& representation_table_for() {
+  static const RepresentationTable table = build_representation_table(N);
   return table;
 }
 
-const WritingTable& writing_table(int n) {
+const RepresentationTable& representation_table(int n) {
   static_assert(kMinJoints == 4 && kMaxJoints == 8, "one case per joint count");
   switch (n) {
-    case 4: return writing_table_for<4>();
-    case 5: return writing_table_for<5>();
-    case 6: return writing_table_for<6>();
-    case 7: return writing_table_for<7>();
-    case 8: return writing_table_for<8>();
+    case 4: return representation_table_for<4>();
+    case 5: return representation_table_for<5>();
+    case 6: return representation_table_for<6>();
+    case 7: return representation_table_for<7>();
+    case 8: return representation_table_for<8>();
   }
-  throw std::logic_error("writing_table: unvalidated joint count " + std::to_string(n));
+  throw std::logic_error("representation_table: unvalidated joint count " + std::to_string(n));
 }
 
-// The values the writings' parameters take for one geometry: every a_j, every
+// The values the representations' parameters take for one geometry: every a_j, every
 // +-d_j, every twist alpha_j + m pi (m = 0, 1, 2) wrapped, with its sine and,
 // when asked, its cosine. Computed as detail::apply computes them (sign *
 // value + offset, twists then wrapped), so a lookup gives the written-out
-// writing's number bit for bit.
+// representation's number bit for bit.
 struct Tables {
   int n = 0;
   std::array<double, kMaxJoints> a;
@@ -135,10 +135,10 @@ Tables tabulate(const LoopGeometry& g, bool cosines) {
   return t;
 }
 
-// One writing as the conditions read it, from the tables.
-struct TabulatedWriting {
+// One representation as the conditions read it, from the tables.
+struct TabulatedRepresentation {
   const Tables& t;
-  const CompiledWriting& w;
+  const CompiledRepresentation& w;
   const Scale& s;  // L only: the search takes no gradients
   int joints() const { return t.n; }
   double a(int k) const { return t.a[w.a[static_cast<size_t>(k)]]; }
@@ -149,9 +149,9 @@ struct TabulatedWriting {
   const Scale& scale() const { return s; }
 };
 
-// A writing's length scale as scale_of computes it on the written-out
-// writing: length_scale on its lengths and offsets, in its order.
-double length_scale_of(const Tables& t, const CompiledWriting& w) {
+// A representation's length scale as scale_of computes it on the written-out
+// representation: length_scale on its lengths and offsets, in its order.
+double length_scale_of(const Tables& t, const CompiledRepresentation& w) {
   LoopGeometry lengths;
   lengths.a.resize(t.n);
   lengths.d.resize(t.n);
@@ -162,13 +162,13 @@ double length_scale_of(const Tables& t, const CompiledWriting& w) {
   return length_scale(lengths);
 }
 
-// The best writing so far, kept as best_over_writings keeps it by norm: a
+// The best representation so far, kept as best_over_representations keeps it by norm: a
 // condition set replaces it only when its norm is strictly smaller, so the
 // first of equal ones stays.
 struct Search {
-  double sum = kInf;  // of squares, of the best writing's conditions
+  double sum = kInf;  // of squares, of the best representation's conditions
   double norm = kInf;
-  int writing = -1;   // index in detail::representations order
+  int representation = -1;   // index in detail::representations order
   int set = 0;        // which condition set (condition_set)
 
   void keep(const SquaredNorm& c, int index, int which) {
@@ -178,14 +178,14 @@ struct Search {
     if (candidate < norm) {
       sum = c.sum;
       norm = candidate;
-      writing = index;
+      representation = index;
       set = which;
     }
   }
 };
 
 template <Family F>
-Search best_writing(const LoopGeometry& g, const WritingTable& table) {
+Search best_representation(const LoopGeometry& g, const RepresentationTable& table) {
   const int n = g.joints();
   // Cosines only where a condition's value reads them; elsewhere they enter gradients alone.
   const Tables t = tabulate(g, reads_cosines(F));
@@ -194,9 +194,9 @@ Search best_writing(const LoopGeometry& g, const WritingTable& table) {
   Search best;
   for (int order = 0; order < 2 * n; ++order) {
     const int first = order * flips;
-    const Scale s{length_scale_of(t, table.writings[static_cast<size_t>(first)]), GeometryVector(), n};
+    const Scale s{length_scale_of(t, table.compiled[static_cast<size_t>(first)]), GeometryVector(), n};
     for (int i = first; i < first + flips; ++i) {
-      const TabulatedWriting w{t, table.writings[static_cast<size_t>(i)], s};
+      const TabulatedRepresentation w{t, table.compiled[static_cast<size_t>(i)], s};
       if constexpr (F == Family::bennett) {
         // The two setups share every condition but the last: sum those once.
         SquaredNorm common{best.sum};
@@ -218,16 +218,16 @@ Search best_writing(const LoopGeometry& g, const WritingTable& table) {
   return best;
 }
 
-// The distance over the writings and, when `gradient` is not null, its
-// gradient: the best writing written out once and differentiated.
+// The distance over the representations and, when `gradient` is not null, its
+// gradient: the best representation written out once and differentiated.
 template <Family F>
-double distance_over_writings(const LoopGeometry& g, GeometryVector* gradient) {
+double distance_over_representations(const LoopGeometry& g, GeometryVector* gradient) {
   const int n = g.joints();
-  const WritingTable& table = writing_table(n);
-  const Search best = best_writing<F>(g, table);
-  assert(best.writing >= 0);  // every norm is finite: the conditions are in units of L
+  const RepresentationTable& table = representation_table(n);
+  const Search best = best_representation<F>(g, table);
+  assert(best.representation >= 0);  // every norm is finite: the conditions are in units of L
   if (gradient) {
-    const detail::Representation& r = (*table.representations)[static_cast<size_t>(best.writing)];
+    const detail::Representation& r = (*table.representations)[static_cast<size_t>(best.representation)];
     const WrittenOut w(detail::apply(r, g));
     FixedConditions c;
     condition_set<F>(best.set, w, c);
@@ -267,18 +267,20 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
   switch (family) {
     case Family::bennett:
       if (geometry.joints() != 4) throw std::invalid_argument("family_distance: Bennett loops have 4 joints");
-      return distance_over_writings<Family::bennett>(geometry, gradient);
-    case Family::planar: return distance_over_writings<Family::planar>(geometry, gradient);
+      return distance_over_representations<Family::bennett>(geometry, gradient);
+    case Family::planar: return distance_over_representations<Family::planar>(geometry, gradient);
     case Family::spherical: return spherical_distance(geometry, gradient);
-    case Family::trivial: return distance_over_writings<Family::trivial>(geometry, gradient);
-    case Family::goldberg: return distance_over_writings<Family::goldberg>(geometry, gradient);
-    case Family::myard: return distance_over_writings<Family::myard>(geometry, gradient);
-    case Family::goldberg_bent: return distance_over_writings<Family::goldberg_bent>(geometry, gradient);
-    case Family::bricard_line_symmetric: return distance_over_writings<Family::bricard_line_symmetric>(geometry, gradient);
-    case Family::bricard_plane_symmetric: return distance_over_writings<Family::bricard_plane_symmetric>(geometry, gradient);
-    case Family::bricard_trihedral: return distance_over_writings<Family::bricard_trihedral>(geometry, gradient);
-    case Family::bennett_pair: return distance_over_writings<Family::bennett_pair>(geometry, gradient);
-    case Family::bennett_dyads: return distance_over_writings<Family::bennett_dyads>(geometry, gradient);
+    case Family::trivial: return distance_over_representations<Family::trivial>(geometry, gradient);
+    case Family::goldberg: return distance_over_representations<Family::goldberg>(geometry, gradient);
+    case Family::myard: return distance_over_representations<Family::myard>(geometry, gradient);
+    case Family::goldberg_bent: return distance_over_representations<Family::goldberg_bent>(geometry, gradient);
+    case Family::bricard_line_symmetric:
+      return distance_over_representations<Family::bricard_line_symmetric>(geometry, gradient);
+    case Family::bricard_plane_symmetric:
+      return distance_over_representations<Family::bricard_plane_symmetric>(geometry, gradient);
+    case Family::bricard_trihedral: return distance_over_representations<Family::bricard_trihedral>(geometry, gradient);
+    case Family::bennett_pair: return distance_over_representations<Family::bennett_pair>(geometry, gradient);
+    case Family::bennett_dyads: return distance_over_representations<Family::bennett_dyads>(geometry, gradient);
     case Family::degenerate: throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified: break;
   }
@@ -293,7 +295,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
   switch (family) {
     case Family::bennett:
       if (n != 4) throw std::invalid_argument("family_distance_report: Bennett loops have 4 joints");
-      best = best_over_writings<Family::bennett>(geometry, true);
+      best = best_over_representations<Family::bennett>(geometry, true);
       break;
     case Family::spherical:
       spherical_conditions(geometry, false, best.conditions);
@@ -315,7 +317,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
   }
   if (gradient) {
     const GeometryVector g = best.conditions.norm_gradient(3 * n);
-    *gradient = best.writing ? detail::pull_back(*best.writing, g) : g;
+    *gradient = best.representation ? detail::pull_back(*best.representation, g) : g;
   }
   FamilyCheck check = check_from(family, best);
   if (family == Family::bennett) {

@@ -55,22 +55,22 @@ FamilyCheck check_from(Family family, const Best& best) {
 
 Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
   switch (family) {
-    case Family::bennett: return best_over_writings<Family::bennett>(g, by_norm);
-    case Family::planar: return best_over_writings<Family::planar>(g, by_norm);
-    case Family::trivial: return best_over_writings<Family::trivial>(g, by_norm);
-    case Family::goldberg: return best_over_writings<Family::goldberg>(g, by_norm);
-    case Family::myard: return best_over_writings<Family::myard>(g, by_norm);
-    case Family::goldberg_bent: return best_over_writings<Family::goldberg_bent>(g, by_norm);
-    case Family::bricard_line_symmetric: return best_over_writings<Family::bricard_line_symmetric>(g, by_norm);
-    case Family::bricard_plane_symmetric: return best_over_writings<Family::bricard_plane_symmetric>(g, by_norm);
-    case Family::bricard_trihedral: return best_over_writings<Family::bricard_trihedral>(g, by_norm);
-    case Family::bennett_pair: return best_over_writings<Family::bennett_pair>(g, by_norm);
-    case Family::bennett_dyads: return best_over_writings<Family::bennett_dyads>(g, by_norm);
+    case Family::bennett: return best_over_representations<Family::bennett>(g, by_norm);
+    case Family::planar: return best_over_representations<Family::planar>(g, by_norm);
+    case Family::trivial: return best_over_representations<Family::trivial>(g, by_norm);
+    case Family::goldberg: return best_over_representations<Family::goldberg>(g, by_norm);
+    case Family::myard: return best_over_representations<Family::myard>(g, by_norm);
+    case Family::goldberg_bent: return best_over_representations<Family::goldberg_bent>(g, by_norm);
+    case Family::bricard_line_symmetric: return best_over_representations<Family::bricard_line_symmetric>(g, by_norm);
+    case Family::bricard_plane_symmetric: return best_over_representations<Family::bricard_plane_symmetric>(g, by_norm);
+    case Family::bricard_trihedral: return best_over_representations<Family::bricard_trihedral>(g, by_norm);
+    case Family::bennett_pair: return best_over_representations<Family::bennett_pair>(g, by_norm);
+    case Family::bennett_dyads: return best_over_representations<Family::bennett_dyads>(g, by_norm);
     case Family::spherical:
     case Family::degenerate:
     case Family::unclassified: break;
   }
-  throw std::logic_error(std::string("best_for: no writings for ") + to_string(family));
+  throw std::logic_error(std::string("best_for: no representations for ") + to_string(family));
 }
 
 FamilyCheck family_check(Family family, const LoopGeometry& g) {

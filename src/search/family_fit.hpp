@@ -13,18 +13,18 @@
 
 namespace loopfarm::detail {
 
-// The best writing's conditions for a family, by max |condition| (for
+// The best representation's conditions for a family, by max |condition| (for
 // classification) or by norm (for distances).
 struct Best {
   Conditions conditions;
-  const detail::Representation* writing = nullptr;
+  const detail::Representation* representation = nullptr;
   double score = kInf;
   double setup_sign = 0.0;  // Bennett: +1 asymmetric, -1 line-symmetric
-  int set = 0;              // the best writing's condition set (condition_sets)
+  int set = 0;              // the best representation's condition set (condition_sets)
 };
 
 template <Family F>
-Best best_over_writings(const LoopGeometry& g, bool by_norm) {
+Best best_over_representations(const LoopGeometry& g, bool by_norm) {
   Best best;
   const int sets = condition_sets(F, g.joints());
   for (const detail::Representation& r : detail::representations(g.joints())) {
@@ -36,7 +36,7 @@ Best best_over_writings(const LoopGeometry& g, bool by_norm) {
       if (score < best.score) {
         best.score = score;
         best.conditions = std::move(c);
-        best.writing = &r;
+        best.representation = &r;
         best.setup_sign = F == Family::bennett ? (set == 0 ? 1.0 : -1.0) : 0.0;
         best.set = set;
       }
@@ -47,7 +47,7 @@ Best best_over_writings(const LoopGeometry& g, bool by_norm) {
 
 FamilyCheck check_from(Family family, const Best& best);
 
-// best_over_writings for a family named at run time (those with writings).
+// best_over_representations for a family named at run time (those with representations).
 Best best_for(Family family, const LoopGeometry& g, bool by_norm);
 
 // A family's check on the geometry alone (not trivial, not degenerate).

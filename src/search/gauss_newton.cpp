@@ -34,7 +34,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen::VectorXd& x0,
                                          const LocalSearchOptions& options) {
   const auto start_time = std::chrono::steady_clock::now();
-  const OptimizerSettings& opt = options.settings;
+  const OptimizerSection& opt = options.optimizer;
   const ParameterSpace& space = objective.space();
   const Eigen::VectorXd lower = space.lower_bounds();
   const Eigen::VectorXd upper = space.upper_bounds();

@@ -37,7 +37,7 @@ LocalSearchSummary local_minimize(CycleObjective& objective, const Eigen::Vector
                           : "the start has a non-finite value";
     return summary;
   }
-  if (options.settings.algorithm == "gauss-newton") return minimize_gauss_newton(objective, x0, options);
+  if (options.optimizer.algorithm == "gauss-newton") return minimize_gauss_newton(objective, x0, options);
   return minimize_nlopt(objective, x0, options);
 }
 

@@ -78,7 +78,7 @@ SearchStatus status_of(nlopt::result result) {
 LocalSearchSummary minimize_nlopt(CycleObjective& objective, const Eigen::VectorXd& x0,
                                   const LocalSearchOptions& options) {
   const auto start_time = std::chrono::steady_clock::now();
-  const OptimizerSettings& opt = options.settings;
+  const OptimizerSection& opt = options.optimizer;
   const ParameterSpace& space = objective.space();
   const Eigen::VectorXd lower = space.lower_bounds();
   const Eigen::VectorXd upper = space.upper_bounds();

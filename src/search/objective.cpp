@@ -10,8 +10,8 @@
 
 namespace loopfarm {
 
-ObjectiveSettings ObjectiveSettings::from_loop(const LoopSettings& loop) {
-  ObjectiveSettings s;
+ObjectiveOptions ObjectiveOptions::from_loop(const LoopSection& loop) {
+  ObjectiveOptions s;
   s.equilibrium.compliance = loop.compliance;
   s.equilibrium.torsion_stiffness_ratio = loop.stiffness_ratio;
   s.equilibrium.closure_tolerance = loop.closure_tolerance;
@@ -46,13 +46,13 @@ std::vector<JointTravel> joint_travel(const CycleSummary& cycle, int joints) {
   return out;
 }
 
-CycleObjective::CycleObjective(const ParameterSpace& space, ObjectiveSettings settings, JointVector initial_angles)
+CycleObjective::CycleObjective(const ParameterSpace& space, ObjectiveOptions options, JointVector initial_angles)
     : space_(space),
-      settings_(std::move(settings)),
+      options_(std::move(options)),
       initial_angles_(std::move(initial_angles)),
       geometry_jacobian_(space.geometry_jacobian()) {
-  settings_.equilibrium.validate();
-  settings_.cycle.validate();
+  options_.equilibrium.validate();
+  options_.cycle.validate();
   if (initial_angles_.size() != space.joints) {
     throw std::invalid_argument("CycleObjective: initial_angles has " + std::to_string(initial_angles_.size()) +
                                 " values for " + std::to_string(space.joints) + " joints");
@@ -83,17 +83,17 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
   } catch (const std::invalid_argument&) {
     return false;  // e.g. a length pushed below zero: no loop to evaluate
   }
-  model_ = std::make_unique<LoopModel>(geometry_, settings_.equilibrium);
+  model_ = std::make_unique<LoopModel>(geometry_, options_.equilibrium);
   workspace_ = std::make_unique<EquilibriumWorkspace>(*model_);
-  if (have_nearby_ && settings_.reuse_nearby_cycle &&
-      cycle_energy_from_nearby(*model_, *workspace_, nearby_, settings_.cycle, cycle_)) {
+  if (have_nearby_ && options_.reuse_nearby_cycle &&
+      cycle_energy_from_nearby(*model_, *workspace_, nearby_, options_.cycle, cycle_)) {
     // The start state is the sample at theta0 (the first one of a full turn).
     if (cycle_.samples.front().theta_in == initial_angles_[0]) {
       start_ = cycle_.samples.front().state;
       return std::isfinite(cycle_.E_mean);
     }
     const EquilibriumSummary anchor = solve_equilibrium(*model_, *workspace_, initial_angles_[0], nearby_start_,
-                                                        {.max_iterations = settings_.cycle.max_iterations_per_step});
+                                                        {.max_iterations = options_.cycle.max_iterations_per_step});
     if (anchor.status == SolveStatus::converged) {
       start_ = anchor.state;
       return std::isfinite(cycle_.E_mean);
@@ -105,7 +105,7 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
   if (start.status != SolveStatus::converged) start = assemble(*model_, *workspace_, initial_angles_[0]);
   if (start.status != SolveStatus::converged) return false;
   start_ = start.state;
-  cycle_energy(*model_, *workspace_, initial_angles_[0], start_, settings_.cycle, cycle_);
+  cycle_energy(*model_, *workspace_, initial_angles_[0], start_, options_.cycle, cycle_);
   return std::isfinite(cycle_.E_mean);
 }
 
@@ -121,21 +121,21 @@ double CycleObjective::steering(const Eigen::MatrixXd* angle_jacobian, GeometryV
   const int n = geometry_.joints();
   double factor = 1.0;
   GeometryVector log_gradient = GeometryVector::Zero(3 * n);  // d log M / dp
-  const double p = settings_.deflation_power;
-  for (const DeflationTerm& term : settings_.deflation) {
+  const double p = options_.deflation_power;
+  for (const DeflationTerm& term : options_.deflation) {
     GeometryVector dd = GeometryVector::Zero(3 * n);
     const double dist = std::max(term.distance(geometry_, gradient ? &dd : nullptr), 1e-300);
     const double inverse = std::pow(dist, -p);
-    const double f = inverse + settings_.deflation_shift;
+    const double f = inverse + options_.deflation_shift;
     factor *= f;
     // d/dp log(dist^-p + s) = -p dist^(-p-1) / (dist^-p + s) * d dist / dp
     if (gradient) log_gradient += (-p * inverse / dist / f) * dd;
   }
-  if (settings_.nontrivial) {
+  if (options_.nontrivial) {
     const std::vector<JointTravel> travel = joint_travel(cycle_, n);
-    const double t0 = settings_.min_travel;
+    const double t0 = options_.min_travel;
     for (int i = 0; i < n; ++i) {
-      if (i == settings_.equilibrium.input_joint) continue;  // driven: it turns by construction
+      if (i == options_.equilibrium.input_joint) continue;  // driven: it turns by construction
       const JointTravel& t = travel[static_cast<size_t>(i)];
       const double ratio = t0 / std::max(t.travel, 1e-300);
       const double f = 1.0 + ratio * ratio;
@@ -163,7 +163,7 @@ ObjectiveValue CycleObjective::cycle_value() const {
 }
 
 int CycleObjective::measured_sample() const {
-  if (settings_.measure == CycleMeasure::mean) return -1;
+  if (options_.measure == CycleMeasure::mean) return -1;
   int worst = 0;
   for (int j = 1; j < static_cast<int>(cycle_.samples.size()); ++j) {
     if (cycle_.samples[static_cast<size_t>(j)].energy > cycle_.samples[static_cast<size_t>(worst)].energy) worst = j;
@@ -172,7 +172,7 @@ int CycleObjective::measured_sample() const {
 }
 
 double CycleObjective::measured_energy() const {
-  return settings_.measure == CycleMeasure::mean ? cycle_.E_mean : cycle_.E_max;
+  return options_.measure == CycleMeasure::mean ? cycle_.E_mean : cycle_.E_max;
 }
 
 void CycleObjective::measured_residuals(Eigen::VectorXd& r) const {
@@ -203,7 +203,7 @@ ObjectiveValue CycleObjective::evaluate(const Eigen::VectorXd& x, Eigen::VectorX
   const int n = geometry_.joints();
   // The travel term's gradient needs the angles' sensitivities (steering()
   // reads angle_jacobian_ only then).
-  if (gradient && settings_.nontrivial) {
+  if (gradient && options_.nontrivial) {
     cycle_deformation_jacobian(*model_, *workspace_, cycle_, deformation_jacobian_, &angle_jacobian_);
   }
   GeometryVector steering_gradient = GeometryVector::Zero(3 * n);
@@ -244,7 +244,7 @@ void CycleObjective::residual_jacobian(Eigen::MatrixXd& jacobian) {
   // Into the buffers of the last call: with the same sizes nothing here
   // allocates (nor do the steering's family distances).
   cycle_deformation_jacobian(*model_, *workspace_, cycle_, deformation_jacobian_,
-                             settings_.nontrivial ? &angle_jacobian_ : nullptr);
+                             options_.nontrivial ? &angle_jacobian_ : nullptr);
   GeometryVector steering_gradient = GeometryVector::Zero(3 * n);
   const double factor = steered() ? steering(&angle_jacobian_, &steering_gradient) : 1.0;
   // dr'/dp = sqrt(M) dr/dp + r (dM/dp)ᵀ / (2 sqrt(M)), with r unsteered.

@@ -24,8 +24,8 @@ Family family_from_name(const std::string& name) {
 
 }  // namespace
 
-ObjectiveSettings objective_settings(const Job& job) {
-  ObjectiveSettings s = ObjectiveSettings::from_loop(job.loop);
+ObjectiveOptions objective_options(const Job& job) {
+  ObjectiveOptions s = ObjectiveOptions::from_loop(job.loop);
   for (const std::string& name : job.steering.deflate) {
     const Family family = family_from_name(name);
     s.deflation.push_back({name, [family](const LoopGeometry& g, GeometryVector* gradient) {
@@ -88,7 +88,7 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
 
   // The unsteered energy at the start, for the record (and for comparing
   // steered with unsteered runs on the same footing).
-  ObjectiveSettings plain = ObjectiveSettings::from_loop(job.loop);
+  ObjectiveOptions plain = ObjectiveOptions::from_loop(job.loop);
   // The analysis of a zero (its local dimension from the Jacobian of every
   // sample's deformations) needs the whole cycle, whatever the search minimised.
   plain.measure = CycleMeasure::mean;
@@ -97,12 +97,12 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   const ObjectiveValue initial = unsteered.evaluate(start.x, nullptr);
   out.initial_E_mean = initial.ok ? initial.E_mean : std::numeric_limits<double>::quiet_NaN();
 
-  CycleObjective objective(job.space, objective_settings(job), start.theta);
+  CycleObjective objective(job.space, objective_options(job), start.theta);
   // The search's first evaluation is at the start itself, whose cycle the
   // record above has just walked (steering does not change the cycle).
   objective.continue_from(unsteered);
   LocalSearchOptions search;
-  search.settings = job.optimizer;
+  search.optimizer = job.optimizer;
   // NLopt's stochastic algorithms: a seed of their own per start.
   search.random_seed = job.search.seed * 0x9E3779B97F4A7C15ull + index;
   search.trace = options.trace;

@@ -30,7 +30,7 @@ constexpr int kMaxAttempts = 100000;
 // input's full turn passes a flat, singular pose.
 constexpr double kGrashofMargin = 0.1;
 // The trivial loop's two link lengths differ by at least this ratio, so that
-// no writing of it is a Bennett loop (which needs a1 = a3).
+// no representation of it is a Bennett loop (which needs a1 = a3).
 constexpr double kTrivialLengthMargin = 0.1;
 constexpr std::uint64_t kMaxCount = 1000000;
 
@@ -322,7 +322,7 @@ struct Parameter {
 std::vector<Parameter> destroying_parameters(GroundTruthFamily family) {
   using K = ParameterKind;
   switch (family) {
-    // Off a1 = a3, alpha2 = alpha4, or d = 0: no Bennett writing, and the
+    // Off a1 = a3, alpha2 = alpha4, or d = 0: no Bennett representation, and the
     // twists are away from planar, the lengths from spherical.
     case GroundTruthFamily::bennett: return {{K::a, 0}, {K::alpha, 1}, {K::d, 2}};
     // A twist off 0/180 deg: the axes are no longer parallel; an offset:

@@ -35,7 +35,7 @@ double quantile(std::vector<double>& values, double q) {
 // The ground-truth loop's cycle energy under the configuration's loop
 // settings, assembled from its pose: what a start on that loop reads.
 // NaN when it cannot be assembled at its pose.
-double ground_truth_energy(const GroundTruthCase& c, const LoopSettings& loop) {
+double ground_truth_energy(const GroundTruthCase& c, const LoopSection& loop) {
   EquilibriumOptions equilibrium;
   equilibrium.compliance = loop.compliance;
   equilibrium.torsion_stiffness_ratio = loop.stiffness_ratio;
@@ -57,7 +57,7 @@ double ground_truth_energy(const GroundTruthCase& c, const LoopSettings& loop) {
 
 // Whether two loop settings give every ground-truth loop the same cycle
 // energy (the search objective E_mean/E_max does not enter the reading).
-bool same_reading(const LoopSettings& a, const LoopSettings& b) {
+bool same_reading(const LoopSection& a, const LoopSection& b) {
   return a.joints == b.joints && a.compliance == b.compliance && a.stiffness_ratio == b.stiffness_ratio &&
          a.samples == b.samples && a.range == b.range && a.closure_tolerance == b.closure_tolerance &&
          a.stationarity_tolerance == b.stationarity_tolerance;
@@ -66,7 +66,7 @@ bool same_reading(const LoopSettings& a, const LoopSettings& b) {
 }  // namespace
 
 std::vector<double> ground_truth_energies(const std::vector<GroundTruthCase>& ground_truth,
-                                          const LoopSettings& loop) {
+                                          const LoopSection& loop) {
   std::vector<double> energies;
   energies.reserve(ground_truth.size());
   for (const GroundTruthCase& c : ground_truth) energies.push_back(ground_truth_energy(c, loop));
@@ -252,12 +252,12 @@ std::vector<TradeoffRow> run_tradeoff(const Job& base, const TradeoffOptions& op
   // The ground truth's energies depend on the loop settings alone: the
   // configurations of the other axes (algorithm, ftol_rel, zero threshold,
   // objective) read those of an earlier configuration.
-  std::vector<std::pair<LoopSettings, std::vector<double>>> readings;
+  std::vector<std::pair<LoopSection, std::vector<double>>> readings;
   std::vector<TradeoffRow> rows;
   rows.reserve(configurations.size());
   for (size_t k = 0; k < configurations.size(); ++k) {
     const auto begin = std::chrono::steady_clock::now();
-    const LoopSettings& loop = configurations[k].job.loop;
+    const LoopSection& loop = configurations[k].job.loop;
     auto known = std::find_if(readings.begin(), readings.end(),
                               [&loop](const auto& reading) { return same_reading(reading.first, loop); });
     if (known == readings.end()) known = readings.insert(readings.end(), {loop, ground_truth_energies(truth, loop)});

@@ -142,7 +142,7 @@ LoopGeometry parallelogram_four_bar(double a, double b);
 //
 // Sign patterns: flipping one axis changes the sign of the two twists at it
 // (axis_flipped), so the parity of the number of -90 deg twists is all that
-// a writing cannot change: the 64 patterns are two loops. In the
+// a representation cannot change: the 64 patterns are two loops. In the
 // construction the parity is the number of faces, mod 2, in which B's foot
 // lies inside the angle between the face's two edges (or its vertical
 // angle), i.e. the number of faces where the root with the minus sign is

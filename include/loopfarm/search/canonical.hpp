@@ -1,5 +1,5 @@
 // Canonical form of a loop, the key for de-duplication: the same linkage
-// written down in any way gives the same key. Equivalent writings are the
+// written down in any way gives the same key. Equivalent representations are the
 // cyclic relabellings, the reversal of the loop, the flips of joint-axis
 // directions (loop.hpp) and scale.
 //
@@ -13,7 +13,7 @@
 // n, then each list with as many decimals as the tolerance has (6 for 1e-6).
 //
 // Known limit: a value within the tolerance of a quantisation boundary can
-// round either way in two writings of the same loop (twists near +-pi are
+// round either way in two representations of the same loop (twists near +-pi are
 // snapped to +pi and -0 to 0, which removes the commonest case). A
 // de-duplicator should therefore also compare candidate geometries
 // numerically (canonical geometries within a few tolerances are the same).

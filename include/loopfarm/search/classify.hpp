@@ -2,7 +2,7 @@
 // "Known movable 4R loops"; docs/families.md for 5R and 6R), with the residual
 // of every condition of every family.
 //
-// Conditions are evaluated on every equivalent writing of the loop (cyclic
+// Conditions are evaluated on every equivalent representation of the loop (cyclic
 // relabelling, reversal, axis flips: 2n * 2^n of them) and the best one is
 // kept, so that the answer does not depend on labels or axis directions.
 // Residuals are dimensionless: lengths divided by the length scale L.
@@ -101,14 +101,14 @@ enum class BennettSetup { none, asymmetric, line_symmetric };
 const char* to_string(BennettSetup setup);
 
 struct ConditionResidual {
-  std::string name;   // e.g. "a1 - a3", in the best writing's labels
+  std::string name;   // e.g. "a1 - a3", in the best representation's labels
   double residual = 0.0;
 };
 
 struct FamilyCheck {
   Family family = Family::unclassified;
   BennettSetup setup = BennettSetup::none;
-  double residual = 0.0;  // max |condition| of the best writing (inf where the family does not apply)
+  double residual = 0.0;  // max |condition| of the best representation (inf where the family does not apply)
   std::vector<ConditionResidual> conditions;
 };
 
@@ -145,9 +145,9 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 
 // Distance of a geometry to a family's conditions, for steering the search
 // away from it (deflation): sqrt of the sum of the squared conditions of the
-// best writing, lengths divided by L; with its gradient with respect to
-// (a, alpha, d) when `gradient` is not null (a min over writings: smooth
-// away from the points where the best writing changes).
+// best representation, lengths divided by L; with its gradient with respect to
+// (a, alpha, d) when `gradient` is not null (a min over representations: smooth
+// away from the points where the best representation changes).
 //   planar, bennett: the conditions above;
 //   spherical: sqrt(sum a_i^2 + d_i^2) in the geometry's own units (in units
 //     of L it would be constant);
@@ -157,7 +157,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 //     alpha3 = alpha4, d2 = d4 = 0, d1 = -d3.
 // The numeric path, called on every evaluation of a steered search: it builds
 // no names and, after the first call for a joint count (which builds that
-// count's table of writings), allocates nothing. Also goldberg, myard and
+// count's table of representations), allocates nothing. Also goldberg, myard and
 // goldberg_bent (n = 5) and the three Bricard families (n = 6), their conditions as
 // classify() lists them. Throws std::invalid_argument for an invalid
 // geometry, a family for another joint count (Bennett with n != 4, ...),
@@ -165,7 +165,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 // Family::unclassified.
 double family_distance(Family family, const LoopGeometry& geometry, GeometryVector* gradient = nullptr);
 
-// The same distance (and gradient) by the reporting path: every writing
+// The same distance (and gradient) by the reporting path: every representation
 // written out and the best one's conditions listed by name, as classify()
 // lists them (`residual` is the distance; `setup` the best Bennett setup).
 // Equal to family_distance bit for bit; slow and allocating, for reports,

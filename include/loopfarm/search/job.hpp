@@ -92,7 +92,12 @@ struct ParameterSpace {
   int random_angle_count() const;  // theta parameters in range mode
 };
 
-struct LoopSettings {
+// Names: a struct holding one table of the job file is a `*Section`
+// (LoopSection is [loop], and so on), a member of Job named after its table;
+// what an algorithm takes is its `*Options` (EquilibriumOptions, CycleOptions,
+// ObjectiveOptions, LocalSearchOptions), which the search builds from the
+// sections (ObjectiveOptions::from_loop, objective_options in start.hpp).
+struct LoopSection {
   int joints = 4;
   Compliance compliance = Compliance::paper;
   double stiffness_ratio = 1.0;        // k_t / (k_a L^2)
@@ -108,7 +113,7 @@ struct LoopSettings {
   std::string objective = "mean";
 };
 
-struct OptimizerSettings {
+struct OptimizerSection {
   std::string algorithm = "gauss-newton";  // or an NLopt name: "LD_LBFGS", "LN_BOBYQA", ...
   double xtol_rel = 1e-10;
   double ftol_rel = 0.0;               // 0: not used
@@ -119,11 +124,11 @@ struct OptimizerSettings {
   int max_evaluations = 500;           // cycle evaluations per start
   double time_limit = 30.0;            // seconds per start; 0: none
   // Start each evaluation's cycle from the last one's samples instead of
-  // walking it from the assembly (ObjectiveSettings::reuse_nearby_cycle).
+  // walking it from the assembly (ObjectiveOptions::reuse_nearby_cycle).
   bool reuse_nearby_cycle = true;
 };
 
-struct SearchSettings {
+struct SearchSection {
   long starts = 100;
   std::uint64_t seed = 1;
   double zero_threshold = 1e-12;       // E_mean below this is a zero
@@ -134,7 +139,7 @@ struct SearchSettings {
 // (any n), "bennett" (n = 4), "goldberg", "myard", "goldberg_bent" (n = 5),
 // "bricard_line_symmetric", "bricard_plane_symmetric", "bricard_trihedral",
 // "bennett_pair", "bennett_dyads" (n = 6): those family_distance measures.
-struct SteeringSettings {
+struct SteeringSection {
   bool nontrivial = false;             // every joint must move over the cycle
   double min_travel = 0.0872664625997164788;  // [rad] (5 deg): what "moves" means
   std::vector<std::string> deflate;    // families whose neighbourhood is penalised
@@ -142,7 +147,7 @@ struct SteeringSettings {
   double deflation_shift = 1.0;
 };
 
-struct OutputSettings {
+struct OutputSection {
   std::string database = "loopfarm.sqlite";  // relative paths are relative to the job file
   // Starts whose final E_mean is at most this keep their final geometry in
   // the database (every start keeps its energies, for the histogram of minima).
@@ -152,12 +157,12 @@ struct OutputSettings {
 struct Job {
   std::string path;                    // the file it was read from
   std::string text;                    // its text as read (the farm stores and hashes it)
-  LoopSettings loop;
+  LoopSection loop;
   ParameterSpace space;
-  OptimizerSettings optimizer;
-  SearchSettings search;
-  SteeringSettings steering;
-  OutputSettings output;
+  OptimizerSection optimizer;
+  SearchSection search;
+  SteeringSection steering;
+  OutputSection output;
 };
 
 // Reads and validates a job file; throws JobError.

@@ -47,7 +47,7 @@ struct SearchTraceRow {
 };
 
 struct LocalSearchOptions {
-  OptimizerSettings settings;
+  OptimizerSection optimizer;
   std::uint64_t random_seed = 0;  // for NLopt's stochastic algorithms (nlopt::srand)
   std::function<void(const SearchTraceRow&)> trace;  // called per row when set
 };
@@ -64,7 +64,7 @@ struct LocalSearchSummary {
   double seconds = 0.0;
 };
 
-// Dispatches on settings.algorithm ("gauss-newton" or an NLopt name).
+// Dispatches on optimizer.algorithm ("gauss-newton" or an NLopt name).
 // `x0` is clamped into [lower, upper]. The objective's last evaluation is left
 // at the returned x.
 LocalSearchSummary local_minimize(CycleObjective& objective, const Eigen::VectorXd& x0,

@@ -16,7 +16,7 @@
 // Zeros away from the steered-off sets stay zeros; M tends to a constant
 // there.
 //
-// With ObjectiveSettings::reuse_nearby_cycle off, each evaluation is a pure
+// With ObjectiveOptions::reuse_nearby_cycle off, each evaluation is a pure
 // function of x: the loop is assembled afresh from the start's initial joint
 // angles. With it on (the default) each cycle is solved from the last
 // successful evaluation's samples, so a value depends on the search's path
@@ -51,7 +51,7 @@ enum class CycleMeasure {
   max,   // E_max: the paper's peak; its gradient and residuals are the worst sample's
 };
 
-struct ObjectiveSettings {
+struct ObjectiveOptions {
   EquilibriumOptions equilibrium;
   CycleOptions cycle;
   CycleMeasure measure = CycleMeasure::mean;
@@ -67,7 +67,7 @@ struct ObjectiveSettings {
 
   // The loop settings of a job (compliance, stiffness ratio, samples, range);
   // steering is added by the caller, which knows the family distances.
-  static ObjectiveSettings from_loop(const LoopSettings& loop);
+  static ObjectiveOptions from_loop(const LoopSection& loop);
 };
 
 struct ObjectiveValue {
@@ -84,7 +84,7 @@ class CycleObjective {
  public:
   // `initial_angles`: the start's joint angles at theta0 = initial_angles[0]
   // (the input joint is joint 1); the passive ones are the assembly's guess.
-  CycleObjective(const ParameterSpace& space, ObjectiveSettings settings, JointVector initial_angles);
+  CycleObjective(const ParameterSpace& space, ObjectiveOptions options, JointVector initial_angles);
 
   // F(x) and, when `gradient` is not null, dF/dx.
   ObjectiveValue evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient);
@@ -111,7 +111,7 @@ class CycleObjective {
   const EquilibriumState& start_state() const { return start_; }
   const CycleSummary& cycle() const { return cycle_; }
   const ParameterSpace& space() const { return space_; }
-  const ObjectiveSettings& settings() const { return settings_; }
+  const ObjectiveOptions& options() const { return options_; }
 
  private:
   // Builds the geometry, assembles and runs the cycle; false when the loop
@@ -131,10 +131,10 @@ class CycleObjective {
   // Keeps only the measured sample's rows of the stacked per-sample rows
   // (scaled to weigh 1), for the max; leaves them all for the mean.
   void mask_to_measured_sample(Eigen::Ref<Eigen::MatrixXd> rows) const;
-  bool steered() const { return !settings_.deflation.empty() || settings_.nontrivial; }
+  bool steered() const { return !options_.deflation.empty() || options_.nontrivial; }
 
   const ParameterSpace& space_;
-  ObjectiveSettings settings_;
+  ObjectiveOptions options_;
   JointVector initial_angles_;
   Eigen::MatrixXd geometry_jacobian_;  // d(a, alpha, d) / dx
   int evaluations_ = 0;

@@ -69,9 +69,9 @@ struct StartSummary {
   CandidateAnalysis candidate;     // for zeros only (`zero`); otherwise default
 };
 
-// The steering of a job as objective settings (deflation terms from the
+// The steering of a job as objective options (deflation terms from the
 // families' distance functions).
-ObjectiveSettings objective_settings(const Job& job);
+ObjectiveOptions objective_options(const Job& job);
 
 StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& options = {});
 

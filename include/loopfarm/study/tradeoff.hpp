@@ -108,7 +108,7 @@ struct TradeoffRow {
 // at its pose (what a start on it reads): NaN where it cannot be assembled
 // there, +inf where a sample fails (not an energy).
 std::vector<double> ground_truth_energies(const std::vector<GroundTruthCase>& ground_truth,
-                                          const LoopSettings& loop);
+                                          const LoopSection& loop);
 
 // Measures one configuration on the job's first `starts` starts and on the
 // ground-truth set, whose energies under the configuration's loop settings
