@@ -239,7 +239,7 @@ TEST_F(ResultsDatabaseTest, CreatesTheSchemaWithItsPragmas) {
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
     EXPECT_EQ(db.path(), path);
     EXPECT_EQ(db.mode(), DatabaseMode::write);
-    const ConnectionSettings settings = db.connection_settings();
+    const ConnectionPragmas settings = db.connection_settings();
     EXPECT_TRUE(settings.foreign_keys);
     EXPECT_EQ(settings.synchronous, 1);  // NORMAL
     EXPECT_EQ(settings.busy_timeout_ms, kDatabaseBusyTimeoutMs);
@@ -444,7 +444,7 @@ TEST_F(ResultsDatabaseTest, DeduplicationRules) {
 }
 
 TEST_F(ResultsDatabaseTest, DeduplicationAcrossGridCellEdgesAndAmongManyEqualValues) {
-  // The lookup goes by grid cell (width 1e-3): two writings of one linkage
+  // The lookup goes by grid cell (width 1e-3): two representations of one linkage
   // on either side of a cell edge, in every value at once, are still one;
   // and a thousand candidates that share a1 (as searches ending on a bound
   // give) neither hide a match nor merge with each other. Checked against a
@@ -464,7 +464,7 @@ TEST_F(ResultsDatabaseTest, DeduplicationAcrossGridCellEdgesAndAmongManyEqualVal
     g.alpha[1] = 1.0 + 1e-4 * k;
     records.push_back(verified_start(static_cast<std::uint64_t>(10 + k), g, "many-" + std::to_string(k)));
   }
-  // And one more writing of the 500th, 3e-6 away: a hit, not a candidate.
+  // And one more representation of the 500th, 3e-6 away: a hit, not a candidate.
   LoopGeometry again = bennett_canonical();
   again.alpha[1] = 1.0 + 1e-4 * 500 + 3e-6;
   records.push_back(verified_start(2000, again, "many-500-again"));

@@ -71,9 +71,9 @@ void bind_run(Query& q, const std::optional<std::int64_t>& run_id) {
 
 }  // namespace
 
-ConnectionSettings ResultsDatabase::connection_settings() const {
+ConnectionPragmas ResultsDatabase::connection_settings() const {
   const Impl& m = impl();
-  ConnectionSettings s;
+  ConnectionPragmas s;
   s.journal_mode = store::query_text(m.path, m.db(), "PRAGMA journal_mode");
   s.foreign_keys = store::query_integer(m.path, m.db(), "PRAGMA foreign_keys") != 0;
   s.synchronous = static_cast<int>(store::query_integer(m.path, m.db(), "PRAGMA synchronous"));

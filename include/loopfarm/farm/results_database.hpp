@@ -168,8 +168,8 @@ struct CandidateFilter {
   std::int64_t offset = 0;                // skip this many (paging)
 };
 
-// The connection's settings, for the record and for tests.
-struct ConnectionSettings {
+// The connection's PRAGMA values (what SQLite reports, not options), for the record and for tests.
+struct ConnectionPragmas {
   std::string journal_mode;  // "wal" while open for writing
   bool foreign_keys = false;
   int synchronous = 0;  // 1: NORMAL
@@ -197,7 +197,7 @@ class ResultsDatabase {
 
   const std::string& path() const;
   DatabaseMode mode() const;
-  ConnectionSettings connection_settings() const;
+  ConnectionPragmas connection_settings() const;
 
   // Decides which run this invocation writes to. No run yet, or new_run: a
   // new run. The latest run with the same job_hash and seed: that run, resumed

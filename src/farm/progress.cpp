@@ -1,4 +1,4 @@
-#include "progress.hpp"
+#include "loopfarm/farm/progress.hpp"
 
 #include <unistd.h>
 
@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 
-namespace loopfarm::cli {
+namespace loopfarm {
 namespace {
 
 std::string duration_text(double seconds) {
@@ -79,4 +79,10 @@ void Progress::finish() {
   drawn_ = false;
 }
 
-}  // namespace loopfarm::cli
+void Progress::message(const std::string& text) {
+  finish();
+  std::fprintf(out_, "loopfarm run: %s\n", text.c_str());
+  std::fflush(out_);
+}
+
+}  // namespace loopfarm

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <string>
 
-namespace loopfarm::cli {
+namespace loopfarm {
 
 enum class ProgressStyle { bar, log, none };
 
@@ -32,6 +32,8 @@ class Progress {
   void update(const ProgressCounts& counts, bool force = false);
   // Ends the bar's line so that later messages start on a fresh line.
   void finish();
+  // One line "loopfarm run: TEXT" on the same stream, the bar's line ended first.
+  void message(const std::string& text);
 
   // The text of one report, without a line end (for tests and logs).
   static std::string line(const ProgressCounts& counts, double elapsed_s);
@@ -45,4 +47,4 @@ class Progress {
   bool drawn_ = false;
 };
 
-}  // namespace loopfarm::cli
+}  // namespace loopfarm

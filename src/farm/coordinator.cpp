@@ -1,0 +1,187 @@
+// The farm's coordinator (coordinator.hpp).
+#include "loopfarm/farm/coordinator.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "loopfarm/search/start.hpp"
+
+namespace loopfarm {
+namespace {
+
+// `text` on one line: line ends and tabs become spaces, trailing ones go.
+std::string one_line(std::string text) {
+  for (char& c : text) {
+    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+  }
+  while (!text.empty() && text.back() == ' ') text.pop_back();
+  return text;
+}
+
+// The coordinator's own worker: a thread that takes chunks like any worker
+// and leaves its records for the coordinating thread (which alone talks to
+// the transport: MPI_THREAD_FUNNELED).
+class LocalWorker {
+ public:
+  LocalWorker(const StartRunner& run, Dispenser& dispenser, const StopFlag& stop)
+      : thread_([this, &run, &dispenser, &stop] {
+          for (;;) {
+            const std::vector<std::uint64_t> chunk = dispenser.take();
+            if (chunk.empty()) break;
+            for (std::uint64_t index : chunk) {
+              if (stop.requested()) break;
+              StartRecord record = run(index);
+              std::lock_guard lock(mutex_);
+              done_.push_back(std::move(record));
+            }
+          }
+          finished_.store(true);
+        }) {}
+  ~LocalWorker() { thread_.join(); }
+  LocalWorker(const LocalWorker&) = delete;
+  LocalWorker& operator=(const LocalWorker&) = delete;
+  std::vector<StartRecord> collect() {
+    std::lock_guard lock(mutex_);
+    std::vector<StartRecord> out;
+    out.swap(done_);
+    return out;
+  }
+  bool finished() const { return finished_.load(); }
+
+ private:
+  std::mutex mutex_;
+  std::vector<StartRecord> done_;
+  std::atomic<bool> finished_{false};
+  std::thread thread_;  // last: started once the members above exist
+};
+
+}  // namespace
+
+StartRecord run_start_record(const Job& job, std::uint64_t index) {
+  try {
+    return make_start_record(run_start(job, index));
+  } catch (const std::exception& error) {
+    StartRecord r;
+    r.index = index;
+    r.status = "error";
+    r.E_mean = r.E_max = r.objective = std::numeric_limits<double>::quiet_NaN();
+    std::fprintf(stderr, "loopfarm run: start %llu failed: %s\n", static_cast<unsigned long long>(index),
+                 one_line(error.what()).c_str());
+    return r;
+  }
+}
+
+ResumePlan plan_run(ResultsDatabase& db, const Job& job, bool new_run, int ranks) {
+  RunIdentity identity;
+  identity.job_path = job.path;
+  identity.job_text = job.text;
+  identity.seed = job.search.seed;
+  identity.starts = static_cast<std::uint64_t>(job.search.starts);
+  identity.joints = job.loop.joints;
+  identity.zero_threshold = job.search.zero_threshold;
+  identity.report_threshold = job.output.report_threshold;
+  const RunInfo run = db.open_run(identity, new_run);
+  ResumePlan plan;
+  plan.run_id = run.run_id;
+  plan.pending = PendingCursor(run.committed, identity.starts);
+  plan.starts = static_cast<long>(identity.starts);
+  plan.committed = static_cast<long>(identity.starts - plan.pending.count());
+  plan.zeros = static_cast<long>(db.start_counts(run.run_id).zeros);
+  plan.candidates = static_cast<long>(db.candidate_count());
+  db.begin_session(run.run_id, ranks);
+  return plan;
+}
+
+CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, CoordinatorTransport& transport,
+                              const StartRunner& run, int chunk, StopFlag& stop, Progress& progress) {
+  using Clock = std::chrono::steady_clock;
+  Dispenser dispenser(plan.pending, chunk, stop);
+  OrderedCommits commits(plan.pending);
+  ProgressCounts counts;
+  counts.total = plan.starts;
+  counts.done = plan.committed;
+  counts.zeros = plan.zeros;
+  counts.candidates = plan.candidates;
+  if (plan.committed > 0) {
+    progress.message("resuming run " + std::to_string(plan.run_id) + " of " + db.path() + ": " +
+                     std::to_string(plan.committed) + " of " + std::to_string(counts.total) +
+                     " starts already committed");
+  }
+
+  CoordinatorSummary summary;
+  const auto session_start = Clock::now();
+  std::vector<StartRecord> batch;
+  auto last_commit = Clock::now();
+  auto flush = [&](bool force) {
+    const auto now = Clock::now();
+    if (batch.empty()) return;
+    if (!force && batch.size() < 256 && now - last_commit < std::chrono::seconds(2)) return;
+    const CommitSummary c = db.commit(plan.run_id, batch);
+    counts.done += c.starts;
+    counts.done_here += c.starts;
+    counts.zeros += c.zeros;
+    counts.candidates += c.new_candidates;
+    batch.clear();
+    last_commit = now;
+  };
+  auto take = [&](std::vector<StartRecord> records) {
+    for (StartRecord& r : records) batch.push_back(std::move(r));
+  };
+
+  int active_workers = transport.remote_workers();
+  {
+    LocalWorker local(run, dispenser, stop);
+    // Destroyed before `local` joins its thread: on an exception (a failed
+    // commit) the thread stops after its current start instead of running on.
+    struct StopOnUnwind {
+      StopFlag& stop;
+      ~StopOnUnwind() {
+        if (std::uncaught_exceptions() > 0) stop.request(-1);
+      }
+    } stop_on_unwind{stop};
+    while (active_workers > 0 || !local.finished()) {
+      const auto work_start = Clock::now();
+      std::optional<WorkRequest> request = transport.poll();
+      if (request) {
+        ++summary.messages;
+        // A worker that caught a signal stops the whole run.
+        if (request->stopping) stop.request(SIGUSR1);
+        for (StartRecord& r : request->records) commits.add(std::move(r));
+        const std::vector<std::uint64_t> work = dispenser.take();
+        transport.send_work(request->worker, work);
+        if (work.empty()) --active_workers;
+      }
+      for (StartRecord& r : local.collect()) commits.add(std::move(r));
+      take(commits.ready());
+      flush(false);
+      progress.update(counts);
+      summary.coordination_s += std::chrono::duration<double>(Clock::now() - work_start).count();
+      if (!request) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    // What the thread finished between the last collect and its end.
+    for (StartRecord& r : local.collect()) commits.add(std::move(r));
+  }
+  take(commits.all());
+  flush(true);
+  progress.update(counts, true);
+  progress.finish();
+
+  summary.total = counts.total;
+  summary.done = counts.done;
+  summary.done_here = counts.done_here;
+  summary.zeros = counts.zeros;
+  summary.candidates = counts.candidates;
+  summary.complete = counts.done >= counts.total;
+  db.end_session(summary.complete ? RunStatus::complete : RunStatus::stopped);
+  summary.wall_s = std::chrono::duration<double>(Clock::now() - session_start).count();
+  return summary;
+}
+
+}  // namespace loopfarm

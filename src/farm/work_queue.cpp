@@ -1,0 +1,64 @@
+// The farm's work queue (work_queue.hpp).
+#include "loopfarm/farm/work_queue.hpp"
+
+#include <algorithm>
+
+namespace loopfarm {
+
+PendingCursor::PendingCursor(const std::vector<IndexRange>& committed, std::uint64_t starts) {
+  std::uint64_t from = 0;
+  for (const IndexRange& c : committed) {
+    if (c.first >= starts) break;
+    if (c.first > from) todo_.push_back({from, c.first});
+    from = std::max(from, c.last);
+  }
+  if (from < starts) todo_.push_back({from, starts});
+  if (!todo_.empty()) at_ = todo_.front().first;
+}
+
+void PendingCursor::advance() {
+  if (++at_ >= todo_[range_].last && ++range_ < todo_.size()) at_ = todo_[range_].first;
+}
+
+std::uint64_t PendingCursor::count() const {
+  std::uint64_t n = 0;
+  for (const IndexRange& r : todo_) n += r.last - r.first;
+  return n;
+}
+
+std::vector<std::uint64_t> Dispenser::take() {
+  std::lock_guard lock(mutex_);
+  std::vector<std::uint64_t> out;
+  if (stop_.requested()) return out;
+  while (static_cast<int>(out.size()) < chunk_ && !cursor_.done()) {
+    out.push_back(cursor_.peek());
+    cursor_.advance();
+  }
+  return out;
+}
+
+void OrderedCommits::add(StartRecord record) {
+  const std::uint64_t index = record.index;
+  held_.emplace(index, std::move(record));
+}
+
+std::vector<StartRecord> OrderedCommits::ready() {
+  std::vector<StartRecord> out;
+  while (!cursor_.done()) {
+    auto it = held_.find(cursor_.peek());
+    if (it == held_.end()) break;
+    out.push_back(std::move(it->second));
+    held_.erase(it);
+    cursor_.advance();
+  }
+  return out;
+}
+
+std::vector<StartRecord> OrderedCommits::all() {
+  std::vector<StartRecord> out = ready();
+  for (auto& [index, record] : held_) out.push_back(std::move(record));
+  held_.clear();
+  return out;
+}
+
+}  // namespace loopfarm
