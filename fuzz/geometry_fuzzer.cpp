@@ -49,7 +49,7 @@ void check_message(const std::string& message) {
   check(!one_line(message).empty(), "empty error message");
 }
 
-// What an accepted geometry promises (docs/commands.md, "One loop's geometry": 4 <= n <= 8, a >= 0, finite,
+// What an accepted geometry promises (docs/guide/commands.md, "One loop's geometry": 4 <= n <= 8, a >= 0, finite,
 // and a finite length scale so that energies are numbers).
 void check_geometry(const loopfarm::LoopGeometry& g) {
   const int n = g.joints();

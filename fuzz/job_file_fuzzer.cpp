@@ -1,6 +1,6 @@
 // libFuzzer target: the job-file parser, parse_job (src/search/job.cpp).
 //
-// The contract (include/loopfarm/search/job.hpp, docs/job-file.md): any text either
+// The contract (include/loopfarm/search/job.hpp, docs/guide/job-file.md): any text either
 // parses into a Job that keeps the documented invariants, or throws JobError
 // with one line naming the source. Anything else -- another exception type, a
 // multi-line message, an accepted job that breaks an invariant, or a sanitizer

@@ -322,8 +322,8 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
       "Per family: the candidates (distinct verified movable linkages) and the starts that found them (hits); "
       "the spread of their canonical parameters (length scale L = 1, twists in degrees, the representation that gives "
       "the canonical key); the local dimension found and the family's known dimension. Both count free real "
-      "parameters **including the scale**: the known one in the full 3n-parameter space (docs/families.md, "
-      "docs/classification.md), the found one (`candidates.local_dimension`) among the search's free "
+      "parameters **including the scale**: the known one in the full 3n-parameter space (docs/guide/families.md, "
+      "docs/guide/classification.md), the found one (`candidates.local_dimension`) among the search's free "
       "parameters, so a sub-space search (ties, zero offsets, symmetry) can find less than the family has and a "
       "point on a larger family more. The representative is a full-turn candidate if there is one, with the "
       "smallest rigid-closure residual; its cycle energy is recomputed from its canonical geometry (" +
@@ -348,7 +348,7 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
     md += "\n<a id=\"" + stem + "\"></a>\n## " + group.family + " (" + std::to_string(group.joints) + "R): " +
           count_of(static_cast<long long>(group.rows.size()), "candidate") + ", " + count_of(group.hits, "hit") +
           "\n\n";
-    if (group.family == "unclassified") md += "Fits no known family: a possible new family (or a known one whose conditions `classify` does not write, docs/families.md).\n\n";
+    if (group.family == "unclassified") md += "Fits no known family: a possible new family (or a known one whose conditions `classify` does not write, docs/guide/families.md).\n\n";
 
     // Local dimension.
     std::map<int, std::pair<int, int>> found;  // dimension -> (candidates, free parameters of the first)

@@ -18,7 +18,7 @@ namespace loopfarm::cli {
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // The dimension of a family (free real parameters, scale included, in the full
-// 3n-parameter space) as docs/families.md and docs/classification.md give it;
+// 3n-parameter space) as docs/guide/families.md and docs/guide/classification.md give it;
 // nothing when it is not one number (trivial, degenerate, unclassified).
 std::optional<int> known_family_dimension(const std::string& family, int joints);
 

@@ -1,5 +1,5 @@
 // `loopfarm energy`: the cycle energy of one loop, with its curve as CSV and
-// plot. See docs/commands.md for the options.
+// plot. See docs/guide/commands.md for the options.
 #pragma once
 
 #include "subcommand.hpp"

@@ -196,7 +196,7 @@ Subcommand add_groundtruth_command(CLI::App& parent) {
       "groundtruth",
       "Write the ground-truth set of 4R loops: known movable ones (Bennett in both setups, planar cranks, spherical, "
       "trivial coaxial) with closed poses, and known rigid ones (each movable one perturbed in one parameter, and "
-      "random loops), labelled. docs/ground-truth.md describes it.");
+      "random loops), labelled. docs/quality/ground-truth.md describes it.");
   app->footer(
       "Examples:\n"
       "  loopfarm groundtruth --out ground-truth.csv\n"

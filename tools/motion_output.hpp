@@ -14,7 +14,7 @@ namespace loopfarm::cli {
 // Indented lines, one block per circuit; `reported` is marked.
 void print_circuits(const MotionAnalysis& motion, int input_joint, int reported);
 
-// [{...}, ...]: one object per circuit (see docs/motion.md for the keys).
+// [{...}, ...]: one object per circuit (see docs/guide/motion.md for the keys).
 std::string circuits_json(const MotionAnalysis& motion, int input_joint);
 
 // One row a point: circuit, point, arclength_rad, then theta1_deg ...

@@ -99,7 +99,7 @@ std::filesystem::path require_gnuplot(const std::string& flag) {
   std::filesystem::path gnuplot = find_program("gnuplot");
   if (gnuplot.empty()) {
     throw EnvironmentError(flag + ": gnuplot not found on PATH; install it (Debian: apt-get install gnuplot-nox, "
-                                  "or run tools/deps.sh) or leave out " + flag);
+                                  "or run scripts/deps.sh) or leave out " + flag);
   }
   return gnuplot;
 }

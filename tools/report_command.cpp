@@ -292,7 +292,7 @@ int run_report(const ReportArguments& args) {
   if (!args.max_energy.empty()) (void)parse_number(args.max_energy, "--max-energy");
   if (!args.run.empty()) (void)parse_integer(args.run, "--run");
   if (!args.family.empty()) {
-    // Every family a classification can store (docs/families.md for n = 5, 6).
+    // Every family a classification can store (docs/guide/families.md for n = 5, 6).
     if (!family_from_string(args.family)) {
       throw UsageError("--family", "got " + quote_text(args.family) + "; expected one of " + family_names());
     }
@@ -376,7 +376,7 @@ Subcommand add_report_command(CLI::App& parent) {
       "  loopfarm report jobs/default.sqlite\n"
       "  loopfarm report jobs/default.sqlite --family bennett --format csv > bennett.csv\n"
       "  loopfarm report jobs/default.sqlite --summary --plot docs/default\n"
-      "  loopfarm report jobs/goldberg-5r.sqlite --atlas docs/atlas\n"
+      "  loopfarm report jobs/goldberg-5r.sqlite --atlas docs/research/atlas\n"
       "Read-only; works while a run is writing. Unclassified candidates (possible new families) come first.\n"
       "Exit codes: 0 done, 1 failure (gnuplot), 2 bad input (options, a file that is not a loopfarm database or\n"
       "is damaged: checked with PRAGMA quick_check, about 2 s per million starts; the file is never changed).\n");

@@ -1,4 +1,4 @@
-// loopfarm run JOB.toml: the discovery farm (docs/farm.md), alone or under
+// loopfarm run JOB.toml: the discovery farm (docs/guide/farm.md), alone or under
 // `mpirun -np P`. This file parses the options, turns signals into a stop
 // request, calls the farm library (loopfarm/farm/farm.hpp) and prints what it
 // did; the work queue, the coordinator and MPI are in src/farm/.
@@ -20,8 +20,8 @@
 #include "loopfarm/farm/results_database.hpp"
 #include "loopfarm/search/job.hpp"
 
-// Under AddressSanitizer (tools/test.sh --sanitize): the allocations Open MPI
-// keeps until exit are suppressed by library name (tools/sanitizers/lsan.supp),
+// Under AddressSanitizer (scripts/test.sh --sanitize): the allocations Open MPI
+// keeps until exit are suppressed by library name (scripts/sanitizers/lsan.supp),
 // which needs whole allocation stacks; the default fast unwinder stops in
 // Open MPI's components, which are built without frame pointers. Full
 // unwinding costs every allocation a slow walk, so only the program that
@@ -188,7 +188,7 @@ Subcommand add_run_command(CLI::App& parent) {
       "running the same command again resumes.\n"
       "Exit codes: 0 all starts committed, 1 failure, 2 bad input (job file, options, a database holding another\n"
       "job, not a loopfarm database or damaged: left untouched), 3 stopped by a signal (resumable).\n");
-  app->add_option("JOB", args->job, "job file (TOML, see docs/job-file.md)")->required()->type_name("JOB.toml");
+  app->add_option("JOB", args->job, "job file (TOML, see docs/guide/job-file.md)")->required()->type_name("JOB.toml");
   app->add_option("--starts", args->starts, "override [search] starts")->type_name("N");
   app->add_option("--seed", args->seed, "override [search] seed")->type_name("S");
   app->add_option("--db", args->db, "override [output] database")->type_name("PATH");

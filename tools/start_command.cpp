@@ -147,7 +147,7 @@ Subcommand add_start_command(CLI::App& parent) {
                "canonicalise the result if it reaches zero.");
   app->footer("Example:\n  loopfarm start jobs/paper-table1.toml --index 3 --trace\n"
               "Exit codes: 0 done (whatever the start found), 1 failure, 2 bad input (job file, index).\n");
-  app->add_option("JOB", args->job, "job file (TOML, see docs/job-file.md)")->required()->type_name("JOB.toml");
+  app->add_option("JOB", args->job, "job file (TOML, see docs/guide/job-file.md)")->required()->type_name("JOB.toml");
   app->add_option("--index", args->index, "start index, 0 <= I < [search] starts")->type_name("I")->capture_default_str();
   app->add_option("--count", args->count, "run starts I to I+N-1, one JSON line each (with --json)")
       ->type_name("N")

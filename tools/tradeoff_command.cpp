@@ -286,10 +286,10 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
       "tradeoff",
       "Measure a job under many configurations, one choice changed at a time (cycle samples, equilibrium tolerance, "
       "compliance, objective, algorithm, its relative-decrease stop, reuse of the nearby cycle, zero threshold): seconds per start against accuracy on the job's starts and on the "
-      "ground-truth set. docs/tradeoff.md explains the measures and the chart.");
+      "ground-truth set. docs/quality/tradeoff.md explains the measures and the chart.");
   app->footer(
       "Examples:\n"
-      "  loopfarm tradeoff jobs/default.toml --csv docs/tradeoff.csv --plot docs/tradeoff.png\n"
+      "  loopfarm tradeoff jobs/default.toml --csv docs/quality/tradeoff.csv --plot docs/quality/tradeoff.png\n"
       "  loopfarm tradeoff jobs/default.toml --starts 10 --algorithms gauss-newton,LD_LBFGS --samples 8,16\n"
       "Runs on one core; each start and each ground-truth loop is measured under every configuration.\n"
       "Exit codes: 0 done, 1 failure (gnuplot), 2 bad input.\n");

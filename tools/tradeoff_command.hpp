@@ -1,5 +1,5 @@
 // loopfarm tradeoff: a job measured under many configurations (speed against
-// accuracy, docs/tradeoff.md).
+// accuracy, docs/quality/tradeoff.md).
 #pragma once
 
 #include "subcommand.hpp"

@@ -13,7 +13,7 @@
 // loops (the 11 x 11 Cholesky: 3,470 -> 2,550 instructions a call over the
 // bench's generic cycles, valgrind --tool=callgrind bench/cycle_breakdown). The
 // arithmetic, and its order, is the same in all versions, so their results
-// are identical to the bit (tests/small_dense_test.cpp).
+// are identical to the bit (tests/core/small_dense_test.cpp).
 #pragma once
 
 #include <cmath>

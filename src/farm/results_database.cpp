@@ -1,4 +1,4 @@
-// The SQLite results database (results_database.hpp, docs/database.md).
+// The SQLite results database (results_database.hpp, docs/guide/database.md).
 //
 // Every write is one BEGIN IMMEDIATE ... COMMIT transaction held by a
 // Transaction guard that rolls back on any exception, so that an error leaves

@@ -1,4 +1,4 @@
-// The results database's schema (docs/database.md): the SQL that creates it,
+// The results database's schema (docs/guide/database.md): the SQL that creates it,
 // the column lists the store binds in, and the checks that a file is a sound
 // loopfarm database of this schema version. Private to the store.
 #pragma once

@@ -38,7 +38,7 @@ void open_connection(Connection& c, const std::string& path, int flags, const st
   // WAL under an EXCLUSIVE lock on the file, and a reader that opens the file
   // in that moment without a busy timeout (the sqlite3 shell) fails with
   // "database is locked": 30 of 4696 and 49 of 3768 plain sqlite3 reads
-  // across 40 short runs did (docs/reliability-faults.md). A read-only connection cannot
+  // across 40 short runs did (docs/quality/reliability-faults.md). A read-only connection cannot
   // checkpoint anyway, so it does not try; the writer checkpoints before it
   // closes (~Impl), without that lock, and keeps it for a few microseconds
   // only (deleting the empty WAL).

@@ -56,7 +56,7 @@ AxisPair nearest_coincident_axes(const LoopGeometry& g, const JointVector& pose)
 // angle relation singular, tan(t1/2) tan(t2/2) = sin((alpha2 + alpha1)/2) /
 // sin((alpha2 - alpha1)/2) (asymmetric setup) or cos(..) / cos(..)
 // (line-symmetric) with a zero denominator. Such a "Bennett loop" only folds,
-// so the 5R has no Goldberg motion (docs/discovery-5r-6r.md). It folds in two
+// so the 5R has no Goldberg motion (docs/research/discovery-5r-6r.md). It folds in two
 // ways. Folded with the joint next to the fused link locked at pi (representation
 // joint 5 when the second loop folds, joint 1 when the first does), the two
 // axes at its other ends coincide with the removed axis A and the loop turns
@@ -65,7 +65,7 @@ AxisPair nearest_coincident_axes(const LoopGeometry& g, const JointVector& pose)
 // other way it locks the other loop: two 5R axes coincide and only they turn
 // (trivial). Both motions meet where the loop folds both ways, and a walk
 // through that pose can switch or stray between them, so no joint's travel
-// need look frozen (docs/discovery-5r-6r.md, "Goldberg geometries on a
+// need look frozen (docs/research/discovery-5r-6r.md, "Goldberg geometries on a
 // folding Bennett loop"). Checked in the family's best representation, links 1 and 2
 // (first loop) and 1 and 3 (second), to `tolerance` (lengths over L).
 struct FoldingGoldberg {

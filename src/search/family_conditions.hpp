@@ -302,7 +302,7 @@ void coaxial_13_conditions(const RepresentationView& w, Sink& c) {
 
 
 // ---------------------------------------------------------------------------
-// 5R and 6R families (docs/families.md). Helpers for the conditions they
+// 5R and 6R families (docs/guide/families.md). Helpers for the conditions they
 // share: a length difference, a twist sum or difference, an offset or a sum
 // of offsets, and a Bennett product.
 
@@ -427,7 +427,7 @@ void myard_conditions(int set, const RepresentationView& w, Sink& c) {
 }
 
 // Goldberg's 5R with the two links fused at any angle psi about the removed
-// joint's axis (docs/families.md, "Goldberg 5R, bent fused link"). Links 1-4
+// joint's axis (docs/guide/families.md, "Goldberg 5R, bent fused link"). Links 1-4
 // as goldberg_conditions; the fused link 5 (a5, alpha5) and the offsets d1,
 // d5 it leaves at joints 1 and 5 are those of the screw product
 // Rx(-alpha3) Tx(-a3) Rz(psi) Tx(a2) Rx(alpha2). Its dual-angle cosine rule
@@ -561,7 +561,7 @@ void bricard_trihedral_conditions(const RepresentationView& w, Sink& c) {
 // (6R): loop 1 (A B C D) = (a, alpha, b, beta) and loop 2 (A F E D) =
 // (c, gamma, b, beta) share the link DA = (b, beta) and its axes A and D; the
 // 6R A B C D E F keeps every joint, so each loop still turns about the shared
-// link on its own: two degrees of freedom (docs/families.md). Written as
+// link on its own: two degrees of freedom (docs/guide/families.md). Written as
 // links 1 (a, alpha), 2 (b, beta), 3 (a, alpha), 4 (c, gamma), 5 (b, beta),
 // 6 (c, gamma), every offset zero (joints 1 and 4 are A and D). Set bits: 0
 // loop 1's setup (sin alpha/a = -sin beta/b when set), 1 loop 2's.
@@ -580,7 +580,7 @@ void bennett_pair_conditions(int set, const RepresentationView& w, Sink& c) {
   add_bennett_product(w, c, s2 > 0 ? "a4 sin(alpha5) - a5 sin(alpha4)" : "a4 sin(alpha5) + a5 sin(alpha4)", 3, 4, s2);
 }
 
-// Two Bennett dyads joined by two equal links (6R, docs/families.md; found
+// Two Bennett dyads joined by two equal links (6R, docs/guide/families.md; found
 // by the generic 6R search): links 1, 2 with Bennett's ratio kappa1 =
 // sin(alpha1)/a1 = sin(alpha2)/a2 and no offset between them (d2 = 0), links
 // 4, 5 likewise (kappa2, d5 = 0), the same (cos alpha + cos beta) / kappa for

@@ -1,4 +1,4 @@
-// Job files: parsing and validation (job.hpp, docs/job-file.md).
+// Job files: parsing and validation (job.hpp, docs/guide/job-file.md).
 //
 // Every check names the file, the line and the key ("FILE:LINE: KEY: what"),
 // so that a mistake in a long job file is found at once.

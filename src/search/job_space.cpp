@@ -1,4 +1,4 @@
-// The [space] table of a job file (job.hpp, docs/job-file.md): parameter
+// The [space] table of a job file (job.hpp, docs/guide/job-file.md): parameter
 // ranges and fixed values, ties between parameters and symmetric sub-spaces.
 #include <array>
 #include <optional>
@@ -125,7 +125,7 @@ ParameterSpec read_spec(const Reader& r, const toml::node& node, const std::stri
              Reader::describe(node));
 }
 
-// A symmetric sub-space ([space] symmetry, docs/job-file.md): for every
+// A symmetric sub-space ([space] symmetry, docs/guide/job-file.md): for every
 // geometric parameter that the symmetry makes an image of another, the
 // source and the sign (image = sign * source); a source of -1 fixes the
 // parameter at 0 (an offset on the plane of symmetry). Indices 0-based into
@@ -152,7 +152,7 @@ std::vector<SymmetryTie> symmetry_ties(const std::string& symmetry, const Parame
     // A reflection in a plane through joints 1 and n/2 + 1 (1-based) maps
     // joint j to joint 2 - j and link i (joint i to i + 1) to link n + 1 - i,
     // run backwards: lengths equal, twists and offsets negated
-    // (docs/families.md: the twist sums are 0 in this convention). The
+    // (docs/guide/families.md: the twist sums are 0 in this convention). The
     // offsets of the two joints on the plane are 0.
     for (int i = 0; i < n; ++i) {  // 0-based link i <-> link n - 1 - i
       const int mirror = n - 1 - i;
@@ -176,7 +176,7 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
   ParameterSpace space;
   space.joints = joints;
   space.specs.resize(static_cast<size_t>(kParameterKinds * joints));
-  // Built-in defaults (docs/job-file.md).
+  // Built-in defaults (docs/guide/job-file.md).
   auto range = [](double lo, double hi) {
     ParameterSpec s;
     s.mode = ParameterSpec::Mode::range;

@@ -135,7 +135,7 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   out.branch_jumps = final_value.branch_jumps;
   out.final_angles = unsteered.start_state().theta;
   // A failed sample's energy is that of wherever its solve stopped, often
-  // near zero (docs/stability.md, S4): a cycle with one is never a zero.
+  // near zero (docs/quality/stability.md, S4): a cycle with one is never a zero.
   out.zero = out.E_mean <= job.search.zero_threshold && out.failed_samples == 0;
   if (!out.zero) return out;
 

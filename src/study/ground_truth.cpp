@@ -1,4 +1,4 @@
-// The ground-truth set (ground_truth.hpp, docs/ground-truth.md): movable 4R
+// The ground-truth set (ground_truth.hpp, docs/quality/ground-truth.md): movable 4R
 // loops built from their families' conditions with closed-form closed poses,
 // and rigid ones made from them by one perturbation each, plus random loops.
 #include "loopfarm/study/ground_truth.hpp"

@@ -32,7 +32,7 @@ int rank() {
   return r;
 }
 
-// The small generic 4R job of tests/farm_test.sh; no wall-clock limit per
+// The small generic 4R job of tests/tools/farm_test.sh; no wall-clock limit per
 // start, so that a loaded machine cannot change a result.
 constexpr const char* kJob = R"([loop]
 joints = 4

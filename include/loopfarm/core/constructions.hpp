@@ -1,6 +1,6 @@
 // Loops with known motions, built by constructions that share nothing with
 // the classifier's family conditions (classify.hpp): ground truth for motion
-// tracers and for the classifier itself (docs/ground-truth.md, "Loops built
+// tracers and for the classifier itself (docs/quality/ground-truth.md, "Loops built
 // from their mechanism").
 //
 // - four-bars (planar and spherical) in closed form: every pose at an input
@@ -148,7 +148,7 @@ LoopGeometry parallelogram_four_bar(double a, double b);
 // angle), i.e. the number of faces where the root with the minus sign is
 // taken. Odd parity (e.g. Baker's alternating +90, -90, ...) moved for every
 // admissible length set tried; even parity (e.g. all +90) moves for most, but
-// some length sets have no real pose at all (docs/ground-truth.md).
+// some length sets have no real pose at all (docs/quality/ground-truth.md).
 struct TrihedralBricard {
   // a1..a5 > 0; a6 = sqrt(a1^2 - a2^2 + a3^2 - a4^2 + a5^2) must be real and > 0.
   std::array<double, 5> a{1.0, 1.0, 1.0, 1.0, 1.0};

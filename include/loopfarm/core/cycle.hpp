@@ -89,7 +89,7 @@ struct CycleSummary {
 // labels reverses it), and which branch a jump lands on can change with
 // round-off. Such cycles are flagged (branch_jumps, refinements); read their
 // energy as one of several possible. Smooth cycles are exact and independent
-// of labelling, direction and scale (tests/cycle_test.cpp).
+// of labelling, direction and scale (tests/core/cycle_test.cpp).
 //
 // Drives the loop from `start` (an assembled state at theta0, e.g. from
 // assemble()) through the cycle. `summary` is reused: with the same N it does

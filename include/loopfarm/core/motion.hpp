@@ -34,7 +34,7 @@
 // an f-dimensional set of poses; trace_circuit then holds f - 1 passive
 // joints at their values in the start pose (picked so that the most joints
 // keep moving) and traces the curve left, which is one motion of many:
-// Circuit::held_joints names them. docs/motion.md has the method, its
+// Circuit::held_joints names them. docs/guide/motion.md has the method, its
 // tolerances and its limits.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The SQLite results database of the farm (docs/database.md documents the
+// The SQLite results database of the farm (docs/guide/database.md documents the
 // schema column by column): runs, their sessions (one per invocation), one row
 // per start, and one row per distinct verified linkage (candidates).
 //

@@ -1,5 +1,5 @@
 // Classification of a movable loop into the known families (docs/design.md,
-// "Known movable 4R loops"; docs/families.md for 5R and 6R), with the residual
+// "Known movable 4R loops"; docs/guide/families.md for 5R and 6R), with the residual
 // of every condition of every family.
 //
 // Conditions are evaluated on every equivalent representation of the loop (cyclic
@@ -25,14 +25,14 @@
 //   bennett_pair (n = 6) two Bennett loops sharing a link, the shared link
 //              removed and nothing fused: moves with two degrees of freedom
 //   bennett_dyads (n = 6) two Bennett dyads with equal (cos alpha + cos
-//              beta) / kappa joined by two equal links (docs/families.md)
+//              beta) / kappa joined by two equal links (docs/guide/families.md)
 //   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
 //              or pi) and the (n-1)R loop with them merged is in a movable
 //              family (not trivial); or a joint stays locked over the motion
 //              (no axes coincide) and the (n-1)R loop left by locking it is
 //              in a movable family
 //
-// docs/classification.md has the details and the tolerances.
+// docs/guide/classification.md has the details and the tolerances.
 #pragma once
 
 #include <optional>
@@ -53,7 +53,7 @@ enum class Family {
   spherical,
   trivial,
   unclassified,
-  // 5R (docs/families.md)
+  // 5R (docs/guide/families.md)
   goldberg,
   myard,
   // 6R
@@ -93,7 +93,7 @@ int family_joints(Family family);
 // unclassified.
 bool has_family_distance(Family family);
 // The family's dimension for `joints` joints: its free real parameters,
-// the scale included (docs/families.md, docs/classification.md); none for a
+// the scale included (docs/guide/families.md, docs/guide/classification.md); none for a
 // joint count it does not have, for degenerate and for unclassified.
 std::optional<int> family_dimension(Family family, int joints);
 
@@ -120,7 +120,7 @@ struct ClassifyOptions {
   // 4R left must then fit to `tolerance` as for a frozen joint: a loop a
   // distance eps off a locked-joint Bennett loop can close along the walk to
   // order eps^2 with its locked joint rocking by order eps (up to 1e3 eps
-  // measured), docs/discovery-5r-6r.md, "The rocking joint". Not for trivial.
+  // measured), docs/research/discovery-5r-6r.md, "The rocking joint". Not for trivial.
   double rocking_travel = 1e-3;
 };
 

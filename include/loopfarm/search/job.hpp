@@ -1,5 +1,5 @@
 // A job file: the single description of a search (TOML, documented key by
-// key in docs/job-file.md, examples in jobs/).
+// key in docs/guide/job-file.md, examples in jobs/).
 //
 //   [loop]       joints, compliance, stiffness_ratio, samples, range_deg
 //   [space]      every DH parameter and initial joint angle: fixed, a range,

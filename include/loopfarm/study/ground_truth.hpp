@@ -27,7 +27,7 @@
 // Every draw comes from the Philox stream keyed by (seed, family and case
 // index) (stream_uniform), so case k of a family is the same whatever the
 // number of cases asked for, and the same options give the same set bit for
-// bit. docs/ground-truth.md describes the set.
+// bit. docs/quality/ground-truth.md describes the set.
 #pragma once
 
 #include <cstdint>

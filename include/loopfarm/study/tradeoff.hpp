@@ -1,5 +1,5 @@
 // Speed against accuracy: one job measured under many configurations, on the
-// same starts and the same ground truth (docs/tradeoff.md).
+// same starts and the same ground truth (docs/quality/tradeoff.md).
 //
 // A configuration is the base job with one choice changed (cycle samples N,
 // equilibrium tolerance, compliance set, objective (mean or max), local

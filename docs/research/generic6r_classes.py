@@ -1,0 +1,747 @@
+#!/usr/bin/env python3
+"""The structure classes of a 6R run's unclassified loops (docs/research/discovery-5r-6r.md,
+"The generic 6R search's unclassified loops"). Python 3 standard library only.
+
+  docs/research/generic6r_classes.py classes DB            # counts per class and rigid-residual band
+  docs/research/generic6r_classes.py exact DB LOOPFARM JOB # the loops closing to round-off, a markdown table
+  docs/research/generic6r_classes.py jacobian DB START LOOPFARM
+      # singular values of the 6 x 6 closure Jacobian at the poses `loopfarm verify --theta0-deg T`
+      # assembles on the loop's motion (T = 0, 30, ..., 330; verified, E_mean < 1e-15)
+  docs/research/generic6r_classes.py jacobian-geometry A ALPHA_DEG D LOOPFARM
+      # the same for a geometry given as comma lists, and the non-adjacent axis pairs whose
+      # distance and angle stay the same (to 1e-9) in all those poses
+  docs/research/generic6r_classes.py normal DB START LOOPFARM
+      # a P9 loop: the direction n in which its cycle energy grows, over the ten parameters the
+      # other eight conditions leave (kappa1, alpha1, alpha2, kappa2, alpha4, alpha5, a3, alpha3,
+      # d1, d4): sqrt(E) of `loopfarm energy` with each moved by 1e-4, signs from pairs
+  docs/research/generic6r_classes.py invariants DB
+      # P9 loops closing to <= 1e-11: dyad invariants compared between the two dyads
+  docs/research/generic6r_classes.py dyads SEED N LOOPFARM
+      # N loops built from bennett_dyads' conditions (docs/guide/families.md), each checked with
+      # `loopfarm verify --theta0-deg T`, T = 0, 5, ..., 355, until one verifies
+  docs/research/generic6r_classes.py mobius DB START
+      # the loop's motion followed with the rigid closure (Python, independent of loopfarm): the
+      # joint pairs whose half-angle tangents are related by a Moebius map (a bilinear relation;
+      # smallest singular value of [s_i s_j, s_i c_j, c_i s_j, c_i c_j] over the poses, s = sin(theta/2),
+      # c = cos(theta/2)), and the pairs whose angle sum or difference stays constant
+  docs/research/generic6r_classes.py mobius-geometry A ALPHA_DEG D
+      # the same for a geometry given as comma lists (any n)
+  docs/research/generic6r_classes.py mobius-all DB
+      # the same over every unclassified loop closing to <= 1e-11, one line each
+  docs/research/generic6r_classes.py cubic SEED ORDER LOOPFARM
+      # a 6R from two factorisations of a random cubic motion polynomial (Hegedues, Schicho,
+      # Schroecker 2013): C = (t - h1)(t - h2)(t - h3) = (t - k1)(t - k2)(t - k3), the k's in the
+      # order ORDER of the norm factors (231 or 321); axes h1 h2 h3 k3 k2 k1; verified with loopfarm
+  docs/research/generic6r_classes.py t7-normal DB START LOOPFARM
+      # a T7 loop: the Hessian of the cycle energy over the nine parameters T7's visible conditions
+      # leave (kappa1, alpha1..3, kappa2, alpha4..6, delta = d1 = +-d4); its two large eigenvalues'
+      # vectors span the directions of the two unseen conditions
+  docs/research/generic6r_classes.py t7-offsets DB
+      # each T7 loop closing to <= 1e-11 with d1, d4 scaled by 0 and 2: does it still move (the
+      # script's rigid closure, followed 80 steps with every pose closing to <= 1e-10)?
+  docs/research/generic6r_classes.py waldron SEED LOOPFARM
+      # Waldron's hybrid: two Bennett loops ABCD, AEFG sharing the axis A, links AB, AE fused and
+      # DA, GA fused, joint A removed: the 6R B C D G F E; verified with loopfarm
+
+Classes, tested on every shift and reversal of the canonical representation, each equality to 1e-6
+(lengths in L, twists in degrees / 57.3; k_i = |sin alpha_i| / a_i, Bennett's ratio; a link
+equals another when a and the twist agree up to sign and pi):
+  pair  links 1 = 3, 4 = 6, 2 = 5, k1 = k2, k4 = k5, every d = 0 (bennett_pair's pattern)
+  P9    link 3 = link 6, k1 = k2, k4 = k5, d2 = d5 = 0, |d1| = |d3|, |d4| = |d6|
+  T7    k1 = k2 = k3, k4 = k5 = k6, d2 = d3 = d5 = d6 = 0, |d1| = |d4|
+  B8    k2 = k3, k5 = k6, d3 = d6 = 0
+"""
+import collections, json, math, re, sqlite3, subprocess, sys
+
+TOL = 1e-6
+COLS = [f'a{i}' for i in range(1, 7)] + [f'alpha{i}_deg' for i in range(1, 7)] + [f'd{i}' for i in range(1, 7)]
+
+
+def wrapd(x):
+    return (x + 180) % 360 - 180
+
+
+def same_link(a, al, i, k):
+    if abs(a[i] - a[k]) > TOL:
+        return False
+    return min(abs(wrapd(al[i] - al[k])), abs(wrapd(al[i] + al[k])), abs(wrapd(al[i] - al[k] + 180)),
+               abs(wrapd(al[i] + al[k] + 180))) < TOL * 57.3
+
+
+def kappa(a, al, i):
+    return abs(math.sin(math.radians(al[i]))) / a[i] if a[i] > 1e-12 else float('inf')
+
+
+def same_kappa(a, al, i, k):
+    return abs(kappa(a, al, i) - kappa(a, al, k)) < TOL * max(1.0, kappa(a, al, i))
+
+
+def representations(a, al, d):
+    for s in range(6):
+        A = [a[(i + s) % 6] for i in range(6)]
+        AL = [al[(i + s) % 6] for i in range(6)]
+        D = [d[(i + s) % 6] for i in range(6)]
+        yield A, AL, D
+        # reversed: link i -> link 4 - i, joint i -> joint 5 - i (0-based; signs do not matter here)
+        yield [A[(4 - i) % 6] for i in range(6)], [AL[(4 - i) % 6] for i in range(6)], [D[(5 - i) % 6] for i in range(6)]
+
+
+def is_pair(A, AL, D):
+    return (same_link(A, AL, 0, 2) and same_link(A, AL, 3, 5) and same_link(A, AL, 1, 4) and same_kappa(A, AL, 0, 1)
+            and same_kappa(A, AL, 3, 4) and max(abs(x) for x in D) < TOL)
+
+
+def is_p9(A, AL, D):
+    return (same_link(A, AL, 2, 5) and same_kappa(A, AL, 0, 1) and same_kappa(A, AL, 3, 4) and abs(D[1]) < TOL
+            and abs(D[4]) < TOL and abs(abs(D[0]) - abs(D[2])) < TOL and abs(abs(D[3]) - abs(D[5])) < TOL)
+
+
+def is_t7(A, AL, D):
+    return (same_kappa(A, AL, 0, 1) and same_kappa(A, AL, 1, 2) and same_kappa(A, AL, 3, 4) and same_kappa(A, AL, 4, 5)
+            and all(abs(D[i]) < TOL for i in (1, 2, 4, 5)) and abs(abs(D[0]) - abs(D[3])) < TOL)
+
+
+def is_b8(A, AL, D):
+    return same_kappa(A, AL, 1, 2) and same_kappa(A, AL, 4, 5) and abs(D[2]) < TOL and abs(D[5]) < TOL
+
+
+PATTERNS = [('pair', is_pair), ('P9', is_p9), ('T7', is_t7), ('B8', is_b8)]
+
+
+def classify(a, al, d):
+    for name, test in PATTERNS:
+        if any(test(*w) for w in representations(a, al, d)):
+            return name
+    return 'none'
+
+
+def rows(db, where=''):
+    con = sqlite3.connect(db)
+    q = (f"SELECT candidate_id, first_start, E_mean, local_dimension, rigid_residual, full_turn, {','.join(COLS)} "
+         f"FROM candidates WHERE family = 'unclassified' {where} ORDER BY first_start")
+    return con.execute(q).fetchall()
+
+
+def band(r):
+    if r[4] <= 1e-13 and r[2] <= 1e-24:
+        return 'rigid <= 1e-13'
+    return 'rigid <= 1e-11' if r[4] <= 1e-11 else 'rigid > 1e-11'
+
+
+def cmd_classes(db):
+    stats = collections.defaultdict(list)
+    for r in rows(db):
+        v = r[6:]
+        stats[(classify(v[0:6], v[6:12], v[12:18]), band(r))].append(r)
+    for key in sorted(stats):
+        dims = collections.Counter(x[3] for x in stats[key])
+        print(len(stats[key]), key, 'local dimensions', dict(sorted(dims.items())),
+              'starts', [x[1] for x in stats[key]])
+
+
+def travels(loopfarm, job, start):
+    out = subprocess.run([loopfarm, 'start', job, '--index', str(start)], capture_output=True, text=True).stdout
+    m = re.search(r'joint travel_deg\s+(.*)', out)
+    return ', '.join(f"{float(x):.3g}" for x in m.group(1).split(',')) if m else '?'
+
+
+def cmd_exact(db, loopfarm, job):
+    print("| start | class | E_mean | local dim. | joint travels [deg] (`loopfarm start`) | a | alpha [deg] | d |")
+    print("|---|---|---|---|---|---|---|---|")
+    fmt = lambda xs: ' '.join(f"{x:.6g}" if abs(x) > 1e-9 else '0' for x in xs)
+    for r in rows(db, 'AND rigid_residual <= 1e-13 AND E_mean <= 1e-24'):
+        v = r[6:]
+        print(f"| {r[1]} | {classify(v[0:6], v[6:12], v[12:18])} | {r[2]:.1e} | {r[3]} | {travels(loopfarm, job, r[1])} "
+              f"| {fmt(v[0:6])} | {fmt(v[6:12])} | {fmt(v[12:18])} |")
+
+
+# Rigid kinematics for the Jacobian: T_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)
+# (docs/design.md, "The loop and its closure").
+def mat_mul(A, B):
+    return [[sum(A[i][k] * B[k][j] for k in range(4)) for j in range(4)] for i in range(4)]
+
+
+def dh(theta, d, a, alpha):
+    ct, st, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
+    return [[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]]
+
+
+def screws(a, al, d, th):
+    F = [[1.0 if i == j else 0.0 for j in range(4)] for i in range(4)]
+    out = []
+    for i in range(len(a)):
+        w = [F[0][2], F[1][2], F[2][2]]
+        p = [F[0][3], F[1][3], F[2][3]]
+        out.append(w + [p[1] * w[2] - p[2] * w[1], p[2] * w[0] - p[0] * w[2], p[0] * w[1] - p[1] * w[0]])
+        F = mat_mul(F, dh(th[i], d[i], a[i], al[i]))
+    return out
+
+
+def singular_values(S):
+    """Ascending singular values of S (rows of 6), from the eigenvalues of its Gram matrix."""
+    n = len(S)
+    gram = [[sum(S[i][k] * S[j][k] for k in range(6)) for j in range(n)] for i in range(n)]
+    return [math.sqrt(max(0.0, e)) for e in sym_eig(gram)[0]]
+
+
+def axis_pair(S1, S2):
+    """Distance and angle [deg] of two lines given as Pluecker screws (direction, moment)."""
+    w1, m1, w2, m2 = S1[:3], S1[3:], S2[:3], S2[3:]
+    cr = [w1[1] * w2[2] - w1[2] * w2[1], w1[2] * w2[0] - w1[0] * w2[2], w1[0] * w2[1] - w1[1] * w2[0]]
+    s = math.sqrt(sum(x * x for x in cr))
+    reciprocal = sum(x * y for x, y in zip(w1, m2)) + sum(x * y for x, y in zip(w2, m1))
+    return (abs(reciprocal) / s if s > 1e-12 else float('nan')), math.degrees(math.atan2(s, sum(x * y for x, y in zip(w1, w2))))
+
+
+def cmd_jacobian(db, start, loopfarm):
+    con = sqlite3.connect(db)
+    v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
+                    "WHERE s.start_index = ?", (int(start),)).fetchone()
+    jacobian(list(v[0:6]), list(v[6:12]), list(v[12:18]), loopfarm)
+
+
+def jacobian(a, al, d, loopfarm):
+    pairs = []
+    for t in range(0, 360, 30):
+        out = subprocess.run([loopfarm, 'verify', '--a', ','.join(map(repr, a)), '--alpha-deg', ','.join(map(repr, al)),
+                              '--d', ','.join(map(repr, d)), '--theta0-deg', str(t), '--json'], capture_output=True, text=True)
+        j = json.loads(out.stdout)
+        if not (j['verified'] and j['E_mean'] is not None and j['E_mean'] < 1e-15):
+            continue
+        S = screws(a, [math.radians(x) for x in al], d, [math.radians(x) for x in j['theta_deg']])
+        sv = singular_values(S)
+        print(f"theta0 {t:3d} deg ({j['family']}): smallest singular values", ' '.join(f"{x:.2g}" for x in sv[:3]))
+        pairs.append({(i, k): axis_pair(S[i], S[k]) for i in range(6) for k in range(i + 2, 6) if (i, k) != (0, 5)})
+    for key in (pairs[0] if pairs else {}):
+        values = [p[key] for p in pairs]
+        if max(v[0] for v in values) - min(v[0] for v in values) < 1e-9 and \
+                max(v[1] for v in values) - min(v[1] for v in values) < 1e-7:
+            print(f"axes {key[0] + 1} and {key[1] + 1}: distance {values[0][0]:.6f}, angle {values[0][1]:.3f} deg in all "
+                  f"{len(values)} poses")
+
+
+def p9_representation(a, al, d):
+    for s in range(6):
+        A = [a[(i + s) % 6] for i in range(6)]
+        AL = [al[(i + s) % 6] for i in range(6)]
+        D = [d[(i + s) % 6] for i in range(6)]
+        if is_p9(A, AL, D):
+            return A, AL, D
+    return None
+
+
+def energy(loopfarm, a, al, d):
+    out = subprocess.run([loopfarm, 'energy', '--a', ','.join(map(repr, a)), '--alpha-deg=' + ','.join(map(repr, al)),
+                          '--d=' + ','.join(map(repr, d)), '--json'], capture_output=True, text=True)
+    return json.loads(out.stdout)['E_mean']
+
+
+def cmd_normal(db, start, loopfarm, eps=1e-4):
+    con = sqlite3.connect(db)
+    v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
+                    "WHERE s.start_index = ?", (int(start),)).fetchone()
+    A, AL, D = p9_representation(list(v[0:6]), list(v[6:12]), list(v[12:18]))
+    R = math.radians
+    p = {'kappa1': math.sin(R(AL[0])) / A[0], 'alpha1': R(AL[0]), 'alpha2': R(AL[1]), 'kappa2': math.sin(R(AL[3])) / A[3],
+         'alpha4': R(AL[3]), 'alpha5': R(AL[4]), 'a3': A[2], 'alpha3': R(AL[2]), 'd1': D[0], 'd4': D[3]}
+
+    def E(q):
+        a = [math.sin(q['alpha1']) / q['kappa1'], math.sin(q['alpha2']) / q['kappa1'], q['a3'],
+             math.sin(q['alpha4']) / q['kappa2'], math.sin(q['alpha5']) / q['kappa2'], q['a3']]
+        al = [math.degrees(q[k]) for k in ('alpha1', 'alpha2', 'alpha3', 'alpha4', 'alpha5', 'alpha3')]
+        return energy(loopfarm, a, al, [q['d1'], 0.0, q['d1'], q['d4'], 0.0, q['d4']])
+
+    print('E at the loop', f"{E(p):.2g}")
+    size = {}
+    for k in p:
+        q = dict(p)
+        q[k] += eps
+        size[k] = math.sqrt(max(E(q), 0.0)) / eps
+    print('sqrt(E) / 1e-4 per parameter:', ' '.join(f"{k} {x:.2g}" for k, x in size.items()))
+    ref = max(size, key=size.get)
+    n = {}
+    for k in p:
+        if k == ref or size[k] < 1e-3 * size[ref]:
+            n[k] = size[k]
+            continue
+        q = dict(p)
+        q[ref] += eps
+        q[k] += eps
+        both = math.sqrt(E(q)) / eps
+        n[k] = size[k] if abs(both - (size[ref] + size[k])) < abs(both - abs(size[ref] - size[k])) else -size[k]
+    norm = math.sqrt(sum(x * x for x in n.values()))
+    print('n:', ' '.join(f"{k} {x / norm:+.4g}" for k, x in n.items()))
+
+
+def cmd_invariants(db):
+    R = math.radians
+    sums = []
+    for r in rows(db, 'AND rigid_residual <= 1e-11'):
+        w = p9_representation(list(r[6:12]), list(r[12:18]), list(r[18:24]))
+        if not w:
+            continue
+        A, AL, D = w
+
+        def dyad(i):
+            k, x, y = math.sin(R(AL[i])) / A[i], R(AL[i]), R(AL[i + 1])
+            return {'(cos alpha + cos beta) / kappa': (math.cos(x) + math.cos(y)) / k, 'kappa': k,
+                    'sin((b+a)/2) / sin((b-a)/2)': math.sin((y + x) / 2) / math.sin((y - x) / 2),
+                    'cos((b+a)/2) / cos((b-a)/2)': math.cos((y + x) / 2) / math.cos((y - x) / 2)}
+        sums.append((dyad(0), dyad(3)))
+    print(len(sums), 'P9 loops closing to <= 1e-11')
+    for key in sums[0][0]:
+        rel = sorted(abs(u[key] - v[key]) / max(1e-12, abs(u[key])) for u, v in sums)
+        print(f"{key}: relative difference between the dyads, median {rel[len(rel) // 2]:.2g}, largest {rel[-1]:.2g}")
+
+
+def dyads_member(rng):
+    while True:
+        k1, k2 = -rng.uniform(0.4, 1.5), -rng.uniform(0.4, 1.5)
+        t1, t2, t4 = (-rng.uniform(0.3, math.pi - 0.3) for _ in range(3))
+        c5 = (math.cos(t1) + math.cos(t2)) / k1 * k2 - math.cos(t4)
+        if abs(c5) > 0.95:
+            continue
+        t5 = -math.acos(c5)
+        a = [math.sin(t1) / k1, math.sin(t2) / k1, rng.uniform(0.5, 1.5), math.sin(t4) / k2, math.sin(t5) / k2]
+        a.append(a[2])
+        if min(a) < 0.2 or max(a) > 3:
+            continue
+        gamma = -rng.uniform(0.3, math.pi - 0.3)
+        e, f = rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3)
+        return a, [math.degrees(x) for x in (t1, t2, gamma, t4, t5, gamma)], [e, 0.0, e, f, 0.0, f]
+
+
+def cmd_dyads(seed, count, loopfarm):
+    import random
+    rng = random.Random(int(seed))
+    moved = 0
+    for i in range(int(count)):
+        a, al, d = dyads_member(rng)
+        for t in range(0, 360, 5):
+            out = subprocess.run([loopfarm, 'verify', '--a', ','.join(map(repr, a)), '--alpha-deg=' + ','.join(map(repr, al)),
+                                  '--d=' + ','.join(map(repr, d)), '--theta0-deg', str(t), '--json'],
+                                 capture_output=True, text=True)
+            j = json.loads(out.stdout)
+            if j['verified'] and j['rigid_residual'] < 1e-12:
+                moved += 1
+                lo, hi = j['input_range_deg']
+                print(f"{i}: verified from theta0 {t} deg, rigid residual {j['rigid_residual']:.1g}, input "
+                      f"{'full turn' if j['full_turn'] else f'{hi - lo:.1f} deg'}, E_mean {j['E_mean']:.2g}, "
+                      f"local dimension {j['local_dimension']}, {j['family']}")
+                break
+        else:
+            print(f"{i}: no verified assembly at theta0 = 0, 5, ..., 355 deg")
+    print(moved, 'of', count, 'moved')
+
+
+# ---- Motions followed with the rigid closure, and constructions from the literature ----
+def closure_residual(a, al, d, th):
+    F = [[1.0 if i == j else 0.0 for j in range(4)] for i in range(4)]
+    for i in range(len(a)):
+        F = mat_mul(F, dh(th[i], d[i], a[i], al[i]))
+    return [F[i][j] - (1.0 if i == j else 0.0) for i in range(3) for j in range(4)]
+
+
+def solve(A, b):
+    n = len(b)
+    M = [row[:] + [b[i]] for i, row in enumerate(A)]
+    for c in range(n):
+        p = max(range(c, n), key=lambda r: abs(M[r][c]))
+        M[c], M[p] = M[p], M[c]
+        for r in range(n):
+            if r != c and M[c][c] != 0:
+                f = M[r][c] / M[c][c]
+                for k in range(c, n + 1):
+                    M[r][k] -= f * M[c][k]
+    return [M[i][n] / M[i][i] if M[i][i] != 0 else 0.0 for i in range(n)]
+
+
+def jac(a, al, d, th, free):
+    r = closure_residual(a, al, d, th)
+    J = []
+    for k in free:
+        t2 = list(th)
+        t2[k] += 1e-7
+        J.append([(x - y) / 1e-7 for x, y in zip(closure_residual(a, al, d, t2), r)])
+    return r, J
+
+
+def lm_close(a, al, d, th, free, iters=100, lam=1e-3):
+    th = list(th)
+    for _ in range(iters):
+        r, J = jac(a, al, d, th, free)
+        if sum(x * x for x in r) < 1e-28:
+            break
+        A = [[sum(u * v for u, v in zip(J[i], J[j])) + (lam if i == j else 0) for j in range(len(free))]
+             for i in range(len(free))]
+        step = solve(A, [-sum(u * v for u, v in zip(J[i], r)) for i in range(len(free))])
+        for i, k in enumerate(free):
+            th[k] += step[i]
+    return th, math.sqrt(sum(x * x for x in closure_residual(a, al, d, th)))
+
+
+def sym_eig(G):
+    """Jacobi: eigenvalues ascending and their eigenvectors."""
+    n = len(G)
+    A = [row[:] for row in G]
+    V = [[1.0 if i == j else 0.0 for j in range(n)] for i in range(n)]
+    for _ in range(100):
+        if sum(A[i][j] ** 2 for i in range(n) for j in range(n) if i != j) < 1e-40:
+            break
+        for p in range(n):
+            for q in range(p + 1, n):
+                if abs(A[p][q]) < 1e-300:
+                    continue
+                t = 0.5 * math.atan2(2 * A[p][q], A[q][q] - A[p][p])
+                c, s = math.cos(t), math.sin(t)
+                for M in (A, V):
+                    for k in range(n):
+                        M[k][p], M[k][q] = c * M[k][p] - s * M[k][q], s * M[k][p] + c * M[k][q]
+                for k in range(n):
+                    A[p][k], A[q][k] = c * A[p][k] - s * A[q][k], s * A[p][k] + c * A[q][k]
+    order = sorted(range(n), key=lambda i: A[i][i])
+    return [A[i][i] for i in order], [[V[k][i] for k in range(n)] for i in order]
+
+
+def assemble(a, al, d, seed=0, tries=300):
+    import random
+    rng = random.Random(seed)
+    for _ in range(tries):
+        th, res = lm_close(a, al, d, [rng.uniform(-math.pi, math.pi) for _ in a], list(range(len(a))))
+        if res < 1e-11:
+            return th
+    return None
+
+
+def trace(a, al, d, th, steps=120, h=0.05):
+    """Arc-length continuation along the closure's null direction (one degree of freedom)."""
+    poses, prev = [list(th)], None
+    for _ in range(steps):
+        r, J = jac(a, al, d, th, range(len(a)))
+        v = sym_eig([[sum(u * w for u, w in zip(J[i], J[j])) for j in range(len(a))] for i in range(len(a))])[1][0]
+        if prev is not None and sum(x * y for x, y in zip(v, prev)) < 0:
+            v = [-x for x in v]
+        k = max(range(len(a)), key=lambda i: abs(v[i]))
+        th2, res = lm_close(a, al, d, [x + h * y for x, y in zip(th, v)], [i for i in range(len(a)) if i != k], 50, 1e-8)
+        if res > 1e-10:
+            break
+        poses.append(th2)
+        prev, th = v, th2
+    return poses
+
+
+def mobius_sv(poses, i, j):
+    rows = [[math.sin(p[i] / 2) * math.sin(p[j] / 2), math.sin(p[i] / 2) * math.cos(p[j] / 2),
+             math.cos(p[i] / 2) * math.sin(p[j] / 2), math.cos(p[i] / 2) * math.cos(p[j] / 2)] for p in poses]
+    G = [[sum(r[u] * r[v] for r in rows) / len(rows) for v in range(4)] for u in range(4)]
+    return math.sqrt(max(sym_eig(G)[0][0], 0.0))
+
+
+def mobius_summary(a, al_deg, d, steps=120):
+    al = [math.radians(x) for x in al_deg]
+    th = assemble(a, al, d)
+    if th is None:
+        return None
+    poses = trace(a, al, d, th, steps)
+    n = len(a)
+    travel = [max(abs(math.remainder(p[k] - poses[0][k], 2 * math.pi)) for p in poses) for k in range(n)]
+    if len(poses) < 20:
+        return {'poses': len(poses)}
+    moving = [k for k in range(n) if travel[k] > math.radians(1)]  # a joint that hardly turns relates to any
+    sv = {(i, j): mobius_sv(poses, i, j) for i in moving for j in moving if i < j}
+    const = []
+    for (i, j) in sv:
+        for sg, name in ((1, '-'), (-1, '+')):
+            v = [math.remainder(p[i] - sg * p[j] - (poses[0][i] - sg * poses[0][j]), 2 * math.pi) for p in poses]
+            if max(abs(x) for x in v) < 1e-7:
+                const.append(f"{i + 1}{name}{j + 1}")
+    related = [k for k, v in sv.items() if v < 1e-7]
+    return {'poses': len(poses), 'still': [k + 1 for k in range(n) if k not in moving], 'pairs': len(sv),
+            'related': ' '.join(f"{i + 1}-{j + 1}" for i, j in related),
+            'largest_related': max([sv[k] for k in related], default=0.0),
+            'smallest_other': min([v for k, v in sv.items() if k not in related], default=float('nan')), 'const': const}
+
+
+def print_mobius(label, m):
+    if m is None:
+        print(label, 'no assembly found')
+        return
+    if 'related' not in m:
+        print(label, f"the motion was not followed ({m['poses']} poses)")
+        return
+    still = f"joints {m['still']} turn < 1 deg over the poses and are left out; " if m['still'] else ''
+    print(f"{label}: {m['poses']} poses; {still}Moebius-related pairs ({len(m['related'].split())} of {m['pairs']}): "
+          f"{m['related'] or '-'} "
+          f"(their singular value <= {m['largest_related']:.1g}, the others' >= {m['smallest_other']:.1g}); "
+          f"constant angle sum or difference: {' '.join(m['const']) or '-'}")
+
+
+def cmd_mobius(db, start):
+    con = sqlite3.connect(f'file:{db}?mode=ro', uri=True)
+    v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
+                    "WHERE s.start_index = ?", (int(start),)).fetchone()
+    print_mobius(f"start {start}", mobius_summary(list(v[0:6]), list(v[6:12]), list(v[12:18])))
+
+
+def cmd_mobius_all(db):
+    for r in rows(db, 'AND rigid_residual <= 1e-11'):
+        v = r[6:]
+        print_mobius(f"start {r[1]} ({classify(v[0:6], v[6:12], v[12:18])}, local dim. {r[3]})",
+                     mobius_summary(list(v[0:6]), list(v[6:12]), list(v[12:18])))
+
+
+# Dual quaternions as pairs of quaternions (primal, dual); a rotation factor t - h has h = (h0 + v, w), v.w = 0.
+def qmul(a, b):
+    return (a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3], a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+            a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1], a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0])
+
+
+def dq_mul(x, y):
+    return (qmul(x[0], y[0]), tuple(u + v for u, v in zip(qmul(x[0], y[1]), qmul(x[1], y[0]))))
+
+
+def dq_add(x, y, s=1.0):
+    return tuple(tuple(u + s * v for u, v in zip(x[k], y[k])) for k in range(2))
+
+
+def dq_inv(x):
+    n = sum(u * u for u in x[0])
+    pi = (x[0][0] / n, -x[0][1] / n, -x[0][2] / n, -x[0][3] / n)
+    return (pi, tuple(-u for u in qmul(qmul(pi, x[1]), pi)))
+
+
+ZERO, ONE = ((0.0,) * 4, (0.0,) * 4), ((1.0, 0.0, 0.0, 0.0), (0.0,) * 4)
+
+
+def poly_mul(P, Q):
+    R = [ZERO] * (len(P) + len(Q) - 1)
+    for i, p in enumerate(P):
+        for j, q in enumerate(Q):
+            R[i + j] = dq_add(R[i + j], dq_mul(p, q))
+    return R
+
+
+def right_factor(P, quad):
+    """The right factor t - k of the monic motion polynomial P whose norm is t^2 + b t + c; P / (t - k)."""
+    b, c = quad
+    R = list(P)
+    for i in range(len(R) - 1, 1, -1):
+        lead, R[i] = R[i], ZERO
+        R[i - 1], R[i - 2] = dq_add(R[i - 1], lead, -b), dq_add(R[i - 2], lead, -c)
+    k = dq_add(ZERO, dq_mul(dq_inv(R[1]), R[0]), -1.0)
+    n = len(P) - 1
+    Q = [ZERO] * n
+    Q[n - 1] = P[n]
+    for i in range(n - 1, 0, -1):
+        Q[i - 1] = dq_add(P[i], dq_mul(Q[i], k))
+    return k, Q
+
+
+def random_rotation(rng):
+    v, w = [rng.gauss(0, 1) for _ in range(3)], [rng.gauss(0, 1) for _ in range(3)]
+    f = sum(x * y for x, y in zip(v, w)) / sum(x * x for x in v)
+    return ((rng.uniform(-1.5, 1.5), *v), (0.0, *[x - f * y for x, y in zip(w, v)]))
+
+
+def cross(u, v):
+    return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+
+
+def dot(u, v):
+    return sum(x * y for x, y in zip(u, v))
+
+
+def line_of(h):
+    v, w = list(h[0][1:]), list(h[1][1:])
+    n2 = dot(v, v)
+    return [x / n2 for x in cross(v, w)], [x / math.sqrt(n2) for x in v]
+
+
+def dh_from_lines(lines):
+    """DH parameters (this project's convention, a_i >= 0, lengths scaled to L) and the pose of n lines."""
+    n = len(lines)
+    a, al, d, xs, s_next, s_prev = [0.0] * n, [0.0] * n, [0.0] * n, [None] * n, [0.0] * n, [0.0] * n
+    for i in range(n):
+        (q1, u1), (q2, u2) = lines[i], lines[(i + 1) % n]
+        c = cross(u1, u2)
+        x = [y / math.sqrt(dot(c, c)) for y in c]
+        w0 = [p - q for p, q in zip(q1, q2)]
+        b, e1, e2 = dot(u1, u2), dot(u1, w0), dot(u2, w0)
+        s1, s2 = (b * e2 - e1) / (1 - b * b), (e2 - b * e1) / (1 - b * b)
+        gap = [q + s2 * u - p - s1 * v for p, v, q, u in zip(q1, u1, q2, u2)]
+        if dot(gap, x) < 0:
+            x = [-y for y in x]
+        a[i], al[i], xs[i] = dot(gap, x), math.degrees(math.atan2(dot(x, cross(u1, u2)), dot(u1, u2))), x
+        s_next[i], s_prev[(i + 1) % n] = s1, s2
+    th = [math.atan2(dot(lines[i][1], cross(xs[i - 1], xs[i])), dot(xs[i - 1], xs[i])) for i in range(n)]
+    d = [s_next[i] - s_prev[i] for i in range(n)]
+    L = math.sqrt(sum(x * x for x in a + d) / n)
+    return [x / L for x in a], al, [x / L for x in d], th
+
+
+def cubic_loop(seed, order):
+    import random
+    rng = random.Random(int(seed))
+    hs = [random_rotation(rng) for _ in range(3)]
+    norms = [(-2 * h[0][0], sum(x * x for x in h[0])) for h in hs]
+    P = poly_mul(poly_mul([dq_add(ZERO, hs[0], -1), ONE], [dq_add(ZERO, hs[1], -1), ONE]), [dq_add(ZERO, hs[2], -1), ONE])
+    ks = [None] * 3
+    for pos in (2, 1):
+        ks[pos], P = right_factor(P, norms[int(order[pos]) - 1])
+    ks[0] = dq_add(ZERO, P[0], -1)
+    return dh_from_lines([line_of(h) for h in hs] + [line_of(k) for k in reversed(ks)])
+
+
+def waldron_loop(seed):
+    import random
+    rng = random.Random(int(seed))
+
+    def bennett(k):
+        x, y = rng.uniform(0.3, 2.8), rng.uniform(0.3, 2.8)
+        A, AL = [math.sin(x) / k, math.sin(y) / k] * 2, [x, y] * 2
+        while True:
+            th, res = lm_close(A, AL, [0.0] * 4, [rng.uniform(-math.pi, math.pi) for _ in range(4)], [1, 2, 3])
+            if res < 1e-13:
+                break
+        F, axes = [[1.0 if i == j else 0.0 for j in range(4)] for i in range(4)], []
+        for i in range(4):
+            axes.append(F)
+            F = mat_mul(F, dh(th[i], 0.0, A[i], AL[i]))
+        return axes
+    loop1, loop2 = bennett(rng.uniform(0.5, 1.5)), bennett(rng.uniform(0.5, 1.5))
+    place = dh(rng.uniform(-3, 3), rng.uniform(-0.5, 0.5), 0.0, 0.0)  # loop 2 turned and slid along the axis A
+    loop2 = [mat_mul(place, F) for F in loop2]
+    line = lambda F: ([F[0][3], F[1][3], F[2][3]], [F[0][2], F[1][2], F[2][2]])
+    return dh_from_lines([line(loop1[1]), line(loop1[2]), line(loop1[3]), line(loop2[3]), line(loop2[2]), line(loop2[1])])
+
+
+def report_built(label, a, al, d, th, loopfarm):
+    print(f"{label}: closure at the built pose {max(abs(x) for x in closure_residual(a, [math.radians(x) for x in al], d, th)):.1g}")
+    print('  --a', ','.join(map(repr, a)), '--alpha-deg=' + ','.join(map(repr, al)), '--d=' + ','.join(map(repr, d)))
+    k = [abs(math.sin(math.radians(y))) / x for x, y in zip(a, al)]
+    print('  |sin alpha| / a:', ' '.join(f"{x:.6f}" for x in k), '; d:', ' '.join(f"{x:.3g}" for x in d))
+    out = subprocess.run([loopfarm, 'verify', '--a', ','.join(map(repr, a)), '--alpha-deg=' + ','.join(map(repr, al)),
+                          '--d=' + ','.join(map(repr, d)), '--json'], capture_output=True, text=True)
+    j = json.loads(out.stdout)
+    print(f"  loopfarm verify: verified {j['verified']}, {j['family']}, rigid residual {j['rigid_residual']:.1g}, "
+          f"E_mean {j['E_mean']:.2g}, full turn {j['full_turn']}, local dimension {j['local_dimension']}")
+    print_mobius('  motion', mobius_summary(a, al, d, 100))
+
+
+def t7_representation(a, al, d):
+    for s in range(6):  # a cyclic shift is a representation of the same loop (no reversal: signs would change)
+        A, AL, D = ([v[(i + s) % 6] for i in range(6)] for v in (a, al, d))
+        if is_t7(A, AL, D):
+            return A, AL, D
+    return None
+
+
+def t7_geometry(p, sign):
+    k1, x1, x2, x3, k2, x4, x5, x6, delta = p
+    return ([math.sin(x1) / k1, math.sin(x2) / k1, math.sin(x3) / k1, math.sin(x4) / k2, math.sin(x5) / k2, math.sin(x6) / k2],
+            [math.degrees(v) for v in (x1, x2, x3, x4, x5, x6)], [delta, 0.0, 0.0, sign * delta, 0.0, 0.0])
+
+
+def cmd_t7_normal(db, start, loopfarm, eps=1e-5):
+    """Hessian of the cycle energy (input range 20 deg from a pose on the motion) over the nine parameters that
+    T7's visible conditions leave: kappa1, alpha1..3, kappa2, alpha4..6, delta (d1 = delta, d4 = +-delta)."""
+    con = sqlite3.connect(f'file:{db}?mode=ro', uri=True)
+    v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
+                    "WHERE s.start_index = ?", (int(start),)).fetchone()
+    A, AL, D = t7_representation(list(v[0:6]), list(v[6:12]), list(v[12:18]))
+    R = [math.radians(x) for x in AL]
+    p = [math.sin(R[0]) / A[0], R[0], R[1], R[2], math.sin(R[3]) / A[3], R[3], R[4], R[5], D[0]]
+    sign = 1.0 if abs(D[3] - D[0]) < 1e-6 else -1.0
+
+    def E(q, th):
+        a, al, d = t7_geometry(q, sign)
+        out = subprocess.run([loopfarm, 'energy', '--a', ','.join(map(repr, a)), '--alpha-deg=' + ','.join(map(repr, al)),
+                              '--d=' + ','.join(map(repr, d)), '--theta-deg=' + ','.join(repr(math.degrees(t)) for t in th),
+                              '--range-deg', '20', '--json'], capture_output=True, text=True)
+        return json.loads(out.stdout)['E_mean']
+    a, al, d = t7_geometry(p, sign)
+    for seed in range(40):  # a pose on the loop's motion (another assembly mode has a cycle energy > 0)
+        th = assemble(a, [math.radians(x) for x in al], d, seed)
+        if th is not None and E(p, th) < 1e-20:
+            break
+    print(f"start {start}: E at the loop {E(p, th):.1g} (d4 = {'+' if sign > 0 else '-'}d1)")
+    n = len(p)
+    Ei = []
+    for i in range(n):
+        q = list(p)
+        q[i] += eps
+        Ei.append(E(q, th))
+    H = [[0.0] * n for _ in range(n)]
+    for i in range(n):
+        H[i][i] = 2 * Ei[i] / eps ** 2
+        for j in range(i + 1, n):
+            q = list(p)
+            q[i] += eps
+            q[j] += eps
+            H[i][j] = H[j][i] = (E(q, th) - Ei[i] - Ei[j]) / eps ** 2
+    ev, V = sym_eig(H)
+    print('  Hessian eigenvalues:', ' '.join(f"{x:.2g}" for x in ev))
+    names = ['kappa1', 'alpha1', 'alpha2', 'alpha3', 'kappa2', 'alpha4', 'alpha5', 'alpha6', 'delta']
+    for k in (-1, -2):
+        print('  normal:', ' '.join(f"{nm} {c:+.4f}" for nm, c in zip(names, V[k])))
+
+
+def cmd_t7_offsets(db):
+    """Each T7 loop with its offsets d1, d4 scaled by f = 0 and 2: assembled (the script's rigid closure, up to 5 x 100
+    random guesses) and its motion followed (80 steps; every pose closes to <= 1e-10)?"""
+    for r in rows(db, 'AND rigid_residual <= 1e-11'):
+        w = t7_representation(list(r[6:12]), list(r[12:18]), list(r[18:24]))
+        if not w:
+            continue
+        A, AL, D = w
+        al = [math.radians(x) for x in AL]
+        out = []
+        for f in (0.0, 2.0):
+            d = [x * f for x in D]
+            best = None
+            for seed in range(5):
+                th = assemble(A, al, d, seed, 100)
+                if th is None:
+                    continue
+                poses = trace(A, al, d, th, 80)
+                travel = max(abs(math.remainder(p[k] - poses[0][k], 2 * math.pi)) for p in poses for k in range(6))
+                if best is None or travel > best[1]:
+                    best = (len(poses), travel)
+                if len(poses) > 20:
+                    break
+            out.append(f"d x {f}: " + (f"{best[0]} poses, largest joint travel {math.degrees(best[1]):.1f} deg" if best
+                                       else 'no assembly'))
+        print(f"start {r[1]}:", '; '.join(out), flush=True)
+
+if __name__ == '__main__':
+    if len(sys.argv) >= 3 and sys.argv[1] == 'classes':
+        cmd_classes(sys.argv[2])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'exact':
+        cmd_exact(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'normal':
+        cmd_normal(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif len(sys.argv) >= 3 and sys.argv[1] == 'invariants':
+        cmd_invariants(sys.argv[2])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'dyads':
+        cmd_dyads(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif len(sys.argv) >= 6 and sys.argv[1] == 'jacobian-geometry':
+        jacobian(*[[float(x) for x in arg.split(',')] for arg in sys.argv[2:5]], sys.argv[5])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'jacobian':
+        cmd_jacobian(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif len(sys.argv) >= 4 and sys.argv[1] == 'mobius':
+        cmd_mobius(sys.argv[2], sys.argv[3])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'mobius-geometry':
+        print_mobius('geometry', mobius_summary(*[[float(x) for x in arg.split(',')] for arg in sys.argv[2:5]], 100))
+    elif len(sys.argv) >= 3 and sys.argv[1] == 'mobius-all':
+        cmd_mobius_all(sys.argv[2])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'cubic':
+        report_built(f"cubic motion polynomial, seed {sys.argv[2]}, order {sys.argv[3]}", *cubic_loop(sys.argv[2], sys.argv[3]),
+                     sys.argv[4])
+    elif len(sys.argv) >= 4 and sys.argv[1] == 'waldron':
+        report_built(f"Waldron hybrid, seed {sys.argv[2]}", *waldron_loop(sys.argv[2]), sys.argv[3])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 't7-normal':
+        cmd_t7_normal(sys.argv[2], sys.argv[3], sys.argv[4])
+    elif len(sys.argv) >= 3 and sys.argv[1] == 't7-offsets':
+        cmd_t7_offsets(sys.argv[2])
+    else:
+        sys.exit(__doc__)

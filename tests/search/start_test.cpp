@@ -1,0 +1,288 @@
+// analyse_candidate: verification, then classification, strict first and
+// loosened to the rigid residual only when no family fits strictly.
+#include <cmath>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/search/job.hpp"
+#include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/start.hpp"
+#include "loopfarm/search/verify.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm {
+namespace {
+
+using testing::rad;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Some joint angles that close the loop, from the rigid verification's own
+// assembly (started from a rough guess).
+JointVector assembled(const LoopGeometry& g, const JointVector& guess) {
+  const VerificationSummary v = verify_motion(g, guess);
+  EXPECT_TRUE(v.assembled);
+  return v.joint_angles.empty() ? guess : v.joint_angles.front();
+}
+
+TEST(AnalyseCandidate, ExactBennettLoopNearlyPlanarStaysBennett) {
+  // Twists 1e-7 rad short of 180 deg: a Bennett loop to round-off, and within
+  // 1e-6 of planar. The strict pass must call it what it exactly is.
+  const double eps = 1e-7;
+  const LoopGeometry g = bennett_loop(2.0, M_PI - eps, M_PI - 2.0 * eps);
+  const JointVector pose = bennett_angles(g, rad(120));
+  const CandidateAnalysis c = analyse_candidate(g, pose, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
+  ASSERT_TRUE(c.verification.verified);
+  EXPECT_EQ(c.classification.family, Family::bennett) << c.classification.detail;
+  EXPECT_GT(c.classification.checks[1].residual, ClassifyOptions{}.tolerance);  // planar: not strictly
+}
+
+TEST(AnalyseCandidate, NearPlanarZeroIsPlanarOnTheLoosenedTolerance) {
+  // A Bennett loop with twists of 1e-6 and 2e-6 rad (nearly planar) and a1
+  // lengthened by 1e-6: off both families by about 1e-6, but where they meet
+  // the closure error is a product of the two small distances, and the loop
+  // closes along its motion to about 1e-10, below the verification's 1e-9:
+  // the kind of zero a local search lands on. Strictly (1e-8) it fits no
+  // family; loosened to the square root of its rigid residual it is planar.
+  LoopGeometry g = bennett_loop(2.0, 1e-6, std::asin(2.0 * std::sin(1e-6)));
+  g.a[0] = 2.000001;
+  JointVector guess(4);
+  guess << rad(120), rad(120), rad(-120), rad(-120);
+  const JointVector pose = assembled(g, guess);
+  const CandidateAnalysis c = analyse_candidate(g, pose, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
+  ASSERT_TRUE(c.verification.verified) << c.verification.worst_residual;
+  EXPECT_GT(c.verification.worst_residual, 1e-13);
+  const Classification strict = classify(g, pose, {}, ClassifyOptions{});
+  EXPECT_EQ(strict.family, Family::unclassified) << strict.detail;
+  EXPECT_EQ(c.classification.family, Family::planar) << c.classification.detail;
+}
+
+TEST(AnalyseCandidate, RigidLoopIsNotVerifiedAndNotLoosened) {
+  const LoopGeometry g = random_loop(4, 7);
+  const JointVector pose = random_angles(4, 7);
+  const CandidateAnalysis c = analyse_candidate(g, pose, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
+  EXPECT_FALSE(c.verification.verified);
+  // Not trivial either: without a verified motion no joint counts as frozen.
+  EXPECT_EQ(c.classification.family, Family::unclassified) << c.classification.detail;
+}
+
+// A start drawn within 1e-9 of the paper's Bennett loop, in boxes that hold
+// it: the search reaches the family at once. Whatever the search minimised, the analysis of the
+// zero (its local dimension from every sample's deformations) is the same:
+// the Bennett family has dimension 3 in (a1..a4, alpha1..alpha4).
+TEST(RunStart, AZeroIsAnalysedOverTheWholeCycleWhateverTheObjective) {
+  const std::string space = R"(
+[space]
+a1 = [2, 2.000000001]
+a2 = [4, 4.000000001]
+a3 = [2, 2.000000001]
+a4 = [4, 4.000000001]
+alpha1_deg = [30, 30.00000001]
+alpha2_deg = [90, 90.00000001]
+alpha3_deg = [30, 30.00000001]
+alpha4_deg = [90, 90.00000001]
+d = 0
+theta1_deg = 120
+theta2_deg = 90
+theta3_deg = -120
+theta4_deg = -90
+[search]
+zero_threshold = 1e-20
+)";
+  for (const char* objective : {"mean", "max"}) {
+    const Job job = parse_job(std::string("[loop]\nsamples = 8\nobjective = \"") + objective + "\"\n" + space,
+                              "bennett.toml");
+    const StartSummary s = run_start(job, 0);
+    ASSERT_TRUE(s.zero) << objective << ": E_mean " << s.E_mean;
+    EXPECT_TRUE(s.candidate.verification.verified) << objective;
+    EXPECT_EQ(s.candidate.classification.family, Family::bennett) << objective;
+    EXPECT_EQ(s.candidate.local_dimension.parameters, 8) << objective;
+    EXPECT_EQ(s.candidate.local_dimension.dimension, 3) << objective;
+  }
+}
+
+// The shipped rocker job (jobs/trihedral-rocker-6r.toml) finds, from random
+// starts, trihedral Bricard loops whose input rocks: verified by the rigid
+// tracer, classified, on the trihedral condition (checked here in closed
+// form, a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2), and with every sample of
+// the cycle's window inside the traced input range (the elastic cycle and
+// the rigid motion agree on where the loop moves; a gap in the range
+// narrower than the samples' spacing may lie between two samples).
+TEST(RunStart, TheRockerJobFindsTrihedralLoopsWhoseInputRocks) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/trihedral-rocker-6r.toml");
+  ASSERT_LT(job.loop.range, 2.0 * kPi);
+  int rockers = 0;
+  for (std::uint64_t index = 0; index < 30; ++index) {
+    const StartSummary s = run_start(job, index);
+    if (!s.zero || !s.candidate.verification.verified) continue;
+    const VerificationSummary& v = s.candidate.verification;
+    EXPECT_EQ(s.candidate.classification.family, Family::bricard_trihedral) << index;
+    const JointVector& a = s.final_geometry.a;
+    const double condition = a[0] * a[0] + a[2] * a[2] + a[4] * a[4] - a[1] * a[1] - a[3] * a[3] - a[5] * a[5];
+    EXPECT_LT(std::abs(condition), 1e-8 * a.squaredNorm()) << index;
+    if (v.full_turn) continue;
+    ++rockers;
+    EXPECT_LT(v.range_hi - v.range_lo, 2.0 * kPi) << index;
+    // The samples theta0 - R/2 + j R / (N - 1), each at its image nearest
+    // the middle of the range.
+    const double middle = 0.5 * (v.range_lo + v.range_hi);
+    for (int j = 0; j < job.loop.samples; ++j) {
+      const double sample =
+          s.initial_angles[0] - 0.5 * job.loop.range + j * job.loop.range / (job.loop.samples - 1);
+      const double image = middle + std::remainder(sample - middle, 2.0 * kPi);
+      EXPECT_GE(image, v.range_lo - 1e-9) << index << " sample " << j;
+      EXPECT_LE(image, v.range_hi + 1e-9) << index << " sample " << j;
+    }
+  }
+  EXPECT_GE(rockers, 3);
+}
+
+// Zeros of the rocker job whose circuit cannot be followed from the search's
+// pose (start 299: theta0 lies in a gap of the input's range that the
+// window's samples step over, so the pose at theta0 does not close; 3500: the
+// tracer stalls; 2089: two freedoms, the curve with the chosen joint held
+// ends) are verified from the whole motion, as `loopfarm verify` does it.
+TEST(RunStart, AZeroWhoseCircuitCannotBeFollowedFromItsPoseIsVerifiedFromTheWholeMotion) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/trihedral-rocker-6r.toml");
+  VerificationOptions through_pose;  // what run_start tries first
+  through_pose.all_circuits = false;
+  through_pose.all_extremes = false;
+  through_pose.steps_per_turn = 360;
+  for (std::uint64_t index : {299u, 3500u, 2089u}) {
+    const StartSummary s = run_start(job, index);
+    ASSERT_TRUE(s.zero) << index;
+    EXPECT_FALSE(verify_motion(s.final_geometry, s.final_angles, through_pose).verified) << index;
+    EXPECT_TRUE(s.candidate.verification.verified) << index;
+    EXPECT_EQ(s.candidate.classification.family, Family::bricard_trihedral) << index;
+  }
+}
+
+// Non-triviality moves a search off a frozen-joint minimum: start 34 of the
+// unsteered generic 4R job ends on a trivial loop (a joint that does not
+// turn); with [steering] nontrivial = true the same start ends on a Bennett
+// loop, every joint turning.
+TEST(RunStart, NonTrivialityLeadsASearchOffAFrozenJointMinimum) {
+  Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/generic-4r.toml");
+  ASSERT_FALSE(job.steering.nontrivial);
+  const StartSummary plain = run_start(job, 34);
+  ASSERT_TRUE(plain.zero);
+  ASSERT_TRUE(plain.candidate.verification.verified);
+  EXPECT_EQ(plain.candidate.classification.family, Family::trivial);
+  const JointVector& frozen = plain.candidate.verification.joint_travel;
+  EXPECT_LT(frozen.minCoeff(), job.steering.min_travel);
+
+  job.steering.nontrivial = true;
+  const StartSummary steered = run_start(job, 34);
+  ASSERT_TRUE(steered.zero);
+  ASSERT_TRUE(steered.candidate.verification.verified);
+  EXPECT_EQ(steered.candidate.classification.family, Family::bennett);
+  EXPECT_GT(steered.candidate.verification.joint_travel.minCoeff(), job.steering.min_travel);
+}
+
+// A search in a symmetric sub-space stays in it: the start, every step and
+// the final geometry are line- or plane-symmetric to the bit (the images are
+// ties, not variables of their own).
+TEST(RunStart, ASearchInASymmetricSubspaceStaysInIt) {
+  for (const char* symmetry : {"line", "plane"}) {
+    const Job job = parse_job(std::string("[loop]\njoints = 6\nsamples = 8\n[space]\nsymmetry = \"") + symmetry +
+                                  "\"\n[optimizer]\nmax_evaluations = 15\n",
+                              "symmetric.toml");
+    for (std::uint64_t index : {0u, 1u}) {
+      const StartSummary s = run_start(job, index);
+      for (const LoopGeometry* g : {&s.initial_geometry, &s.final_geometry}) {
+        for (int i = 0; i < 6; ++i) {
+          if (std::string(symmetry) == "line") {
+            EXPECT_EQ(g->a[(i + 3) % 6], g->a[i]) << i;
+            EXPECT_EQ(g->alpha[(i + 3) % 6], g->alpha[i]) << i;
+            EXPECT_EQ(g->d[(i + 3) % 6], g->d[i]) << i;
+          } else {
+            EXPECT_EQ(g->a[5 - i], g->a[i]) << i;
+            EXPECT_EQ(g->alpha[5 - i], -g->alpha[i]) << i;
+            EXPECT_EQ(g->d[(6 - i) % 6], -g->d[i]) << i;
+          }
+        }
+      }
+      EXPECT_GE(s.evaluations, 1) << symmetry << " " << index;
+    }
+  }
+}
+
+LoopGeometry from_degrees(std::vector<double> a, std::vector<double> alpha_deg, std::vector<double> d) {
+  return LoopGeometry::from_degrees(std::span<const double>(a), std::span<const double>(alpha_deg),
+                                    std::span<const double>(d));
+}
+
+// Every family that [steering] deflate accepts for a loop of its size becomes
+// a deflation term measuring the distance to that family: zero (to round-off)
+// on a member (the examples of docs/guide/families.md), not on a generic loop of
+// the same size. The job parser keeps its own list of these names (it stands
+// alone for the fuzzers); this checks that start.cpp maps each of them.
+TEST(ObjectiveOptions, EveryDeflatableFamilyMeasuresItsDistance) {
+  const double s3 = std::sqrt(3.0);
+  struct Case {
+    const char* family;
+    LoopGeometry member;
+  };
+  const Case cases[] = {
+      {"bennett", paper_bennett_loop()},
+      {"goldberg", from_degrees({2, 1, s3, 2, 1 + s3}, {90, 30, 60, 90, 90}, {0, 0, 0, 0, 0})},
+      {"myard", from_degrees({2, 1, 1, 2, 2}, {90, 30, -30, 90, 0}, {0, 0, 0, 0, 0})},
+      // docs/guide/families.md's bent Goldberg example: the Goldberg loop's links fused at 90 deg.
+      {"goldberg_bent", from_degrees({2, 1, s3, 2, 1.7185034823583989}, {90, 30, 60, 90, 64.341093726744717},
+                                     {0.60433895850392444, 0, 0, 0, 0.60433895850392444})},
+      {"bricard_line_symmetric", from_degrees({1, 1.7, 0.8, 1, 1.7, 0.8}, {51.566, 120.321, -34.377, 51.566, 120.321, -34.377},
+                                              {0.4, 0.3, -0.5, 0.4, 0.3, -0.5})},
+      {"bricard_plane_symmetric", from_degrees({1, 1.7, 0.8, 0.8, 1.7, 1}, {51.566, 120.321, -34.377, 34.377, -120.321, -51.566},
+                                               {0, 0.3, -0.5, 0, 0.5, -0.3})},
+      {"bricard_trihedral", from_degrees({1.5, 1, 1.2, 0.8, 1, std::sqrt(1.5 * 1.5 + 1.2 * 1.2 + 1.0 - 1.0 - 0.8 * 0.8)},
+                                         {90, -90, 90, -90, 90, -90}, {0, 0, 0, 0, 0, 0})},
+      // docs/guide/families.md's example: Bennett loops (1, 30 deg, 2, 90 deg) and (sqrt 3, 60 deg, 2, 90 deg) sharing a link.
+      {"bennett_pair", from_degrees({1, 2, 1, s3, 2, s3}, {30, 90, 30, 60, 90, 60}, {0, 0, 0, 0, 0, 0})},
+      // docs/guide/families.md's example of two Bennett dyads joined by equal links.
+      {"bennett_dyads",
+       from_degrees({0.29105928100629913, 0.3266234112565141, 1.1155627045785708, 2.0724378472248963, 2.112627142478364,
+                     1.1155627045785708},
+                    {-160.21822699133264, -157.67920498998612, -40.123422809296045, -112.41458911002134,
+                     -109.54549378379366, -40.123422809296045},
+                    {-0.29099955783023707, 0, -0.29099955783023707, 0.017028759702287233, 0, 0.017028759702287233})},
+  };
+  for (const Case& c : cases) {
+    const int n = c.member.joints();
+    const Job job = parse_job("[loop]\njoints = " + std::to_string(n) + "\n[steering]\ndeflate = [\"" + c.family +
+                                  "\", \"planar\"]\n",
+                              "deflate.toml");
+    const ObjectiveOptions options = objective_options(job);
+    ASSERT_EQ(options.deflation.size(), 2u) << c.family;
+    EXPECT_EQ(options.deflation[0].family, c.family);
+    GeometryVector gradient;
+    EXPECT_LT(options.deflation[0].distance(c.member, &gradient), 1e-12) << c.family;
+    const double generic = options.deflation[0].distance(random_loop(n, 11), nullptr);
+    EXPECT_GT(generic, 1e-3) << c.family;
+    EXPECT_GT(options.deflation[1].distance(c.member, nullptr), 1e-3) << c.family << ": planar";
+  }
+}
+
+// The job parser's own list of deflatable names (it stands alone for the
+// fuzzers) against classify's: a family is accepted in [steering] deflate,
+// for a loop of its joint count, exactly where family_distance measures it.
+TEST(ObjectiveOptions, DeflatableNamesAreTheFamiliesWithADistance) {
+  for (Family f : kAllFamilies) {
+    const int n = family_joints(f) != 0 ? family_joints(f) : 5;
+    const std::string text =
+        "[loop]\njoints = " + std::to_string(n) + "\n[steering]\ndeflate = [\"" + to_string(f) + "\"]\n";
+    if (has_family_distance(f)) {
+      const ObjectiveOptions options = objective_options(parse_job(text, "deflate.toml"));
+      ASSERT_EQ(options.deflation.size(), 1u) << to_string(f);
+      EXPECT_EQ(options.deflation[0].family, to_string(f));
+    } else {
+      EXPECT_ANY_THROW(parse_job(text, "deflate.toml")) << to_string(f);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace loopfarm

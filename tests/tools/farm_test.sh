@@ -1,0 +1,324 @@
+#!/usr/bin/env bash
+# The farm as users run it: `loopfarm run` alone and under mpirun, resume,
+# stop by signal, refusal of another job, and `loopfarm report`.
+#
+#   tests/tools/farm_test.sh LOOPFARM SOURCE_DIR CASE [MPIEXEC]
+#
+# CASE: ranks | resume | signal | refuse | report. Each case makes its own
+# temporary directory and removes it. Exit 0 on success; on failure one line
+# saying what differed, and exit 1.
+set -euo pipefail
+loopfarm="$1"
+source_dir="$2"
+case_name="$3"
+mpiexec="${4:-mpirun}"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+
+fail() {
+  echo "farm_test $case_name: FAILED: $*" >&2
+  exit 1
+}
+
+# A small generic 4R job: its zeros include planar, trivial and Bennett loops,
+# so de-duplication and every family's columns are exercised.
+job="$tmp/job.toml"
+cat >"$job" <<'EOF'
+[loop]
+joints = 4
+samples = 16
+
+[optimizer]
+algorithm = "gauss-newton"
+max_evaluations = 100
+# No wall-clock limit: the comparisons below are row by row, and a start cut
+# short by a loaded machine would differ from the same start run unhurried.
+time_limit_s = 0
+
+[search]
+starts = 40
+seed = 7
+
+[output]
+database = "job.sqlite"
+report_threshold = 1e-3
+EOF
+
+run1() { "$loopfarm" run "$job" --progress none "$@"; }
+run2() { "$mpiexec" --oversubscribe -np 2 "$loopfarm" run "$job" --progress none "$@"; }
+
+# Every column of the candidates table, and of the starts table but for the
+# wall time, in key order: what must not depend on ranks, chunks or timing.
+dump() {
+  sqlite3 "$1" "SELECT * FROM candidates ORDER BY candidate_id;" >"$2"
+  local columns
+  columns="$(sqlite3 "$1" "SELECT group_concat(name, ', ') FROM pragma_table_info('starts') WHERE name NOT IN ('seconds', 'session_id');")"
+  sqlite3 "$1" "SELECT $columns FROM starts ORDER BY run_id, start_index;" >>"$2"
+}
+
+same() {  # same A B WHAT
+  if ! cmp -s "$1" "$2"; then
+    diff "$1" "$2" | grep "^>" | head -3 | cut -c1-400 >&2
+    fail "$3"
+  fi
+}
+
+case "$case_name" in
+ranks)
+  # 1 rank with chunks of 7 against 2 ranks with chunks of 1.
+  "$loopfarm" run "$job" --db "$tmp/one.sqlite" --chunk 7 --progress log 2>"$tmp/err" || fail "1 rank exited with $?"
+  # Batch-log progress: the final line at least, with counts, rate and ETA.
+  grep -q "^loopfarm run: 40/40 starts (100.0%), .* starts/s, [0-9]* zero minima, [0-9]* candidates, ETA 0s$" \
+    "$tmp/err" || fail "no progress line: $(head -1 "$tmp/err")"
+  run2 --db "$tmp/two.sqlite" --chunk 1 || fail "2 ranks exited with $?"
+  dump "$tmp/one.sqlite" "$tmp/one.txt"
+  dump "$tmp/two.sqlite" "$tmp/two.txt"
+  [[ "$(sqlite3 "$tmp/one.sqlite" 'SELECT COUNT(*) FROM starts')" == 40 ]] || fail "not 40 starts"
+  [[ "$(sqlite3 "$tmp/one.sqlite" 'SELECT COUNT(*) FROM candidates')" -ge 2 ]] || fail "fewer than 2 candidates"
+  [[ "$(sqlite3 "$tmp/two.sqlite" 'SELECT ranks FROM runs')" == 2 ]] || fail "runs.ranks is not 2"
+  same "$tmp/one.txt" "$tmp/two.txt" "the databases of 1 and 2 ranks differ"
+  ;;
+resume)
+  # 15 starts, then the same job to 40: the same database as 40 at once.
+  run1 --db "$tmp/whole.sqlite"
+  run1 --db "$tmp/parts.sqlite" --starts 15
+  [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT COUNT(*) FROM starts')" == 15 ]] || fail "first part is not 15 starts"
+  run2 --db "$tmp/parts.sqlite" --starts 40 2>"$tmp/err" || fail "resume exited with $?"
+  grep -q "15 of 40 starts already committed" "$tmp/err" || fail "no resume message: $(head -1 "$tmp/err")"
+  [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT COUNT(*) FROM sessions')" == 2 ]] || fail "not 2 sessions"
+  [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT status FROM runs')" == complete ]] || fail "run not complete"
+  # A third call has nothing left to do and changes no start.
+  run1 --db "$tmp/parts.sqlite" || fail "a complete run's rerun exited with $?"
+  dump "$tmp/whole.sqlite" "$tmp/whole.txt"
+  dump "$tmp/parts.sqlite" "$tmp/parts.txt"
+  same "$tmp/whole.txt" "$tmp/parts.txt" "a run in two parts differs from one in one go"
+  ;;
+signal)
+  # SIGUSR1 (as Slurm's --signal sends it, forwarded by mpirun) while 2
+  # ranks run: exit 3, a line saying how to resume, and the resumed run
+  # equals an uninterrupted one. 400 starts, or LOOPFARM_FAULT_STARTS as in
+  # fault_test.sh (scripts/test.sh --sanitize: 150; the instrumented farm took
+  # 124 s for 400, and this case runs the job four times under 240 s).
+  long="${LOOPFARM_FAULT_STARTS:-400}"
+  [[ "$long" =~ ^[0-9]+$ ]] && ((long >= 100)) || fail "LOOPFARM_FAULT_STARTS must be a whole number >= 100, not '$long'"
+  sed -i "s/^starts = 40\$/starts = $long/" "$job"
+  # A run that finishes before the signal arrives (a fast machine) proves
+  # nothing: it is tried again with four times the starts, twice at most,
+  # and the case fails if it still finishes first.
+  for attempt in 1 2 3; do
+    rm -f "$tmp/stopped.sqlite"*
+    set +e
+    # mpirun itself in the background (not a function's subshell), so that
+    # the signal reaches it.
+    "$mpiexec" --oversubscribe -np 2 "$loopfarm" run "$job" --progress none --db "$tmp/stopped.sqlite" 2>"$tmp/err" &
+    pid=$!
+    # Wait for the first commit (at most 20 s), then signal.
+    for ((i = 0; i < 200; ++i)); do
+      n="$(sqlite3 "$tmp/stopped.sqlite" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
+      [[ "${n:-0}" -gt 0 ]] && break
+      sleep 0.1
+    done
+    kill -USR1 "$pid"
+    wait "$pid"
+    code=$?
+    set -e
+    [[ $code -eq 0 ]] || break
+    [[ $attempt -lt 3 ]] || fail "the run finished before the signal three times, the last with $long starts"
+    long=$((long * 4))
+    echo "farm_test signal: the run finished before the signal; again with $long starts" >&2
+    sed -i "s/^starts = [0-9]*\$/starts = $long/" "$job"
+  done
+  [[ $code -eq 3 ]] || fail "a stopped run exited with $code, not 3: $(tail -2 "$tmp/err")"
+  grep -q "resume with: loopfarm run" "$tmp/err" || fail "no resume line: $(tail -1 "$tmp/err")"
+  done_before="$(sqlite3 "$tmp/stopped.sqlite" 'SELECT COUNT(*) FROM starts')"
+  [[ "$done_before" -lt "$long" ]] || fail "the run was not stopped early ($done_before starts)"
+  [[ "$(sqlite3 "$tmp/stopped.sqlite" 'SELECT status FROM runs')" == stopped ]] || fail "run status is not stopped"
+  run2 --db "$tmp/stopped.sqlite" || fail "resume after the signal exited with $?"
+  run2 --db "$tmp/straight.sqlite" || fail "uninterrupted run exited with $?"
+  [[ "$(sqlite3 "$tmp/stopped.sqlite" 'SELECT COUNT(*) FROM starts')" == "$long" ]] || fail "resumed run lacks starts"
+  # Candidate ids may come in another order after a stop with gaps; compare
+  # the candidates by their first start, and every start.
+  for db in stopped straight; do
+    sqlite3 "$tmp/$db.sqlite" "SELECT first_run, first_start, family, canonical_key, hits FROM candidates ORDER BY first_run, first_start;" >"$tmp/$db.txt"
+    columns="$(sqlite3 "$tmp/$db.sqlite" "SELECT group_concat(name, ', ') FROM pragma_table_info('starts') WHERE name NOT IN ('seconds', 'candidate_id', 'session_id');")"
+    sqlite3 "$tmp/$db.sqlite" "SELECT $columns FROM starts ORDER BY start_index;" >>"$tmp/$db.txt"
+  done
+  same "$tmp/stopped.txt" "$tmp/straight.txt" "a stopped and resumed run differs from an uninterrupted one"
+  # SIGTERM and SIGINT stop a run alike (one rank: without mpirun, which
+  # follows its SIGTERM with SIGKILL, both leave time): exit 3, the resume
+  # line, and the resumed run equals the uninterrupted one.
+  for signal in TERM INT; do
+    set +e
+    "$loopfarm" run "$job" --progress none --db "$tmp/$signal.sqlite" 2>"$tmp/err" &
+    pid=$!
+    for ((i = 0; i < 200; ++i)); do
+      n="$(sqlite3 "$tmp/$signal.sqlite" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
+      [[ "${n:-0}" -gt 0 ]] && break
+      sleep 0.1
+    done
+    kill -"$signal" "$pid"
+    wait "$pid"
+    code=$?
+    set -e
+    [[ $code -eq 3 ]] || fail "SIG$signal: exited with $code, not 3: $(tail -2 "$tmp/err")"
+    grep -q "stopped by SIG$signal; resume with: loopfarm run" "$tmp/err" || fail "SIG$signal: no resume line: $(tail -1 "$tmp/err")"
+    [[ "$(sqlite3 "$tmp/$signal.sqlite" 'SELECT status FROM runs')" == stopped ]] || fail "SIG$signal: run status is not stopped"
+    [[ "$(sqlite3 "$tmp/$signal.sqlite" 'SELECT COUNT(*) FROM starts')" -lt "$long" ]] || fail "SIG$signal: not stopped early"
+    run2 --db "$tmp/$signal.sqlite" || fail "resume after SIG$signal exited with $?"
+    sqlite3 "$tmp/$signal.sqlite" "SELECT first_run, first_start, family, canonical_key, hits FROM candidates ORDER BY first_run, first_start;" >"$tmp/$signal.txt"
+    sqlite3 "$tmp/$signal.sqlite" "SELECT $columns FROM starts ORDER BY start_index;" >>"$tmp/$signal.txt"
+    same "$tmp/$signal.txt" "$tmp/straight.txt" "a run stopped by SIG$signal and resumed differs from an uninterrupted one"
+  done
+  ;;
+refuse)
+  # --seed overrides [search] seed: the same starts and candidates as the
+  # job file with that seed, and the run records it.
+  run1 --db "$tmp/flag.sqlite" --starts 8 --seed 8 || fail "--seed 8 exited with $?"
+  sed 's/^seed = 7$/seed = 8/' "$job" >"$tmp/job8.toml"
+  "$loopfarm" run "$tmp/job8.toml" --progress none --db "$tmp/file.sqlite" --starts 8 || fail "seed 8 exited with $?"
+  dump "$tmp/flag.sqlite" "$tmp/flag.txt"
+  dump "$tmp/file.sqlite" "$tmp/file.txt"
+  same "$tmp/flag.txt" "$tmp/file.txt" "--seed 8 differs from a job with seed = 8"
+  run1 --db "$tmp/seven.sqlite" --starts 8
+  dump "$tmp/seven.sqlite" "$tmp/seven.txt"
+  ! cmp -s "$tmp/seven.txt" "$tmp/flag.txt" || fail "--seed 8 gave the starts of seed 7"
+  [[ "$(sqlite3 "$tmp/flag.sqlite" 'SELECT seed FROM runs')" == 8 ]] || fail "--seed 8: runs.seed is not 8"
+  run1 --db "$tmp/a.sqlite" --starts 5
+  before="$(sha256sum "$tmp/a.sqlite")"
+  sed -i 's/^seed = 7/seed = 8/' "$job"
+  set +e
+  run1 --db "$tmp/a.sqlite" 2>"$tmp/err"
+  code=$?
+  set -e
+  [[ $code -eq 2 ]] || fail "another job on the database exited with $code, not 2"
+  [[ "$(wc -l <"$tmp/err")" -eq 1 ]] || fail "the refusal is not one line: $(cat "$tmp/err")"
+  grep -q -- "--new-run" "$tmp/err" || fail "the refusal does not mention --new-run: $(cat "$tmp/err")"
+  [[ "$(sha256sum "$tmp/a.sqlite")" == "$before" ]] || fail "the refused run changed the database"
+  run1 --db "$tmp/a.sqlite" --starts 5 --new-run || fail "--new-run exited with $?"
+  [[ "$(sqlite3 "$tmp/a.sqlite" 'SELECT COUNT(*) FROM runs')" == 2 ]] || fail "--new-run did not add a run"
+  # Bad input never touches the database: a broken job file, bad options.
+  before="$(sha256sum "$tmp/a.sqlite")"
+  printf '[search]\nstarts = 0\n' >"$tmp/bad.toml"
+  for args in "$tmp/bad.toml --db $tmp/a.sqlite" "$job --db $tmp/a.sqlite --chunk 0" "$job --db $tmp/a.sqlite --starts x"; do
+    set +e
+    # shellcheck disable=SC2086
+    "$loopfarm" run $args 2>"$tmp/err"
+    code=$?
+    set -e
+    [[ $code -eq 2 ]] || fail "'run $args' exited with $code, not 2"
+    [[ "$(wc -l <"$tmp/err")" -eq 1 ]] || fail "'run $args' printed more than one line"
+  done
+  [[ "$(sha256sum "$tmp/a.sqlite")" == "$before" ]] || fail "bad input changed the database"
+  # Not a loopfarm database: refused, untouched.
+  echo "not a database" >"$tmp/junk.sqlite"
+  set +e
+  run1 --db "$tmp/junk.sqlite" 2>"$tmp/err"
+  code=$?
+  set -e
+  [[ $code -eq 2 ]] || fail "a junk database exited with $code, not 2"
+  [[ "$(cat "$tmp/junk.sqlite")" == "not a database" ]] || fail "the junk file was changed"
+  ;;
+report)
+  run1 --db "$tmp/r.sqlite"
+  # A finished run's database is one file, and a report keeps it one file
+  # (before any sqlite3 below, whose read-write connection would tidy up).
+  companions() { find "$tmp" -maxdepth 1 -name 'r.sqlite-*' -printf '%f ' | sed 's/ $//'; }
+  [[ -z "$(companions)" ]] || fail "after the run the database is not one file: $(companions)"
+  "$loopfarm" report "$tmp/r.sqlite" --summary >/dev/null || fail "report --summary exited with $?"
+  "$loopfarm" report "$tmp/r.sqlite" --format json >/dev/null || fail "report --format json exited with $?"
+  [[ -z "$(companions)" ]] || fail "reading the database left $(companions) beside it"
+  n="$(sqlite3 "$tmp/r.sqlite" 'SELECT COUNT(*) FROM candidates')"
+  "$loopfarm" report "$tmp/r.sqlite" >"$tmp/table.txt" || fail "report exited with $?"
+  [[ "$(wc -l <"$tmp/table.txt")" -eq $((n + 1)) ]] || fail "the table has not $n rows and a header"
+  "$loopfarm" report "$tmp/r.sqlite" --format csv >"$tmp/c.csv"
+  [[ "$(wc -l <"$tmp/c.csv")" -eq $((n + 1)) ]] || fail "the CSV has not $n rows and a header"
+  head -1 "$tmp/c.csv" | grep -q '^candidate_id,family,setup,' || fail "CSV header: $(head -1 "$tmp/c.csv")"
+  # The order: unclassified candidates first, then by energy from zero
+  # upwards, ties by id (docs/guide/database.md), as SQLite orders them.
+  cut -d, -f1 "$tmp/c.csv" | sed 1d >"$tmp/order.txt"
+  sqlite3 "$tmp/r.sqlite" "SELECT candidate_id FROM candidates ORDER BY family <> 'unclassified', E_mean, candidate_id" >"$tmp/expected_order.txt"
+  same "$tmp/order.txt" "$tmp/expected_order.txt" "the candidates are not in the documented order"
+  # The CSV parses: SQLite's own CSV reader takes it back as a table with
+  # the same values as the database (ids, families, energies to the bit).
+  sqlite3 "$tmp/csv.sqlite" ".import --csv $tmp/c.csv report" || fail "the CSV does not import"
+  [[ "$(sqlite3 "$tmp/csv.sqlite" 'SELECT COUNT(*) FROM report')" -eq "$n" ]] || fail "the CSV imports to not $n rows"
+  sqlite3 "$tmp/csv.sqlite" "ATTACH '$tmp/r.sqlite' AS db; SELECT COUNT(*) FROM report r JOIN db.candidates c
+    ON c.candidate_id = CAST(r.candidate_id AS INTEGER) AND c.family = r.family
+    AND c.E_mean = CAST(r.E_mean AS REAL) AND c.a1 = CAST(r.a1 AS REAL);" >"$tmp/matched"
+  [[ "$(cat "$tmp/matched")" -eq "$n" ]] || fail "CSV rows do not match the database ($(cat "$tmp/matched") of $n)"
+  # The JSON parses (SQLite's JSON parser) to an array of n objects.
+  "$loopfarm" report "$tmp/r.sqlite" --format json >"$tmp/j.json"
+  parsed="$(sqlite3 :memory: "SELECT json_valid(CAST(readfile('$tmp/j.json') AS TEXT)),
+    json_array_length(CAST(readfile('$tmp/j.json') AS TEXT)),
+    json_extract(CAST(readfile('$tmp/j.json') AS TEXT), '\$[0].family');")"
+  first_family="$(sqlite3 "$tmp/r.sqlite" "SELECT family FROM candidates ORDER BY family <> 'unclassified', E_mean, candidate_id LIMIT 1")"
+  [[ "$parsed" == "1|$n|$first_family" ]] || fail "the JSON does not parse to $n objects: $parsed"
+  "$loopfarm" report "$tmp/r.sqlite" --format markdown --limit 1 | grep -q '^| id | family' || fail "markdown header"
+  [[ "$("$loopfarm" report "$tmp/r.sqlite" --format csv --limit 1 | wc -l)" -eq 2 ]] || fail "--limit 1"
+  fam="$(sqlite3 "$tmp/r.sqlite" 'SELECT family FROM candidates ORDER BY candidate_id LIMIT 1')"
+  m="$(sqlite3 "$tmp/r.sqlite" "SELECT COUNT(*) FROM candidates WHERE family = '$fam'")"
+  [[ "$("$loopfarm" report "$tmp/r.sqlite" --family "$fam" --format csv | wc -l)" -eq $((m + 1)) ]] || fail "--family"
+  # --max-energy at the median energy keeps exactly the candidates at or below it.
+  median="$(sqlite3 "$tmp/r.sqlite" "SELECT printf('%.17g', E_mean) FROM candidates ORDER BY E_mean LIMIT 1 OFFSET $((n / 2))")"
+  below="$(sqlite3 "$tmp/r.sqlite" "SELECT COUNT(*) FROM candidates WHERE E_mean <= $median")"
+  [[ "$below" -lt "$n" ]] || fail "--max-energy: no candidate above the median energy to leave out"
+  [[ "$("$loopfarm" report "$tmp/r.sqlite" --max-energy "$median" --format csv | wc -l)" -eq $((below + 1)) ]] ||
+    fail "--max-energy $median: not the $below candidates at or below it"
+  # --run: only what that run found first (a second run, another seed, on a
+  # database of its own).
+  run1 --db "$tmp/two_runs.sqlite" --starts 15
+  sed 's/^seed = 7$/seed = 9/' "$job" >"$tmp/job9.toml"
+  "$loopfarm" run "$tmp/job9.toml" --progress none --db "$tmp/two_runs.sqlite" --new-run --starts 25 ||
+    fail "a second run exited with $?"
+  for run in 1 2; do
+    k="$(sqlite3 "$tmp/two_runs.sqlite" "SELECT COUNT(*) FROM candidates WHERE first_run = $run")"
+    [[ "$k" -gt 0 ]] || fail "--run $run: the run found no candidate of its own to select"
+    [[ "$("$loopfarm" report "$tmp/two_runs.sqlite" --run $run --format csv | wc -l)" -eq $((k + 1)) ]] ||
+      fail "--run $run: not its $k candidates"
+  done
+  # The documented sqlite3 examples (docs/guide/database.md) run on a real database.
+  mkdir "$tmp/doc"
+  sed -n '/^## Examples/,/^```$/p' "$source_dir/docs/guide/database.md" | sed -n '/^```sh$/,/^```$/p' | sed '1d;$d' |
+    sed "s|loopfarm.sqlite|$tmp/r.sqlite|g" >"$tmp/doc/examples.sh"
+  [[ "$(grep -c '^sqlite3' "$tmp/doc/examples.sh")" -ge 5 ]] || fail "no sqlite3 examples found in docs/guide/database.md"
+  (cd "$tmp/doc" && bash -euo pipefail examples.sh >out.txt 2>err.txt) || fail "docs/guide/database.md examples: $(head -1 "$tmp/doc/err.txt")"
+  [[ ! -s "$tmp/doc/err.txt" ]] || fail "docs/guide/database.md examples: $(head -1 "$tmp/doc/err.txt")"
+  grep -q "^\[loop\]" "$tmp/doc/job.toml" || fail "the documented job_text query did not give the job back"
+  "$loopfarm" report "$tmp/r.sqlite" --summary >"$tmp/s.txt" || fail "--summary exited with $?"
+  grep -q "histogram of log10(E_mean)" "$tmp/s.txt" || fail "--summary has no histogram"
+  grep -q "candidates by family" "$tmp/s.txt" || fail "--summary has no family counts"
+  "$loopfarm" report "$tmp/r.sqlite" --limit 1 --plot "$tmp/plots" >/dev/null 2>&1 || fail "--plot exited with $?"
+  [[ -s "$tmp/plots/minima_histogram.png" ]] || fail "no histogram PNG"
+  ls "$tmp"/plots/candidate_*_cycle.png >/dev/null 2>&1 || fail "no cycle PNG"
+  # The report reads while a run writes (WAL): start a long run, report during it.
+  sed -i 's/^starts = 40/starts = 400/' "$job"
+  "$loopfarm" run "$job" --progress none --db "$tmp/live.sqlite" --new-run &
+  pid=$!
+  for ((i = 0; i < 200; ++i)); do
+    [[ "$(sqlite3 "$tmp/live.sqlite" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)" -gt 0 ]] && break
+    sleep 0.1
+  done
+  "$loopfarm" report "$tmp/live.sqlite" --summary >/dev/null || fail "report during a run exited with $?"
+  kill -INT "$pid"
+  set +e
+  wait "$pid"
+  code=$?
+  set -e
+  [[ $code -eq 3 || $code -eq 0 ]] || fail "SIGINT: exit $code"
+  # Bad input.
+  for args in "$tmp/nothing.sqlite" "$tmp/r.sqlite --format xml" "$tmp/r.sqlite --family conic" "$tmp/r.sqlite --limit -1" "$job"; do
+    set +e
+    # shellcheck disable=SC2086
+    "$loopfarm" report $args >/dev/null 2>"$tmp/err"
+    code=$?
+    set -e
+    [[ $code -eq 2 ]] || fail "'report $args' exited with $code, not 2"
+    [[ "$(wc -l <"$tmp/err")" -eq 1 ]] || fail "'report $args' printed $(wc -l <"$tmp/err") lines"
+  done
+  ;;
+*)
+  fail "unknown case"
+  ;;
+esac
+echo "farm_test $case_name: passed"
