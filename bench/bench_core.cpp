@@ -18,10 +18,10 @@
 #include <vector>
 
 #include "loopfarm/core/assembly.hpp"
-#include "loopfarm/search/classify.hpp"
 #include "loopfarm/core/cycle.hpp"
 #include "loopfarm/core/motion.hpp"
 #include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/classify.hpp"
 
 namespace loopfarm {
 namespace {
@@ -31,7 +31,7 @@ constexpr double kDeg = 3.14159265358979323846 / 180.0;
 struct Fixture {
   LoopGeometry geometry;
   double theta0 = 0.0;
-  JointVector start;  // empty: assemble from the deterministic guesses
+  JointVector start;            // empty: assemble from the deterministic guesses
   bool structured_step = true;  // EquilibriumOptions::structured_step (off: the general step, to compare)
 };
 
@@ -181,9 +181,7 @@ void BM_SolvePredicted_Generic(benchmark::State& state) { solve_step(state, gene
 
 void BM_Cycle_Bennett(benchmark::State& state) { cycle(state, {bennett()}); }
 // The same with EquilibriumOptions::structured_step off: what the structured step saves.
-void BM_SolvePredicted_Bennett_GeneralStep(benchmark::State& state) {
-  solve_step(state, bennett_general_step(), true);
-}
+void BM_SolvePredicted_Bennett_GeneralStep(benchmark::State& state) { solve_step(state, bennett_general_step(), true); }
 void BM_Cycle_Bennett_GeneralStep(benchmark::State& state) { cycle(state, {bennett_general_step()}); }
 std::vector<Fixture> generic_loops(bool structured_step) {
   std::vector<Fixture> fixtures;

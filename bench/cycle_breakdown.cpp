@@ -89,15 +89,15 @@ int main(int argc, char** argv) {
     const double theta0 = bennett ? 120.0 * kDegree : 0.0;
     const LoopModel model(bennett ? paper_bennett_loop() : random_loop(4, seed), solver);
     EquilibriumWorkspace ws(model);
-    const EquilibriumState start =
-        bennett ? EquilibriumState::at_angles(model, bennett_angles(model.geometry(), theta0))
-                : assemble(model, ws, theta0).state;
+    const EquilibriumState start = bennett
+                                       ? EquilibriumState::at_angles(model, bennett_angles(model.geometry(), theta0))
+                                       : assemble(model, ws, theta0).state;
     CycleSummary s;
     cycle_energy(model, ws, theta0, start, options, s);
     total += s.total_iterations;
     std::printf("%s(4, %d): E_mean %.10g, %d iterations, %d bisections, %d branch jumps, %d failed\n",
-                bennett ? "paper_bennett_loop" : "random_loop", static_cast<int>(seed), s.E_mean, s.total_iterations, s.refinements, s.branch_jumps,
-                s.failed_samples);
+                bennett ? "paper_bennett_loop" : "random_loop", static_cast<int>(seed), s.E_mean, s.total_iterations,
+                s.refinements, s.branch_jumps, s.failed_samples);
     for (const CycleSample& sample : s.samples) {
       auto& entry = by_status[to_string(sample.status)];
       ++entry.first;

@@ -45,15 +45,14 @@ void check(bool condition, const std::string& what) {
 
 // A message the command prints must stay one line after one_line(), and must
 // not be empty after its "where: " prefix.
-void check_message(const std::string& message) {
-  check(!one_line(message).empty(), "empty error message");
-}
+void check_message(const std::string& message) { check(!one_line(message).empty(), "empty error message"); }
 
 // What an accepted geometry promises (docs/guide/commands.md, "One loop's geometry": 4 <= n <= 8, a >= 0, finite,
 // and a finite length scale so that energies are numbers).
 void check_geometry(const loopfarm::LoopGeometry& g) {
   const int n = g.joints();
-  check(n >= loopfarm::kMinJoints && n <= loopfarm::kMaxJoints, "accepted a loop with " + std::to_string(n) + " joints");
+  check(n >= loopfarm::kMinJoints && n <= loopfarm::kMaxJoints,
+        "accepted a loop with " + std::to_string(n) + " joints");
   check(g.alpha.size() == n && g.d.size() == n, "accepted lists of different lengths");
   for (int i = 0; i < n; ++i) {
     check(std::isfinite(g.a[i]) && g.a[i] >= 0.0, "accepted a bad link length");
@@ -131,9 +130,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view text(reinterpret_cast<const char*>(data) + 1, size - 1);
   try {
     switch (mode) {
-      case 0: fuzz_toml(text); break;
-      case 1: fuzz_arguments(text); break;
-      default: fuzz_value(text); break;
+      case 0:
+        fuzz_toml(text);
+        break;
+      case 1:
+        fuzz_arguments(text);
+        break;
+      default:
+        fuzz_value(text);
+        break;
     }
   } catch (const UsageError& error) {
     check_message(error.what());

@@ -15,8 +15,8 @@
 #include <string>
 #include <string_view>
 
-#include "loopfarm/search/job.hpp"
 #include "loopfarm/core/loop.hpp"
+#include "loopfarm/search/job.hpp"
 
 namespace {
 
@@ -56,7 +56,9 @@ void check_invariants(const loopfarm::Job& job) {
   for (size_t i = 0; i < job.space.specs.size(); ++i) {
     const ParameterSpec& s = job.space.specs[i];
     switch (s.mode) {
-      case ParameterSpec::Mode::fixed: check(std::isfinite(s.value), "fixed value not finite"); break;
+      case ParameterSpec::Mode::fixed:
+        check(std::isfinite(s.value), "fixed value not finite");
+        break;
       case ParameterSpec::Mode::range:
         check(std::isfinite(s.lo) && std::isfinite(s.hi) && s.lo < s.hi, "range not finite or lo >= hi");
         // The sampler draws lo + (hi - lo) u: the width must be finite too.

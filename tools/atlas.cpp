@@ -14,10 +14,10 @@
 
 #include "cli_support.hpp"
 #include "loopfarm/core/assembly.hpp"
-#include "loopfarm/search/classify.hpp"
 #include "loopfarm/core/cycle.hpp"
 #include "loopfarm/core/equilibrium.hpp"
 #include "loopfarm/core/loop.hpp"
+#include "loopfarm/search/classify.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -141,9 +141,8 @@ struct Representation {
 // energy` computes it (assembly at theta0, then the cycle): a full turn from 0,
 // or, for a loop whose verified motion does not turn fully, the verified range.
 Representation compute_cycle(const CandidateRow& r) {
-  const LoopGeometry geometry = LoopGeometry::from_degrees(std::span<const double>(r.a),
-                                                           std::span<const double>(r.alpha_deg),
-                                                           std::span<const double>(r.d));
+  const LoopGeometry geometry = LoopGeometry::from_degrees(
+      std::span<const double>(r.a), std::span<const double>(r.alpha_deg), std::span<const double>(r.d));
   const LoopModel model(geometry);
   EquilibriumWorkspace workspace(model);
   Representation out;
@@ -172,8 +171,8 @@ void pick_frames(const Representation& rep, std::vector<std::vector<double>>& th
   const int frames = std::min<int>(kFrames, static_cast<int>(samples.size()));
   for (int k = 0; k < frames; ++k) {
     // A full turn: k/frames of the turn; a range: both ends included.
-    const double position = rep.full_turn ? static_cast<double>(k) / frames
-                                          : (frames > 1 ? static_cast<double>(k) / (frames - 1) : 0.0);
+    const double position =
+        rep.full_turn ? static_cast<double>(k) / frames : (frames > 1 ? static_cast<double>(k) / (frames - 1) : 0.0);
     const size_t index = std::min(samples.size() - 1, static_cast<size_t>(std::lround(position * samples.size())));
     const CycleSample& s = *samples[index];
     theta.emplace_back(s.state.theta.data(), s.state.theta.data() + s.state.theta.size());
@@ -203,9 +202,8 @@ std::string atlas_stem(const std::string& family, int joints) {
 
 std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vector<double>>& theta,
                              const std::vector<double>& input_deg, const std::string& title) {
-  const LoopGeometry geometry = LoopGeometry::from_degrees(std::span<const double>(row.a),
-                                                           std::span<const double>(row.alpha_deg),
-                                                           std::span<const double>(row.d));
+  const LoopGeometry geometry = LoopGeometry::from_degrees(
+      std::span<const double>(row.a), std::span<const double>(row.alpha_deg), std::span<const double>(row.d));
   const int n = geometry.joints();
   // A fixed oblique view: azimuth 35 deg, elevation 25 deg, orthographic.
   const double az = 35.0 / kDegreesPerRadian, el = 25.0 / kDegreesPerRadian;
@@ -247,18 +245,19 @@ std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vec
   const double height = kTop + kPanel + kBottom;
   char buffer[512];
   std::string svg;
-  std::snprintf(buffer, sizeof buffer,
-                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" "
-                "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
-                width, height, width, height);
+  std::snprintf(
+      buffer, sizeof buffer,
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" "
+      "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
+      width, height, width, height);
   svg += buffer;
   std::string escaped;
   for (char c : title) escaped += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
   svg += "<text x=\"8\" y=\"20\" font-size=\"14\">" + escaped + "</text>\n";
   const char* colours[] = {"#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf"};
   for (size_t k = 0; k < frames.size(); ++k) {
-    const double x0 = kPanel * static_cast<double>(k) + kMargin - xmin * scale +
-                      0.5 * (kPanel - 2 * kMargin - (xmax - xmin) * scale);
+    const double x0 =
+        kPanel * static_cast<double>(k) + kMargin - xmin * scale + 0.5 * (kPanel - 2 * kMargin - (xmax - xmin) * scale);
     const double y0 = kTop + kMargin - ymin * scale + 0.5 * (kPanel - 2 * kMargin - (ymax - ymin) * scale);
     auto screen = [&](const Eigen::Vector3d& v) {
       const auto [x, y] = project(v);
@@ -293,7 +292,8 @@ std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vec
       std::snprintf(buffer, sizeof buffer, "%.2f,%.2f ", px, py);
       points += buffer;
     }
-    svg += "<polyline points=\"" + points + "\" fill=\"none\" stroke=\"black\" stroke-width=\"2.5\" "
+    svg += "<polyline points=\"" + points +
+           "\" fill=\"none\" stroke=\"black\" stroke-width=\"2.5\" "
            "stroke-linejoin=\"round\"/>\n";
     // Joints: a dot where each link meets its axis, numbered 1..n.
     for (int i = 0; i < n; ++i) {
@@ -314,8 +314,8 @@ std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vec
   return svg;
 }
 
-int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
-                const std::string& header, const std::filesystem::path& dir) {
+int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows, const std::string& header,
+                const std::filesystem::path& dir) {
   const std::vector<FamilyGroup> groups = group_by_family(rows);
   std::string md = "# Family atlas\n\n" + header + "\n";
   md +=
@@ -327,11 +327,12 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
       "parameters, so a sub-space search (ties, zero offsets, symmetry) can find less than the family has and a "
       "point on a larger family more. The representative is a full-turn candidate if there is one, with the "
       "smallest rigid-closure residual; its cycle energy is recomputed from its canonical geometry (" +
-      std::to_string(kCycleSamples) +
-      " samples, log axis) and its motion drawn at " + std::to_string(kFrames) +
+      std::to_string(kCycleSamples) + " samples, log axis) and its motion drawn at " + std::to_string(kFrames) +
       " input angles of that cycle (oblique view; dashed: joint axes, black: links, dots: joints). "
       "Unclassified candidates come first: a possible new family.\n\n";
-  md += "| family | joints | candidates | hits | local dimension found (candidates) | free parameters | known dimension |\n";
+  md +=
+      "| family | joints | candidates | hits | local dimension found (candidates) | free parameters | known dimension "
+      "|\n";
   md += "|---|---|---|---|---|---|---|\n";
   for (const FamilyGroup& group : groups) {
     const std::optional<int> known = known_family_dimension(group.family, group.joints);
@@ -345,10 +346,13 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
   for (const FamilyGroup& group : groups) {
     const std::string stem = atlas_stem(group.family, group.joints);
     const std::optional<int> known = known_family_dimension(group.family, group.joints);
-    md += "\n<a id=\"" + stem + "\"></a>\n## " + group.family + " (" + std::to_string(group.joints) + "R): " +
-          count_of(static_cast<long long>(group.rows.size()), "candidate") + ", " + count_of(group.hits, "hit") +
-          "\n\n";
-    if (group.family == "unclassified") md += "Fits no known family: a possible new family (or a known one whose conditions `classify` does not write, docs/guide/families.md).\n\n";
+    md += "\n<a id=\"" + stem + "\"></a>\n## " + group.family + " (" + std::to_string(group.joints) +
+          "R): " + count_of(static_cast<long long>(group.rows.size()), "candidate") + ", " +
+          count_of(group.hits, "hit") + "\n\n";
+    if (group.family == "unclassified")
+      md +=
+          "Fits no known family: a possible new family (or a known one whose conditions `classify` does not write, "
+          "docs/guide/families.md).\n\n";
 
     // Local dimension.
     std::map<int, std::pair<int, int>> found;  // dimension -> (candidates, free parameters of the first)
@@ -361,12 +365,14 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
     md += "| found | candidates | free parameters | reading |\n|---|---|---|---|\n";
     for (const auto& [dimension, entry] : found) {
       md += "| " + std::to_string(dimension) + " | " + std::to_string(entry.first) + " | " +
-            std::to_string(entry.second) + " | " +
-            dimension_reading(dimension, known, entry.second, group.joints) + " |\n";
+            std::to_string(entry.second) + " | " + dimension_reading(dimension, known, entry.second, group.joints) +
+            " |\n";
     }
 
     // Parameter spread.
-    md += "\nParameters (canonical, L = 1, twists in degrees):\n\n| parameter | min | median | max |\n|---|---|---|---|\n";
+    md +=
+        "\nParameters (canonical, L = 1, twists in degrees):\n\n| parameter | min | median | max "
+        "|\n|---|---|---|---|\n";
     for (int kind = 0; kind < 3; ++kind) {
       for (int i = 0; i < group.joints; ++i) {
         std::vector<double> values;
@@ -375,8 +381,10 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
           if (i < static_cast<int>(v.size())) values.push_back(v[static_cast<size_t>(i)]);
         }
         const Spread s = spread(values);
-        const std::string name = (kind == 0 ? "a" : kind == 1 ? "alpha" : "d") + std::to_string(i + 1) +
-                                 (kind == 1 ? " [deg]" : "");
+        const std::string name = (kind == 0   ? "a"
+                                  : kind == 1 ? "alpha"
+                                              : "d") +
+                                 std::to_string(i + 1) + (kind == 1 ? " [deg]" : "");
         md += "| " + name + " | " + g(s.min) + " | " + g(s.median) + " | " + g(s.max) + " |\n";
       }
     }
@@ -405,13 +413,14 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
           "), E_mean " + g(r.E_mean, 3) + ", rigid residual " + g(r.rigid_residual, 2) + ", family residual " +
           g(r.family_residual, 2) + ", local dimension " + std::to_string(r.local_dimension) + " of " +
           std::to_string(r.free_parameters) + ", " +
-          (r.full_turn ? std::string("full turn") : "input range [" + g(r.range_lo_deg) + ", " + g(r.range_hi_deg) + "] deg") +
+          (r.full_turn ? std::string("full turn")
+                       : "input range [" + g(r.range_lo_deg) + ", " + g(r.range_hi_deg) + "] deg") +
           (r.setup != "none" && !r.setup.empty() ? ", setup " + r.setup : "") + ".\n";
     if (!r.detail.empty()) md += "Classification: " + r.detail + ".\n";
-    md += "\n```\na     = " + joined(r.a, 9) + "\nalpha = " + joined(r.alpha_deg, 9) + " deg\nd     = " +
-          joined(r.d, 9) + "\n```\n\n";
-    md += "Cycle energy recomputed here: E_mean " + g(rep.cycle.E_mean, 3) + ", E_max " + g(rep.cycle.E_max, 3) +
-          ", " + std::to_string(rep.cycle.failed_samples) + " failed samples.\n\n";
+    md += "\n```\na     = " + joined(r.a, 9) + "\nalpha = " + joined(r.alpha_deg, 9) +
+          " deg\nd     = " + joined(r.d, 9) + "\n```\n\n";
+    md += "Cycle energy recomputed here: E_mean " + g(rep.cycle.E_mean, 3) + ", E_max " + g(rep.cycle.E_max, 3) + ", " +
+          std::to_string(rep.cycle.failed_samples) + " failed samples.\n\n";
     md += "![cycle energy of candidate " + std::to_string(r.id) + "](" + png.filename().string() + ")\n\n";
     md += "![motion of candidate " + std::to_string(r.id) + "](" + svg.filename().string() + ")\n";
     std::fprintf(stderr, "loopfarm report: wrote %s and %s\n", png.string().c_str(), svg.string().c_str());

@@ -31,8 +31,8 @@ std::string atlas_stem(const std::string& family, int joints);
 // database and its runs). Unclassified families come first, then by count.
 // Returns the number of families. Throws EnvironmentError when gnuplot fails
 // or a file cannot be written.
-int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
-                const std::string& header, const std::filesystem::path& dir);
+int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows, const std::string& header,
+                const std::filesystem::path& dir);
 
 // The SVG strip of frames (exposed for the atlas only; one row of `frames`
 // panels): the joint axes and links of the loop at evenly spaced samples of

@@ -53,9 +53,9 @@ void print_candidate(const CandidateAnalysis& c) {
   std::printf("  verified              %s\n", v.verified ? "yes" : "no");
   if (m.given_pose.size() > 0 || !m.given_pose_closes) {
     std::printf("  given pose            %s\n", m.given_pose.size() == 0 ? "none"
-                                                : !v.assembled ? "does not close the rigid loop"
-                                                : v.on_motion  ? "closes, on the reported circuit"
-                                                               : "closes, not on a moving circuit");
+                                                : !v.assembled           ? "does not close the rigid loop"
+                                                : v.on_motion            ? "closes, on the reported circuit"
+                                                                         : "closes, not on a moving circuit");
   }
   if (v.circuit >= 0) {
     std::printf("  reported circuit      %d: ", v.circuit + 1);

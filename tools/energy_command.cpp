@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
-#include <utility>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli_support.hpp"
@@ -69,8 +69,8 @@ EnergyRequest read_request(const EnergyArguments& args) {
 
   const long long samples = parse_integer(args.samples, "--samples");
   if (samples < 2 || samples > kMaxSamples) {
-    throw UsageError("--samples", "got " + std::to_string(samples) + "; must be in [2, " +
-                                      std::to_string(kMaxSamples) + "]");
+    throw UsageError("--samples",
+                     "got " + std::to_string(samples) + "; must be in [2, " + std::to_string(kMaxSamples) + "]");
   }
   request.samples = static_cast<int>(samples);
 
@@ -138,7 +138,8 @@ void write_csv(std::FILE* out, const LoopModel& model, const DegreeDisplay& degr
     std::fprintf(out, "%s,%s,%s,%d,%s", format_double(degrees.input_deg(sample.theta_in)).c_str(),
                  format_double(sample.energy).c_str(), to_string(sample.status), sample.iterations,
                  format_double(sample.closure_residual).c_str());
-    for (int i = 0; i < n; ++i) std::fprintf(out, ",%s", format_double(degrees.joint_deg(sample.state.theta, i)).c_str());
+    for (int i = 0; i < n; ++i)
+      std::fprintf(out, ",%s", format_double(degrees.joint_deg(sample.state.theta, i)).c_str());
     for (int k = 0; k < model.deformation_count(); ++k) {
       const double value = physical_deformation(model, sample.state.deformations, k);
       std::fprintf(out, ",%s", format_double(is_twist(model, k) ? value * kDegreesPerRadian : value).c_str());
@@ -220,8 +221,8 @@ void print_summary(const EnergyRequest& request, const LoopModel& model, const E
   const EquilibriumSummary& a = result.start.assembly;
   const CycleStart& start = result.start;
   const int input = model.options().input_joint;
-  const std::vector<double> d = request.input.d ? request.input.d->values
-                                                : std::vector<double>(request.input.a.values.size(), 0.0);
+  const std::vector<double> d =
+      request.input.d ? request.input.d->values : std::vector<double>(request.input.a.values.size(), 0.0);
   std::printf("loop (%dR)\n", model.joints());
   std::printf("  a                     %s\n", format_list(request.input.a.values).c_str());
   std::printf("  alpha_deg             %s\n", format_list(request.input.alpha_deg.values).c_str());
@@ -229,9 +230,9 @@ void print_summary(const EnergyRequest& request, const LoopModel& model, const E
   std::printf("  length scale L        %s\n", readable(model.length_scale()).c_str());
   std::printf("  compliance            %s, torsion ratio k_t/(k_a L^2) = %s\n", to_string(request.compliance),
               readable(request.torsion_ratio).c_str());
-  const char* assembled = request.theta ? "from --theta-deg"
-                         : start.motion ? "on a motion of the rigid loop"
-                                        : "least-energy of the deterministic guesses: none at theta0 is on a motion";
+  const char* assembled = request.theta  ? "from --theta-deg"
+                          : start.motion ? "on a motion of the rigid loop"
+                                         : "least-energy of the deterministic guesses: none at theta0 is on a motion";
   std::printf("assembly at theta0 = %s deg (%s)\n", readable(request.theta0_deg).c_str(), assembled);
   std::printf("  status                %s after %d Newton iterations\n", to_string(a.status), a.iterations);
   std::printf("  theta_deg             %s\n", joint_angles_deg(model, result.degrees, a.state.theta).c_str());
@@ -244,8 +245,7 @@ void print_summary(const EnergyRequest& request, const LoopModel& model, const E
     covered = "a full turn: the input turns fully on the motion";
   } else {
     const std::array<double, 2> r = input_range_deg(start, input, result.degrees.theta0);
-    covered = "a window inside the input's range [" + readable(r[0]) + ", " + readable(r[1]) +
-              "] deg on the motion";
+    covered = "a window inside the input's range [" + readable(r[0]) + ", " + readable(r[1]) + "] deg on the motion";
   }
   std::printf("cycle (%d samples over %s deg: %s)\n", static_cast<int>(c.samples.size()),
               readable(request.range_deg.value_or(start.range * kDegreesPerRadian)).c_str(), covered.c_str());
@@ -307,16 +307,17 @@ int run_energy(const EnergyArguments& args) {
   CycleStartOptions start_options;
   // 360 gives exactly 2 pi, so that the library treats it as a full turn.
   if (request.range_deg) start_options.range = *request.range_deg / 360.0 * (2.0 * kPi);
-  result.start = choose_cycle_start(model, workspace, theta0, request.theta ? &*request.theta : nullptr,
-                                    start_options);
+  result.start = choose_cycle_start(model, workspace, theta0, request.theta ? &*request.theta : nullptr, start_options);
   cycle_options.range = result.start.range;
   cycle_options.validate();
   cycle_energy(model, workspace, theta0, result.start.assembly.state, cycle_options, result.cycle);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
 
   if (result.start.assembly.status != SolveStatus::converged) {
-    std::fprintf(stderr, "loopfarm energy: warning: the assembly at theta0 did not converge (%s); "
-                         "the cycle starts from the best attempt\n", to_string(result.start.assembly.status));
+    std::fprintf(stderr,
+                 "loopfarm energy: warning: the assembly at theta0 did not converge (%s); "
+                 "the cycle starts from the best attempt\n",
+                 to_string(result.start.assembly.status));
   }
 
   // 3. Files first, each written in full before it replaces its target; then
@@ -345,9 +346,10 @@ int run_energy(const EnergyArguments& args) {
 
 Subcommand add_energy_command(CLI::App& parent) {
   auto args = std::make_shared<EnergyArguments>();
-  CLI::App* app = parent.add_subcommand(
-      "energy", "Cycle energy of one loop: drive joint 1 through a turn and report the elastic energy "
-                "E/(k_a L^2) that closing the loop costs (zero for a movable linkage).");
+  CLI::App* app =
+      parent.add_subcommand("energy",
+                            "Cycle energy of one loop: drive joint 1 through a turn and report the elastic energy "
+                            "E/(k_a L^2) that closing the loop costs (zero for a movable linkage).");
   app->footer(
       "Lists are comma-separated, without spaces; use --flag=LIST when a list starts with '-'.\n"
       "Examples:\n"
@@ -362,9 +364,7 @@ Subcommand add_energy_command(CLI::App& parent) {
           ->capture_default_str();
   args->geometry.theta_option->excludes(theta0);
 
-  app->add_option("--samples", args->samples, "samples N over the cycle (>= 2)")
-      ->type_name("N")
-      ->capture_default_str();
+  app->add_option("--samples", args->samples, "samples N over the cycle (>= 2)")->type_name("N")->capture_default_str();
   app->add_option("--compliance", args->compliance,
                   "springy parameters: paper (a and alpha, the paper's model) or full (a, alpha and d)")
       ->type_name("paper|full")
@@ -380,8 +380,8 @@ Subcommand add_energy_command(CLI::App& parent) {
       ->capture_default_str();
 
   app->add_flag("--json", args->json, "print one JSON object instead of the summary");
-  args->csv_option = app->add_option("--csv", args->csv, "write the energy curve, one row per sample")
-                         ->type_name("FILE");
+  args->csv_option =
+      app->add_option("--csv", args->csv, "write the energy curve, one row per sample")->type_name("FILE");
   args->plot_option =
       app->add_option("--plot", args->plot, "draw energy against input angle into a PNG (needs gnuplot)")
           ->type_name("FILE.png");

@@ -11,8 +11,8 @@
 #include <toml++/toml.h>
 
 #include "cli_support.hpp"
-#include "loopfarm/search/job.hpp"
 #include "loopfarm/core/types.hpp"
+#include "loopfarm/search/job.hpp"
 
 namespace loopfarm::cli {
 namespace {
@@ -168,8 +168,8 @@ LoopGeometry make_geometry(const GeometryInput& input) {
   if (input.d) check_count(*input.d, n, input.a.source);
   for (size_t i = 0; i < n; ++i) {
     if (input.a.values[i] < 0.0) {
-      throw UsageError(input.a.source, "element " + std::to_string(i + 1) + " is " +
-                                           format_double(input.a.values[i]) + ": a link length must be >= 0");
+      throw UsageError(input.a.source, "element " + std::to_string(i + 1) + " is " + format_double(input.a.values[i]) +
+                                           ": a link length must be >= 0");
     }
   }
   const std::vector<double> zeros(n, 0.0);

@@ -33,13 +33,15 @@ GeometryRequest read_geometry(const GeometryOptions& o) {
     request.input = geometry_from_toml(o.geometry);
   } else {
     if (!given(o.a_option)) {
-      throw UsageError("--a", "missing: give the link lengths with --a and the twists with --alpha-deg "
-                              "(e.g. --a 2,4,2,4 --alpha-deg 30,90,30,90), or --geometry FILE.toml");
+      throw UsageError("--a",
+                       "missing: give the link lengths with --a and the twists with --alpha-deg "
+                       "(e.g. --a 2,4,2,4 --alpha-deg 30,90,30,90), or --geometry FILE.toml");
     }
     if (!given(o.alpha_option)) {
       throw UsageError("--alpha-deg", "missing: give the twists in degrees, e.g. --alpha-deg 30,90,30,90");
     }
-    request.input = geometry_from_flags(o.a, o.alpha_deg, given(o.d_option) ? std::optional<std::string>(o.d) : std::nullopt);
+    request.input =
+        geometry_from_flags(o.a, o.alpha_deg, given(o.d_option) ? std::optional<std::string>(o.d) : std::nullopt);
   }
   request.geometry = make_geometry(request.input);
   const int n = request.geometry.joints();

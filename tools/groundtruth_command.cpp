@@ -130,7 +130,8 @@ std::string csv_text(const std::vector<GroundTruthCase>& cases) {
   std::string out;
   // Every case has 4 joints; the header comes from an empty 4R case.
   GroundTruthCase header_case;
-  header_case.geometry.a = header_case.geometry.alpha = header_case.geometry.d = header_case.pose = JointVector::Zero(4);
+  header_case.geometry.a = header_case.geometry.alpha = header_case.geometry.d = header_case.pose =
+      JointVector::Zero(4);
   std::vector<Field> header = fields(header_case);
   for (Field& column : joint_columns(header_case)) header.push_back(std::move(column));
   for (size_t i = 0; i < header.size(); ++i) out += (i ? "," : "") + header[i].name;
@@ -180,8 +181,8 @@ int run_groundtruth(const GroundTruthArguments& args) {
     output->commit();
     int movable = 0;
     for (const GroundTruthCase& c : cases) movable += c.movable ? 1 : 0;
-    std::fprintf(stderr, "loopfarm groundtruth: wrote %zu cases (%d movable, %zu rigid) to %s\n", cases.size(),
-                 movable, cases.size() - static_cast<size_t>(movable), args.out.c_str());
+    std::fprintf(stderr, "loopfarm groundtruth: wrote %zu cases (%d movable, %zu rigid) to %s\n", cases.size(), movable,
+                 cases.size() - static_cast<size_t>(movable), args.out.c_str());
   } else {
     std::fputs(text.c_str(), stdout);
   }

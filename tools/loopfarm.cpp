@@ -18,9 +18,9 @@
 #include "report_command.hpp"
 #include "run_command.hpp"
 #include "start_command.hpp"
+#include "subcommand.hpp"
 #include "tradeoff_command.hpp"
 #include "verify_command.hpp"
-#include "subcommand.hpp"
 
 #ifndef LOOPFARM_VERSION
 #error "LOOPFARM_VERSION is defined by the loopfarm library target"
@@ -66,14 +66,10 @@ int main(int argc, char** argv) {
 
   // Every subcommand, in the order --help lists them.
   const std::vector<loopfarm::cli::Subcommand> commands{
-      loopfarm::cli::add_energy_command(app),
-      loopfarm::cli::add_verify_command(app),
-      loopfarm::cli::add_motion_command(app),
-      loopfarm::cli::add_start_command(app),
-      loopfarm::cli::add_run_command(app),
-      loopfarm::cli::add_report_command(app),
-      loopfarm::cli::add_groundtruth_command(app),
-      loopfarm::cli::add_tradeoff_command(app),
+      loopfarm::cli::add_energy_command(app),      loopfarm::cli::add_verify_command(app),
+      loopfarm::cli::add_motion_command(app),      loopfarm::cli::add_start_command(app),
+      loopfarm::cli::add_run_command(app),         loopfarm::cli::add_report_command(app),
+      loopfarm::cli::add_groundtruth_command(app), loopfarm::cli::add_tradeoff_command(app),
   };
 
   // CLI11 would call a mistyped subcommand "missing"; name it instead.

@@ -69,9 +69,9 @@ int run_motion(const MotionArguments& args) {
   }
   if (png && !v.motion.circuits.empty()) {
     png->close();
-    plot_motion(gnuplot, v.motion, "motion of the " + std::to_string(geometry.joints()) + "R loop a = " +
-                                       lengths_text(geometry.a) + ", alpha_deg = " + degrees_text(geometry.alpha) +
-                                       ", d = " + lengths_text(geometry.d),
+    plot_motion(gnuplot, v.motion,
+                "motion of the " + std::to_string(geometry.joints()) + "R loop a = " + lengths_text(geometry.a) +
+                    ", alpha_deg = " + degrees_text(geometry.alpha) + ", d = " + lengths_text(geometry.d),
                 png->temporary());
   }
   if (csv) csv->commit();
@@ -113,8 +113,9 @@ int run_motion(const MotionArguments& args) {
 Subcommand add_motion_command(CLI::App& parent) {
   auto args = std::make_shared<MotionArguments>();
   CLI::App* app = parent.add_subcommand(
-      "motion", "Trace every circuit of a geometry's rigid motion over the whole turn: each joint's range (crank or "
-                "rocker), dead points, bifurcation points, freedoms; the input-output curves as CSV and a plot.");
+      "motion",
+      "Trace every circuit of a geometry's rigid motion over the whole turn: each joint's range (crank or "
+      "rocker), dead points, bifurcation points, freedoms; the input-output curves as CSV and a plot.");
   app->footer(
       "Examples:\n"
       "  loopfarm motion --a 3,1,2.5,2 --alpha-deg 0,0,0,0 --csv curves.csv --plot curves.png\n"
@@ -123,10 +124,9 @@ Subcommand add_motion_command(CLI::App& parent) {
       "Exit codes: 0 verified (a circuit moves), 4 analysed but not verified, 1 failure (e.g. gnuplot missing),\n"
       "2 bad input.\n");
   add_geometry_options(*app, args->geometry);
-  CLI::Option* theta0 =
-      app->add_option("--theta0-deg", args->theta0_deg,
-                      "input angle theta0 [deg]: report the circuit whose input reaches it")
-          ->type_name("DEG");
+  CLI::Option* theta0 = app->add_option("--theta0-deg", args->theta0_deg,
+                                        "input angle theta0 [deg]: report the circuit whose input reaches it")
+                            ->type_name("DEG");
   args->geometry.theta_option->excludes(theta0);
   app->add_option("--steps", args->steps, "tracing: the largest step along a circuit is 360/S deg (>= 360)")
       ->type_name("S")
@@ -135,9 +135,9 @@ Subcommand add_motion_command(CLI::App& parent) {
                                      "write every circuit's points (every joint angle against the input and "
                                      "arclength), one row a point; '-' for standard output")
                          ->type_name("FILE");
-  args->plot_option =
-      app->add_option("--plot", args->plot, "draw the joint angles against input and arclength into a PNG (needs gnuplot)")
-          ->type_name("FILE");
+  args->plot_option = app->add_option("--plot", args->plot,
+                                      "draw the joint angles against input and arclength into a PNG (needs gnuplot)")
+                          ->type_name("FILE");
   app->add_flag("--json", args->json, "print one JSON object instead of the summary");
   return {app, [args] { return run_motion(*args); }};
 }

@@ -44,7 +44,8 @@ std::string range_text(const JointRange& r) {
 
 void print_circuits(const MotionAnalysis& m, int input, int reported) {
   std::printf("circuits                %d found", static_cast<int>(m.circuits.size()));
-  if (!m.isolated_poses.empty()) std::printf(", and %d isolated closed poses", static_cast<int>(m.isolated_poses.size()));
+  if (!m.isolated_poses.empty())
+    std::printf(", and %d isolated closed poses", static_cast<int>(m.isolated_poses.size()));
   std::printf("\n");
   for (size_t i = 0; i < m.circuits.size(); ++i) {
     const Circuit& c = m.circuits[i];
@@ -60,9 +61,11 @@ void print_circuits(const MotionAnalysis& m, int input, int reported) {
     }
     std::printf("\n");
     const JointRange& r = c.input_range(input);
-    std::printf("    input (joint %d)     %s\n", input + 1,
-                r.crank() ? "full turn" : ("[" + readable(r.lo * kDegreesPerRadian) + ", " +
-                                           readable(r.hi * kDegreesPerRadian) + "] deg").c_str());
+    std::printf(
+        "    input (joint %d)     %s\n", input + 1,
+        r.crank()
+            ? "full turn"
+            : ("[" + readable(r.lo * kDegreesPerRadian) + ", " + readable(r.hi * kDegreesPerRadian) + "] deg").c_str());
     for (size_t j = 0; j < c.ranges.size(); ++j) {
       std::printf("    joint %-2zu            %s\n", j + 1, range_text(c.ranges[j]).c_str());
     }
@@ -72,8 +75,9 @@ void print_circuits(const MotionAnalysis& m, int input, int reported) {
                   readable(e.theta[input] * kDegreesPerRadian).c_str(), degrees_list(e.theta).c_str());
     }
     for (const Bifurcation& b : c.bifurcations) {
-      std::printf("    singular pose       the closure Jacobian loses rank; %d branch directions leave it; theta_deg %s\n",
-                  b.branches, degrees_list(b.theta).c_str());
+      std::printf(
+          "    singular pose       the closure Jacobian loses rank; %d branch directions leave it; theta_deg %s\n",
+          b.branches, degrees_list(b.theta).c_str());
     }
   }
 }
@@ -94,7 +98,8 @@ std::string circuits_json(const MotionAnalysis& m, int input) {
     json += ",\"arclength_rad\":" + json_number(c.length);
     json += ",\"worst_residual\":" + json_number(c.worst_residual);
     json += ",\"full_turn\":" + std::string(r.crank() ? "true" : "false");
-    json += ",\"input_range_deg\":[" + json_number(r.lo * kDegreesPerRadian) + "," + json_number(r.hi * kDegreesPerRadian) + "]";
+    json += ",\"input_range_deg\":[" + json_number(r.lo * kDegreesPerRadian) + "," +
+            json_number(r.hi * kDegreesPerRadian) + "]";
     json += ",\"joints\":[";
     for (size_t j = 0; j < c.ranges.size(); ++j) {
       const JointRange& k = c.ranges[j];

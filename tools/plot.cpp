@@ -98,14 +98,16 @@ std::filesystem::path find_program(std::string_view name) {
 std::filesystem::path require_gnuplot(const std::string& flag) {
   std::filesystem::path gnuplot = find_program("gnuplot");
   if (gnuplot.empty()) {
-    throw EnvironmentError(flag + ": gnuplot not found on PATH; install it (Debian: apt-get install gnuplot-nox, "
-                                  "or run scripts/deps.sh) or leave out " + flag);
+    throw EnvironmentError(flag +
+                           ": gnuplot not found on PATH; install it (Debian: apt-get install gnuplot-nox, "
+                           "or run scripts/deps.sh) or leave out " +
+                           flag);
   }
   return gnuplot;
 }
 
-void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary& summary,
-                       const EnergyPlotStyle& style, const std::filesystem::path& png) {
+void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary& summary, const EnergyPlotStyle& style,
+                       const std::filesystem::path& png) {
   // The data: input angle [deg], energy as drawn, and a marker class
   // (0 solved, 1 failed, 2 branch jump) for the points to highlight.
   ScratchFile data(".dat");
@@ -120,9 +122,7 @@ void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary&
       energy = kLogFloor;
       floored = true;
     }
-    const int marker = sample.status == SampleStatus::failed        ? 1
-                       : sample.status == SampleStatus::branch_jump ? 2
-                                                                     : 0;
+    const int marker = sample.status == SampleStatus::failed ? 1 : sample.status == SampleStatus::branch_jump ? 2 : 0;
     failed += marker == 1;
     jumped += marker == 2;
     ++drawable;
@@ -161,12 +161,16 @@ void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary&
   std::fprintf(gp, "plot %s using 1:2 with linespoints pt 7 ps 0.5 lw 1.5 lc rgb '#1f5fa8' title %s noenhanced",
                data_name.c_str(), gnuplot_string(energy_title).c_str());
   if (failed > 0) {
-    std::fprintf(gp, ", \\\n  %s using 1:($3 == 1 ? $2 : 1/0) with points pt 6 ps 1.6 lc rgb '#c0392b' "
-                     "title 'failed solve'", data_name.c_str());
+    std::fprintf(gp,
+                 ", \\\n  %s using 1:($3 == 1 ? $2 : 1/0) with points pt 6 ps 1.6 lc rgb '#c0392b' "
+                 "title 'failed solve'",
+                 data_name.c_str());
   }
   if (jumped > 0) {
-    std::fprintf(gp, ", \\\n  %s using 1:($3 == 2 ? $2 : 1/0) with points pt 4 ps 1.6 lc rgb '#d68910' "
-                     "title 'branch jump'", data_name.c_str());
+    std::fprintf(gp,
+                 ", \\\n  %s using 1:($3 == 2 ? $2 : 1/0) with points pt 4 ps 1.6 lc rgb '#d68910' "
+                 "title 'branch jump'",
+                 data_name.c_str());
   }
   std::fputs("\nunset output\n", gp);
   script.close();
@@ -208,9 +212,11 @@ void plot_motion(const std::filesystem::path& gnuplot, const MotionAnalysis& mot
   // A colour per joint, a dash pattern per circuit.
   const int circuits = static_cast<int>(motion.circuits.size());
   std::fprintf(gp, "set xlabel 'input angle theta_%d [deg]'\n", motion.input_joint + 1);
-  std::fputs("curve_title(c, j) = c == 0 ? sprintf('theta_%d', j-1) : (j == 2 ? sprintf('circuit %d', c+1) : '')\n", gp);
+  std::fputs("curve_title(c, j) = c == 0 ? sprintf('theta_%d', j-1) : (j == 2 ? sprintf('circuit %d', c+1) : '')\n",
+             gp);
   const char* plot =
-      "plot for [c=0:%d] for [j=2:%d] %s index c using %s:j with lines lw 1.5 lc (j-1) dt 1+c%%5 title (curve_title(c, j))\n";
+      "plot for [c=0:%d] for [j=2:%d] %s index c using %s:j with lines lw 1.5 lc (j-1) dt 1+c%%5 title (curve_title(c, "
+      "j))\n";
   std::fprintf(gp, plot, circuits - 1, n + 1, data_name.c_str(), std::to_string(input).c_str());
   std::fputs("set xlabel 'arclength in joint space [rad]'\n", gp);
   std::fprintf(gp, plot, circuits - 1, n + 1, data_name.c_str(), "1");

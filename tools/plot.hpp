@@ -37,8 +37,8 @@ struct EnergyPlotStyle {
 // at kLogFloor. Throws EnvironmentError if gnuplot fails or writes nothing,
 // with gnuplot's first error line.
 inline constexpr double kLogFloor = 1e-32;
-void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary& summary,
-                       const EnergyPlotStyle& style, const std::filesystem::path& png);
+void plot_energy_curve(const std::filesystem::path& gnuplot, const CycleSummary& summary, const EnergyPlotStyle& style,
+                       const std::filesystem::path& png);
 
 // Draws every circuit's joint angles [deg, unwrapped along the circuit]
 // against the input angle (left) and against arclength (right) into `png`.

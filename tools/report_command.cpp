@@ -21,9 +21,9 @@
 #include "atlas.hpp"
 #include "cli_support.hpp"
 #include "loopfarm/core/assembly.hpp"
-#include "loopfarm/search/classify.hpp"
 #include "loopfarm/core/cycle.hpp"
 #include "loopfarm/farm/results_database.hpp"
+#include "loopfarm/search/classify.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -97,8 +97,9 @@ void print_table(const std::vector<CandidateRow>& rows) {
 }
 
 void print_markdown(const std::vector<CandidateRow>& rows) {
-  std::printf("| id | family | setup | E_mean | hits | first (run:start) | local dim | rigid residual | family residual "
-              "| input range | a | alpha [deg] | d |\n");
+  std::printf(
+      "| id | family | setup | E_mean | hits | first (run:start) | local dim | rigid residual | family residual "
+      "| input range | a | alpha [deg] | d |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const CandidateRow& r : rows) {
     std::printf("| %lld | %s | %s | %s | %lld | %lld:%lld | %d/%d | %s | %s | %s | %s | %s | %s |\n", r.id,
@@ -183,7 +184,8 @@ void print_json(const std::vector<CandidateRow>& rows) {
   for (size_t k = 0; k < rows.size(); ++k) {
     const std::vector<Field> f = fields(rows[k], rows[k].joints);
     std::printf("%s\n{", k ? "," : "");
-    for (size_t i = 0; i < f.size(); ++i) std::printf("%s\"%s\":%s", i ? "," : "", f[i].name.c_str(), f[i].json.c_str());
+    for (size_t i = 0; i < f.size(); ++i)
+      std::printf("%s\"%s\":%s", i ? "," : "", f[i].name.c_str(), f[i].json.c_str());
     std::printf("}");
   }
   std::printf("%s]\n", rows.empty() ? "" : "\n");
@@ -249,9 +251,8 @@ void plot_histogram(const std::filesystem::path& gnuplot, const EnergyHistogram&
 void plot_candidates(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
                      const std::filesystem::path& dir) {
   for (const CandidateRow& r : rows) {
-    const LoopGeometry geometry =
-        LoopGeometry::from_degrees(std::span<const double>(r.a), std::span<const double>(r.alpha_deg),
-                                   std::span<const double>(r.d));
+    const LoopGeometry geometry = LoopGeometry::from_degrees(
+        std::span<const double>(r.a), std::span<const double>(r.alpha_deg), std::span<const double>(r.d));
     const LoopModel model(geometry);
     EquilibriumWorkspace workspace(model);
     const EquilibriumSummary assembly = assemble(model, workspace, 0.0);

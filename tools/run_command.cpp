@@ -111,10 +111,14 @@ RunRequest read_settings(const RunArguments& args) {
 
 std::string signal_name(int signal) {
   switch (signal) {
-    case SIGINT: return "SIGINT";
-    case SIGTERM: return "SIGTERM";
-    case SIGUSR1: return "SIGUSR1";
-    default: return "signal " + std::to_string(signal);
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGUSR1:
+      return "SIGUSR1";
+    default:
+      return "signal " + std::to_string(signal);
   }
 }
 
@@ -147,10 +151,13 @@ int run_run_command(const RunArguments& args) {
     throw UsageError("database", error.what());
   }
   switch (summary.status) {
-    case FarmStatus::refused: return kExitUsage;
-    case FarmStatus::failed: return kExitFailure;
+    case FarmStatus::refused:
+      return kExitUsage;
+    case FarmStatus::failed:
+      return kExitFailure;
     case FarmStatus::complete:
-    case FarmStatus::stopped: break;
+    case FarmStatus::stopped:
+      break;
   }
   // Every rank exits with rank 0's code, so that mpirun passes it on (3 for a
   // stopped run); only rank 0 reports.
@@ -163,10 +170,9 @@ int run_run_command(const RunArguments& args) {
   std::fprintf(stderr,
                "loopfarm run: this session %ld starts in %.1f s on %d ranks (%.3g starts/s); rank 0 coordination "
                "%.3f s (%.2f%% of the wall time, %ld messages); peak memory per rank %.1f MB (rank 0) .. %.1f MB\n",
-               summary.done_here, wall, summary.ranks,
-               wall > 0 ? static_cast<double>(summary.done_here) / wall : 0.0, summary.coordination_s,
-               wall > 0 ? 100.0 * summary.coordination_s / wall : 0.0, summary.messages, summary.peak_mb_rank0,
-               summary.peak_mb_max);
+               summary.done_here, wall, summary.ranks, wall > 0 ? static_cast<double>(summary.done_here) / wall : 0.0,
+               summary.coordination_s, wall > 0 ? 100.0 * summary.coordination_s / wall : 0.0, summary.messages,
+               summary.peak_mb_rank0, summary.peak_mb_max);
   if (summary.status == FarmStatus::stopped) {
     std::fprintf(stderr, "loopfarm run: stopped by %s; resume with: %s\n", signal_name(summary.stop_signal).c_str(),
                  resume_command(args, s).c_str());
@@ -193,7 +199,9 @@ Subcommand add_run_command(CLI::App& parent) {
   app->add_option("--seed", args->seed, "override [search] seed")->type_name("S");
   app->add_option("--db", args->db, "override [output] database")->type_name("PATH");
   app->add_flag("--new-run", args->new_run, "add a new run to a database that holds another job");
-  app->add_option("--chunk", args->chunk, "start indices handed out per request")->type_name("K")->capture_default_str();
+  app->add_option("--chunk", args->chunk, "start indices handed out per request")
+      ->type_name("K")
+      ->capture_default_str();
   app->add_option("--progress", args->progress, "auto (bar on a terminal, else a line every 10 s), bar, log or none")
       ->type_name("STYLE")
       ->capture_default_str();

@@ -37,9 +37,9 @@ void print_geometry(const char* title, const LoopGeometry& g) {
 }
 
 void print_story(const Job& job, const StartSummary& s) {
-  std::printf("start %llu of %s (seed %llu, %d joints, %d free parameters)\n",
-              static_cast<unsigned long long>(s.index), job.path.c_str(),
-              static_cast<unsigned long long>(job.search.seed), job.loop.joints, job.space.free_count());
+  std::printf("start %llu of %s (seed %llu, %d joints, %d free parameters)\n", static_cast<unsigned long long>(s.index),
+              job.path.c_str(), static_cast<unsigned long long>(job.search.seed), job.loop.joints,
+              job.space.free_count());
   print_geometry("drawn geometry", s.initial_geometry);
   std::printf("  theta_deg             %s\n", degrees_text(s.initial_angles).c_str());
   std::printf("  E_mean                %s\n", readable(s.initial_E_mean).c_str());
@@ -100,8 +100,8 @@ int run_start_command(const StartArguments& args) {
   const long long index = parse_integer(args.index, "--index");
   if (index < 0 || index >= job.search.starts) {
     throw UsageError("--index", "got " + std::to_string(index) + "; the job has starts 0 to " +
-                                    std::to_string(job.search.starts - 1) + " ([search] starts = " +
-                                    std::to_string(job.search.starts) + ")");
+                                    std::to_string(job.search.starts - 1) +
+                                    " ([search] starts = " + std::to_string(job.search.starts) + ")");
   }
   const long long count = parse_integer(args.count, "--count");
   if (count < 1) throw UsageError("--count", "got " + std::to_string(count) + "; must be >= 1");
@@ -122,8 +122,8 @@ int run_start_command(const StartArguments& args) {
     std::fprintf(out, "%5s %6s %-23s %-23s %-12s %-12s %-10s %s\n", "iter", "evals", "objective", "E_mean", "|grad|",
                  "|step|", "damping", "accepted");
     options.trace = [out](const SearchTraceRow& row) {
-      std::fprintf(out, "%5d %6d %-23.17g %-23.17g %-12.4g %-12.4g %-10.3g %s\n", row.iteration, row.evaluations, row.value,
-                  row.E_mean, row.gradient_norm, row.step_norm, row.damping, row.accepted ? "yes" : "no");
+      std::fprintf(out, "%5d %6d %-23.17g %-23.17g %-12.4g %-12.4g %-10.3g %s\n", row.iteration, row.evaluations,
+                   row.value, row.E_mean, row.gradient_norm, row.step_norm, row.damping, row.accepted ? "yes" : "no");
     };
   }
   for (long long i = index; i < index + count; ++i) {
@@ -143,17 +143,20 @@ int run_start_command(const StartArguments& args) {
 Subcommand add_start_command(CLI::App& parent) {
   auto args = std::make_shared<StartArguments>();
   CLI::App* app = parent.add_subcommand(
-      "start", "Run one start of a job: draw its geometry, minimise the cycle energy, and verify, classify and "
-               "canonicalise the result if it reaches zero.");
-  app->footer("Example:\n  loopfarm start jobs/paper-table1.toml --index 3 --trace\n"
-              "Exit codes: 0 done (whatever the start found), 1 failure, 2 bad input (job file, index).\n");
+      "start",
+      "Run one start of a job: draw its geometry, minimise the cycle energy, and verify, classify and "
+      "canonicalise the result if it reaches zero.");
+  app->footer(
+      "Example:\n  loopfarm start jobs/paper-table1.toml --index 3 --trace\n"
+      "Exit codes: 0 done (whatever the start found), 1 failure, 2 bad input (job file, index).\n");
   app->add_option("JOB", args->job, "job file (TOML, see docs/guide/job-file.md)")->required()->type_name("JOB.toml");
-  app->add_option("--index", args->index, "start index, 0 <= I < [search] starts")->type_name("I")->capture_default_str();
+  app->add_option("--index", args->index, "start index, 0 <= I < [search] starts")
+      ->type_name("I")
+      ->capture_default_str();
   app->add_option("--count", args->count, "run starts I to I+N-1, one JSON line each (with --json)")
       ->type_name("N")
       ->capture_default_str();
-  app->add_option("--algorithm", args->algorithm, "override [optimizer] algorithm of the job")
-      ->type_name("NAME");
+  app->add_option("--algorithm", args->algorithm, "override [optimizer] algorithm of the job")->type_name("NAME");
   app->add_flag("--trace", args->trace, "print every iteration of the local minimisation");
   app->add_flag("--json", args->json, "print one JSON object instead of the story");
   return {app, [args] { return run_start_command(*args); }};

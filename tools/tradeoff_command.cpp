@@ -40,8 +40,8 @@ struct TradeoffArguments {
 long long bounded_integer(const std::string& text, const std::string& flag, long long lo, long long hi) {
   const long long value = parse_integer(text, flag);
   if (value < lo || value > hi) {
-    throw UsageError(flag, "got " + std::to_string(value) + "; must be in [" + std::to_string(lo) + ", " +
-                               std::to_string(hi) + "]");
+    throw UsageError(
+        flag, "got " + std::to_string(value) + "; must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   }
   return value;
 }
@@ -70,8 +70,8 @@ std::vector<double> checked_numbers(const std::string& text, const std::string& 
   const std::vector<double> values = parse_number_list(text, flag);
   std::set<double> seen;
   for (size_t i = 0; i < values.size(); ++i) {
-    const std::string element = "element " + std::to_string(i + 1) + " of " + quote_text(text) + " is " +
-                                format_double(values[i]);
+    const std::string element =
+        "element " + std::to_string(i + 1) + " of " + quote_text(text) + " is " + format_double(values[i]);
     if (!valid(values[i])) throw UsageError(flag, element + ": must be " + allowed);
     if (!seen.insert(values[i]).second) throw UsageError(flag, element + ": given twice");
   }
@@ -147,12 +147,11 @@ std::string csv_text(const std::vector<TradeoffRow>& rows) {
     out += r.axis + "," + r.value + "," + format_double(r.median_seconds) + "," + format_double(r.p90_seconds) + "," +
            format_double(r.search_seconds) + "," + format_double(r.total_seconds) + "," + std::to_string(r.starts) +
            "," + std::to_string(r.zeros) + "," + format_double(r.zero_fraction()) + "," + std::to_string(r.verified) +
-           "," + format_double(r.seconds_per_verified_zero()) + "," +
-           std::to_string(r.false_zeros) + "," + format_double(r.worst_family_residual) + "," +
-           std::to_string(r.movable_cases) + "," + std::to_string(r.missed_zeros) + "," +
-           std::to_string(r.rigid_cases) + "," + std::to_string(r.rigid_read_as_zero) + "," +
-           format_double(r.smallest_told_apart) + "," + format_double(r.error_rate()) + "," +
-           (r.pareto ? "1" : "0") + "\n";
+           "," + format_double(r.seconds_per_verified_zero()) + "," + std::to_string(r.false_zeros) + "," +
+           format_double(r.worst_family_residual) + "," + std::to_string(r.movable_cases) + "," +
+           std::to_string(r.missed_zeros) + "," + std::to_string(r.rigid_cases) + "," +
+           std::to_string(r.rigid_read_as_zero) + "," + format_double(r.smallest_told_apart) + "," +
+           format_double(r.error_rate()) + "," + (r.pareto ? "1" : "0") + "\n";
   }
   return out;
 }
@@ -160,8 +159,8 @@ std::string csv_text(const std::vector<TradeoffRow>& rows) {
 std::string name_of(const TradeoffRow& r) { return r.axis == "base" ? "base" : r.axis + "=" + r.value; }
 
 void print_table(const std::vector<TradeoffRow>& rows) {
-  std::printf("%-26s %10s %10s %9s %8s %6s %9s %8s %9s %10s %8s %s\n", "configuration", "median_ms", "p90_ms",
-              "zeros", "verified", "false", "fam_res", "missed", "rigid0", "told_apart", "error_%", "front");
+  std::printf("%-26s %10s %10s %9s %8s %6s %9s %8s %9s %10s %8s %s\n", "configuration", "median_ms", "p90_ms", "zeros",
+              "verified", "false", "fam_res", "missed", "rigid0", "told_apart", "error_%", "front");
   for (const TradeoffRow& r : rows) {
     const std::string zeros = std::to_string(r.zeros) + "/" + std::to_string(r.starts);
     const std::string missed = std::to_string(r.missed_zeros) + "/" + std::to_string(r.movable_cases);
@@ -181,7 +180,8 @@ void print_table(const std::vector<TradeoffRow>& rows) {
 // would pile them up on one line.
 constexpr double kErrorFloor = 0.01;  // [%]
 
-void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_name, const std::filesystem::path& png) {
+void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_name,
+                   const std::filesystem::path& png) {
   const std::filesystem::path gnuplot = require_gnuplot("--plot");
   ScratchFile data(".dat");
   ScratchFile front(".dat");
@@ -197,7 +197,8 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
   }
   std::sort(on_front.begin(), on_front.end(),
             [](const TradeoffRow* a, const TradeoffRow* b) { return a->median_seconds < b->median_seconds; });
-  for (const TradeoffRow* r : on_front) std::fprintf(front.stream(), "%.17g %.17g\n", 1e3 * r->median_seconds, drawn_error(*r));
+  for (const TradeoffRow* r : on_front)
+    std::fprintf(front.stream(), "%.17g %.17g\n", 1e3 * r->median_seconds, drawn_error(*r));
   data.close();
   front.close();
   const std::string d = data.path().string();
@@ -209,8 +210,8 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
     for (size_t i = 0; i < rows.size(); ++i) {
       const int point_type = rows[i].pareto ? 7 : static_cast<int>(4 + 2 * (i % 5));  // 4,6,8,10,12: open shapes
       elements += ", \\\n  " + gnuplot_string(d) + " every ::" + std::to_string(i) + "::" + std::to_string(i) +
-                  " using " + std::to_string(x_column) + ":2 with points pt " + std::to_string(point_type) +
-                  " ps " + (rows[i].pareto ? "2.0" : "1.5") + " lc " + std::to_string(i % 8 + 1) + " title " +
+                  " using " + std::to_string(x_column) + ":2 with points pt " + std::to_string(point_type) + " ps " +
+                  (rows[i].pareto ? "2.0" : "1.5") + " lc " + std::to_string(i % 8 + 1) + " title " +
                   gnuplot_string(name_of(rows[i]) + (rows[i].pareto ? " (front)" : "")) + " noenhanced";
     }
     return elements;
@@ -285,7 +286,8 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand(
       "tradeoff",
       "Measure a job under many configurations, one choice changed at a time (cycle samples, equilibrium tolerance, "
-      "compliance, objective, algorithm, its relative-decrease stop, reuse of the nearby cycle, zero threshold): seconds per start against accuracy on the job's starts and on the "
+      "compliance, objective, algorithm, its relative-decrease stop, reuse of the nearby cycle, zero threshold): "
+      "seconds per start against accuracy on the job's starts and on the "
       "ground-truth set. docs/quality/tradeoff.md explains the measures and the chart.");
   app->footer(
       "Examples:\n"
@@ -300,7 +302,9 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
   app->add_option("--per-family", args->per_family, "ground truth: movable loops per family")
       ->type_name("N")
       ->capture_default_str();
-  app->add_option("--generic", args->generic, "ground truth: generic rigid loops")->type_name("N")->capture_default_str();
+  app->add_option("--generic", args->generic, "ground truth: generic rigid loops")
+      ->type_name("N")
+      ->capture_default_str();
   app->add_option("--perturbations", args->perturbations, "ground truth: relative perturbation sizes, or none")
       ->type_name("LIST")
       ->capture_default_str();
@@ -313,7 +317,9 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
                   "equilibrium closure tolerances tried (stationarity 100x looser)")
       ->type_name("LIST")
       ->capture_default_str();
-  app->add_option("--compliances", args->compliances, "compliance sets tried")->type_name("LIST")->capture_default_str();
+  app->add_option("--compliances", args->compliances, "compliance sets tried")
+      ->type_name("LIST")
+      ->capture_default_str();
   app->add_option("--objectives", args->objectives, "search objectives tried (mean: E_mean, max: E_max)")
       ->type_name("LIST")
       ->capture_default_str();

@@ -58,8 +58,8 @@ int run_verify(const VerifyArguments& args) {
   // The cycle energy, only where it means something: driven along the
   // verified motion, from a pose on it (motion_window says where and over
   // what input range).
-  const std::optional<MotionWindow> window = motion_window(geometry, verification, options.verification.theta0,
-                                                           options.verification);
+  const std::optional<MotionWindow> window =
+      motion_window(geometry, verification, options.verification.theta0, options.verification);
   const LoopModel model(geometry);
   EquilibriumWorkspace workspace(model);
   CycleSummary cycle;
@@ -75,8 +75,8 @@ int run_verify(const VerifyArguments& args) {
     // the full (a, alpha, d) space.
     std::vector<bool> is_length(static_cast<size_t>(3 * n), true);
     for (int i = n; i < 2 * n; ++i) is_length[static_cast<size_t>(i)] = false;  // the twists
-    jacobian = dimensionless_columns(cycle_deformation_jacobian(model, workspace, cycle), is_length,
-                                     model.length_scale());
+    jacobian =
+        dimensionless_columns(cycle_deformation_jacobian(model, workspace, cycle), is_length, model.length_scale());
   }
   const JointVector classified_pose =
       window ? window->pose : (request.theta ? *request.theta : JointVector(JointVector::Zero(n)));
@@ -97,8 +97,9 @@ int run_verify(const VerifyArguments& args) {
       json += ",\"failed_samples\":" + std::to_string(cycle.failed_samples);
       json += ",\"theta_deg\":" + degrees_json(window->pose);
     } else {
-      json += ",\"theta0_deg\":null,\"cycle_range_deg\":null,\"status\":null,\"E_mean\":null,\"E_max\":null,"
-              "\"failed_samples\":null,\"theta_deg\":null";
+      json +=
+          ",\"theta0_deg\":null,\"cycle_range_deg\":null,\"status\":null,\"E_mean\":null,\"E_max\":null,"
+          "\"failed_samples\":null,\"theta_deg\":null";
     }
     json += candidate_json_fields(candidate, true);
     json += "}\n";
@@ -112,9 +113,9 @@ int run_verify(const VerifyArguments& args) {
   print_candidate(candidate);
   if (window) {
     std::printf("cycle energy along the motion (%d samples, %s from theta0 = %s deg)\n", static_cast<int>(samples),
-                window->range >= 2.0 * 3.14159265358979323846 ? "full turn"
-                                                               : ("window of " + readable(window->range * kDegreesPerRadian) +
-                                                                  " deg").c_str(),
+                window->range >= 2.0 * 3.14159265358979323846
+                    ? "full turn"
+                    : ("window of " + readable(window->range * kDegreesPerRadian) + " deg").c_str(),
                 readable(window->theta0 * kDegreesPerRadian).c_str());
     std::printf("  theta_deg             %s\n", degrees_text(window->pose).c_str());
     std::printf("  E_mean                %s   [E / (k_a L^2)]\n", readable(cycle.E_mean).c_str());
@@ -129,9 +130,10 @@ int run_verify(const VerifyArguments& args) {
 Subcommand add_verify_command(CLI::App& parent) {
   auto args = std::make_shared<VerifyArguments>();
   CLI::App* app = parent.add_subcommand(
-      "verify", "Verify a geometry: find every circuit of its rigid motion over the whole turn, classify it (Bennett, "
-                "planar, spherical, trivial, the 5R and 6R families), give its canonical key and, for a verified loop, "
-                "its cycle energy along the motion and the local dimension of its zero set.");
+      "verify",
+      "Verify a geometry: find every circuit of its rigid motion over the whole turn, classify it (Bennett, "
+      "planar, spherical, trivial, the 5R and 6R families), give its canonical key and, for a verified loop, "
+      "its cycle energy along the motion and the local dimension of its zero set.");
   app->footer(
       "Examples:\n"
       "  loopfarm verify --a 2,4,2,4 --alpha-deg 30,90,30,90 --theta-deg 120,90,-120,-90\n"

@@ -1,6 +1,5 @@
 #include "loopfarm/core/assembly.hpp"
 
-
 #include <array>
 #include <stdexcept>
 

@@ -19,7 +19,6 @@ namespace loopfarm {
 namespace detail {
 namespace {
 
-
 // Probes around a singular point: their distance [rad] and number.
 constexpr double kProbeDistance = 1e-3;
 constexpr int kProbes = 48;
@@ -150,8 +149,8 @@ struct Probe {
   JointVector point;
 };
 
-std::vector<Probe> probe_rays(const ClosureSystem& system, const JointVector& xb, const MotionOptions& o,
-                              int& nullity, bool& spread) {
+std::vector<Probe> probe_rays(const ClosureSystem& system, const JointVector& xb, const MotionOptions& o, int& nullity,
+                              bool& spread) {
   const int n = system.joints();
   SystemVector F;
   SystemMatrix A;
@@ -185,7 +184,8 @@ std::vector<Probe> probe_rays(const ClosureSystem& system, const JointVector& xb
     SystemMatrix Ay;
     system.evaluate(y, Fy, Ay);
     if (n - numerical_rank(decompose(Ay), o.rank_tolerance) >= 2) ++surface;
-    const bool known = std::any_of(rays.begin(), rays.end(), [&](const Probe& r) { return r.direction.dot(e) > 0.995; });
+    const bool known =
+        std::any_of(rays.begin(), rays.end(), [&](const Probe& r) { return r.direction.dot(e) > 0.995; });
     if (!known) rays.push_back({e, y});
   }
   spread = converged > 0 && 2 * surface > converged;
@@ -505,9 +505,9 @@ TracedCircuit trace(const LoopGeometry& g, JointVector x, const MotionOptions& o
     c.arclength.push_back(back_length + forward.arclength[i]);
   }
   c.length = c.arclength.back();
-  c.end = forward.end == CircuitEnd::closed ? CircuitEnd::closed
+  c.end = forward.end == CircuitEnd::closed                                               ? CircuitEnd::closed
           : (forward.end == CircuitEnd::too_long || backward.end == CircuitEnd::too_long) ? CircuitEnd::too_long
-                                                                                         : CircuitEnd::lost;
+                                                                                          : CircuitEnd::lost;
   append_events(backward.extremes, forward.extremes, back_length, c.extremes);
   append_events(backward.bifurcations, forward.bifurcations, back_length, c.bifurcations);
   for (const Walk* w : std::array<const Walk*, 2>{&backward, &forward}) {
@@ -523,9 +523,11 @@ TracedCircuit trace(const LoopGeometry& g, JointVector x, const MotionOptions& o
 Circuit trace_circuit(const LoopGeometry& geometry, const JointVector& pose, const MotionOptions& o) {
   o.validate();
   validate_geometry(geometry);
-  if (pose.size() != geometry.joints()) throw std::invalid_argument("trace_circuit: pose has the wrong number of angles");
+  if (pose.size() != geometry.joints())
+    throw std::invalid_argument("trace_circuit: pose has the wrong number of angles");
   if (!pose.allFinite()) throw std::invalid_argument("trace_circuit: a pose angle is not finite");
-  if (o.input_joint >= geometry.joints()) throw std::invalid_argument("trace_circuit: input_joint beyond the loop's joints");
+  if (o.input_joint >= geometry.joints())
+    throw std::invalid_argument("trace_circuit: input_joint beyond the loop's joints");
   const LoopGeometry g = scaled(geometry, length_scale(geometry));
   return detail::trace(g, pose, o).circuit;
 }

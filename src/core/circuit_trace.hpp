@@ -9,7 +9,6 @@
 
 namespace loopfarm::detail {
 
-
 // The circuit through the closed pose x (polished), with the seeds of other
 // branches met at bifurcations. `g` is scaled to L = 1.
 struct TracedCircuit {

@@ -14,7 +14,6 @@
 namespace loopfarm::detail {
 namespace {
 
-
 // A corrector stops when its step is below this [rad] (round-off reached).
 constexpr double kConvergedStep = 1e-13;
 constexpr int kMaxCorrectorIterations = 12;
@@ -98,8 +97,8 @@ int numerical_rank(const Svd& svd, double tolerance) {
   return r;
 }
 
-Correction correct(const ClosureSystem& system, JointVector& x, int max_rank, double max_move,
-                   const MotionOptions& o, const JointVector* tangent) {
+Correction correct(const ClosureSystem& system, JointVector& x, int max_rank, double max_move, const MotionOptions& o,
+                   const JointVector* tangent) {
   using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxJoints>;
   const JointVector start = x;
   SystemVector F;

@@ -14,7 +14,6 @@
 
 namespace loopfarm::detail {
 
-
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoPi = 2.0 * kPi;
 constexpr int kMaxRows = 6 + kMaxJoints;
@@ -82,8 +81,8 @@ struct Correction {
 // straight back onto the curve from a predicted point. Fails if x moves more
 // than `max_move` from where it started or the residual stops falling above
 // the tolerance.
-Correction correct(const ClosureSystem& system, JointVector& x, int max_rank, double max_move,
-                   const MotionOptions& o, const JointVector* tangent = nullptr);
+Correction correct(const ClosureSystem& system, JointVector& x, int max_rank, double max_move, const MotionOptions& o,
+                   const JointVector* tangent = nullptr);
 
 bool same_pose(const JointVector& a, const JointVector& b, double tolerance);
 

@@ -157,8 +157,8 @@ class Stepper {
   //
   // `stepping_stone`: `target` is a bisection's midpoint, not a sample: its
   // solve may end at CycleOptions::stepping_tolerance.
-  Result step(const PathPoint& from, const PathPoint* before, double target, int depth,
-              bool beyond_failure = false, bool stepping_stone = false) const {
+  Result step(const PathPoint& from, const PathPoint* before, double target, int depth, bool beyond_failure = false,
+              bool stepping_stone = false) const {
     Result r;
     if (before != nullptr && before->theta == from.theta) before = nullptr;
     const double h = target - from.theta;
@@ -303,7 +303,8 @@ class Stepper {
 
   const LoopModel& model_;
   EquilibriumWorkspace& ws_;
-  const CycleOptions& options_;};
+  const CycleOptions& options_;
+};
 
 // The summary's energies and counts from its samples.
 void summarize_samples(CycleSummary& summary) {
@@ -347,10 +348,14 @@ void CycleOptions::validate() const {
 
 const char* to_string(SampleStatus status) {
   switch (status) {
-    case SampleStatus::converged: return "converged";
-    case SampleStatus::refined: return "refined";
-    case SampleStatus::branch_jump: return "branch_jump";
-    case SampleStatus::failed: return "failed";
+    case SampleStatus::converged:
+      return "converged";
+    case SampleStatus::refined:
+      return "refined";
+    case SampleStatus::branch_jump:
+      return "branch_jump";
+    case SampleStatus::failed:
+      return "failed";
   }
   return "unknown";
 }
@@ -448,8 +453,7 @@ bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& ws, 
   summary.refinements = 0;
   for (int j = 0; j < N; ++j) {
     const CycleSample& from = nearby.samples[static_cast<size_t>(j)];
-    if (from.state.theta.size() != model.joints() ||
-        from.state.deformations.size() != model.deformation_count()) {
+    if (from.state.theta.size() != model.joints() || from.state.deformations.size() != model.deformation_count()) {
       return false;  // another model's cycle
     }
     const EquilibriumSummary solve =

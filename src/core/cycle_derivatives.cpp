@@ -61,9 +61,12 @@ class Normalization {
 int parameter_element(int n, int j) {
   const int joint = j % n;
   switch (j / n) {
-    case 0: return chain_index(joint, ChainParameter::a);
-    case 1: return chain_index(joint, ChainParameter::alpha);
-    default: return chain_index(joint, ChainParameter::d);
+    case 0:
+      return chain_index(joint, ChainParameter::a);
+    case 1:
+      return chain_index(joint, ChainParameter::alpha);
+    default:
+      return chain_index(joint, ChainParameter::d);
   }
 }
 
@@ -270,8 +273,8 @@ GeometryVector cycle_energy_gradient(const LoopModel& model, EquilibriumWorkspac
                                      int sample) {
   const int n = model.joints();
   const int N = static_cast<int>(summary.samples.size());
-  if (sample >= N) throw std::invalid_argument("cycle_energy_gradient: sample " + std::to_string(sample) + " of " +
-                                               std::to_string(N));
+  if (sample >= N)
+    throw std::invalid_argument("cycle_energy_gradient: sample " + std::to_string(sample) + " of " + std::to_string(N));
   GeometryVector gradient = GeometryVector::Zero(3 * n);
   // The mean weighs every sample by 1/N; one sample's own energy, by 1.
   const double weight = sample < 0 ? 1.0 / N : 1.0;
@@ -295,7 +298,8 @@ void cycle_weighted_deformations(const LoopModel& model, const CycleSummary& sum
   r.resize(N * m);
   for (int j = 0; j < N; ++j) {
     for (int k = 0; k < m; ++k) {
-      r[j * m + k] = std::sqrt(model.deformation_stiffness(k) / N) * summary.samples[static_cast<size_t>(j)].state.deformations[k];
+      r[j * m + k] =
+          std::sqrt(model.deformation_stiffness(k) / N) * summary.samples[static_cast<size_t>(j)].state.deformations[k];
     }
   }
 }
@@ -318,17 +322,23 @@ void cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& ws
   static_assert(kMinJoints == 4 && kMaxJoints == 8 && kMaxUnknowns == 4 * kMaxJoints - 1);
   const bool full = model.options().compliance == Compliance::full;
   switch (n) {
-    case 4: return full ? differentiate_cycle<4, 15>(model, ws, summary, jacobian, angle_jacobian)
-                        : differentiate_cycle<4, 11>(model, ws, summary, jacobian, angle_jacobian);
-    case 5: return full ? differentiate_cycle<5, 19>(model, ws, summary, jacobian, angle_jacobian)
-                        : differentiate_cycle<5, 14>(model, ws, summary, jacobian, angle_jacobian);
-    case 6: return full ? differentiate_cycle<6, 23>(model, ws, summary, jacobian, angle_jacobian)
-                        : differentiate_cycle<6, 17>(model, ws, summary, jacobian, angle_jacobian);
-    case 7: return full ? differentiate_cycle<7, 27>(model, ws, summary, jacobian, angle_jacobian)
-                        : differentiate_cycle<7, 20>(model, ws, summary, jacobian, angle_jacobian);
-    case 8: return full ? differentiate_cycle<8, 31>(model, ws, summary, jacobian, angle_jacobian)
-                        : differentiate_cycle<8, 23>(model, ws, summary, jacobian, angle_jacobian);
-    default: throw std::logic_error("cycle_deformation_jacobian: a model of " + std::to_string(n) + " joints");
+    case 4:
+      return full ? differentiate_cycle<4, 15>(model, ws, summary, jacobian, angle_jacobian)
+                  : differentiate_cycle<4, 11>(model, ws, summary, jacobian, angle_jacobian);
+    case 5:
+      return full ? differentiate_cycle<5, 19>(model, ws, summary, jacobian, angle_jacobian)
+                  : differentiate_cycle<5, 14>(model, ws, summary, jacobian, angle_jacobian);
+    case 6:
+      return full ? differentiate_cycle<6, 23>(model, ws, summary, jacobian, angle_jacobian)
+                  : differentiate_cycle<6, 17>(model, ws, summary, jacobian, angle_jacobian);
+    case 7:
+      return full ? differentiate_cycle<7, 27>(model, ws, summary, jacobian, angle_jacobian)
+                  : differentiate_cycle<7, 20>(model, ws, summary, jacobian, angle_jacobian);
+    case 8:
+      return full ? differentiate_cycle<8, 31>(model, ws, summary, jacobian, angle_jacobian)
+                  : differentiate_cycle<8, 23>(model, ws, summary, jacobian, angle_jacobian);
+    default:
+      throw std::logic_error("cycle_deformation_jacobian: a model of " + std::to_string(n) + " joints");
   }
 }
 

@@ -16,13 +16,13 @@ namespace {
 // Tuning of the Newton iteration. None of these changes the answer (every
 // fixed point is an exact KKT point); they only decide how fast and how
 // robustly it is reached.
-constexpr double kInitialAugmentation = 1.0;   // sigma: weight of A^T A added to the Hessian
+constexpr double kInitialAugmentation = 1.0;  // sigma: weight of A^T A added to the Hessian
 constexpr double kMaxAugmentation = 1e4;
 constexpr double kMinRegularization = 1e-10;
-constexpr double kMaxRegularization = 1e10;    // rho: primal (Levenberg) regularisation cap
+constexpr double kMaxRegularization = 1e10;       // rho: primal (Levenberg) regularisation cap
 constexpr double kMinDualRegularization = 1e-14;  // mu: stabilisation of the dual block
 constexpr double kMaxDualRegularization = 1e-6;
-constexpr double kMaxStep = 1.0;               // cap on |dx|_inf [rad, or units of L]
+constexpr double kMaxStep = 1.0;  // cap on |dx|_inf [rad, or units of L]
 constexpr double kArmijo = 1e-4;
 constexpr int kMaxBacktracks = 40;
 // Multipliers (max-norm) below which the constraint curvature they weight is
@@ -49,8 +49,7 @@ double max_abs(const Vector6& v) { return v.cwiseAbs().maxCoeff(); }
 
 // Loads the residual, the energy and (optionally) the closure Jacobian of
 // `state` into the workspace. Returns the energy.
-double evaluate(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& state,
-                bool with_jacobian) {
+double evaluate(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& state, bool with_jacobian) {
   deformed_geometry(model, state.deformations, ws.deformed);
   compute_chain(ws.deformed, state.theta, ws.chain);
   double energy = 0.0;
@@ -71,8 +70,8 @@ void lagrangian_gradient(const LoopModel& model, EquilibriumWorkspace& ws, const
 }
 
 // Moves `from` by `scale * step` (unknowns) and `scale * dual` (multipliers) into `to`.
-void take_step(const LoopModel& model, const EquilibriumState& from, const UnknownVector& step,
-               const Vector6& dual, double scale, EquilibriumState& to) {
+void take_step(const LoopModel& model, const EquilibriumState& from, const UnknownVector& step, const Vector6& dual,
+               double scale, EquilibriumState& to) {
   to.theta = from.theta;
   to.deformations = from.deformations;
   for (int u = 0; u < model.unknown_count(); ++u) {
@@ -94,8 +93,10 @@ bool finite(const EquilibriumState& s) {
 
 const char* to_string(Compliance compliance) {
   switch (compliance) {
-    case Compliance::paper: return "paper";
-    case Compliance::full: return "full";
+    case Compliance::paper:
+      return "paper";
+    case Compliance::full:
+      return "full";
   }
   return "unknown";
 }
@@ -108,11 +109,16 @@ Compliance compliance_from_string(const std::string& text) {
 
 const char* to_string(SolveStatus status) {
   switch (status) {
-    case SolveStatus::converged: return "converged";
-    case SolveStatus::max_iterations: return "max_iterations";
-    case SolveStatus::line_search_failed: return "line_search_failed";
-    case SolveStatus::singular: return "singular";
-    case SolveStatus::non_finite: return "non_finite";
+    case SolveStatus::converged:
+      return "converged";
+    case SolveStatus::max_iterations:
+      return "max_iterations";
+    case SolveStatus::line_search_failed:
+      return "line_search_failed";
+    case SolveStatus::singular:
+      return "singular";
+    case SolveStatus::non_finite:
+      return "non_finite";
   }
   return "unknown";
 }
@@ -237,10 +243,14 @@ std::string deformation_name(const LoopModel& model, int k) {
   const int e = model.deformation_element(k);
   const std::string joint = std::to_string(e / kElementsPerJoint + 1);
   switch (static_cast<ChainParameter>(e % kElementsPerJoint)) {
-    case ChainParameter::a: return "a" + joint;
-    case ChainParameter::alpha: return "alpha" + joint;
-    case ChainParameter::d: return "d" + joint;
-    case ChainParameter::theta: break;
+    case ChainParameter::a:
+      return "a" + joint;
+    case ChainParameter::alpha:
+      return "alpha" + joint;
+    case ChainParameter::d:
+      return "d" + joint;
+    case ChainParameter::theta:
+      break;
   }
   return "theta" + joint;
 }
@@ -359,9 +369,8 @@ bool tangent_from_unknowns(const LoopModel& model, const EquilibriumState& x, co
 // step's factorisation (H = W + sigma AᵀA = L Lᵀ, `gram` holding its solved
 // columns), the same elimination as the step: W is that of the previous
 // iterate, which is all a predictor needs.
-bool path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& x,
-                  const SolvedGram& gram, const SchurFactor& schur_factor, double sigma,
-                  EquilibriumState& t) {
+bool path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, const EquilibriumState& x, const SolvedGram& gram,
+                  const SchurFactor& schur_factor, double sigma, EquilibriumState& t) {
   const int m = model.unknown_count();
   const int input = model.options().input_joint;
   const Vector6 c_t = residual_derivative(ws.chain, chain_index(input, ChainParameter::theta));
@@ -518,8 +527,8 @@ bool structured_path_tangent(const LoopModel& model, EquilibriumWorkspace& ws, c
 // e of the solution whose factorisation is d away, the error falls to about
 // d e instead of e^2: one such step after a full one takes a continuation
 // solve from 1e-10 to round-off, at the cost of three triangular solves.
-void simplified_step(const LoopModel& model, EquilibriumWorkspace& ws, const SchurFactor& schur_factor,
-                     double sigma, const Vector6& c, Vector6& dual, double& step_curvature) {
+void simplified_step(const LoopModel& model, EquilibriumWorkspace& ws, const SchurFactor& schur_factor, double sigma,
+                     const Vector6& c, Vector6& dual, double& step_curvature) {
   const int m = model.unknown_count();
   ws.scratch = ws.gradient;
   solve_lower_vector(ws.hessian, m, ws.scratch);  // z = L^-1 g
@@ -557,13 +566,13 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
   // Gram matrix of the solved columns [L^-1 Aᵀ | L^-1 g | L^-1 b] (below);
   // kept with the factorisation for the path tangent.
   SolvedGram gram;
-  bool last_step_exact = false;  // the last factorisation holds the exact Hessian
+  bool last_step_exact = false;         // the last factorisation holds the exact Hessian
   bool last_step_gauss_newton = false;  // the last step fell back to the Gauss-Newton model
   bool last_step_structured = false;    // the last step was the structured one (factors below)
   StructuredFactors structured_factors;
   bool reusable_factorization = false;  // a simplified step may reuse the last factorisation
   bool last_step_simplified = false;
-  double last_kkt_residual = 0.0;       // at the start of the last iteration
+  double last_kkt_residual = 0.0;  // at the start of the last iteration
 
   for (;;) {
     const Vector6 c = ws.chain.residual;
@@ -577,7 +586,8 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
     }
     const bool at_tolerance =
         summary.closure_residual <= opt.closure_tolerance && summary.stationarity <= opt.stationarity_tolerance;
-    const bool at_stepping_tolerance = summary.iterations > 0 && summary.closure_residual <= limits.stepping_tolerance &&
+    const bool at_stepping_tolerance = summary.iterations > 0 &&
+                                       summary.closure_residual <= limits.stepping_tolerance &&
                                        summary.stationarity <= limits.stepping_tolerance;
     if (at_tolerance || at_stepping_tolerance) {
       summary.status = SolveStatus::converged;
@@ -785,8 +795,7 @@ EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspac
       // The slack admits steps whose change of merit is lost in round-off, as
       // the last steps of a solve with nonzero energy are: the energy and
       // lambᵀc (c is O(1) in normalised units) are only known to that level.
-      const double slack =
-          10.0 * std::numeric_limits<double>::epsilon() * (std::abs(merit0) + lambda_plus.lpNorm<1>());
+      const double slack = 10.0 * std::numeric_limits<double>::epsilon() * (std::abs(merit0) + lambda_plus.lpNorm<1>());
       if (std::isfinite(merit) && merit <= merit0 + kArmijo * alpha * std::min(slope, 0.0) + slack) {
         accepted = true;
         energy = trial_energy;

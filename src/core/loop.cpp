@@ -52,10 +52,11 @@ LoopGeometry LoopGeometry::from_degrees(std::span<const double> a, std::span<con
 void validate_geometry(const LoopGeometry& g) {
   const int n = g.joints();
   if (n < kMinJoints || n > kMaxJoints) {
-    fail("a: a loop needs " + std::to_string(kMinJoints) + " to " + std::to_string(kMaxJoints) +
-         " joints, got " + std::to_string(n));
+    fail("a: a loop needs " + std::to_string(kMinJoints) + " to " + std::to_string(kMaxJoints) + " joints, got " +
+         std::to_string(n));
   }
-  if (g.alpha.size() != n) fail("alpha: expected " + std::to_string(n) + " values, got " + std::to_string(g.alpha.size()));
+  if (g.alpha.size() != n)
+    fail("alpha: expected " + std::to_string(n) + " values, got " + std::to_string(g.alpha.size()));
   if (g.d.size() != n) fail("d: expected " + std::to_string(n) + " values, got " + std::to_string(g.d.size()));
   for (int i = 0; i < n; ++i) {
     const std::string k = std::to_string(i + 1);

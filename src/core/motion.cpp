@@ -19,7 +19,6 @@ using namespace detail;
 
 namespace {
 
-
 // Circuits traced by analyse_motion at most (bifurcation branches included).
 constexpr int kMaxCircuits = 64;
 
@@ -63,10 +62,14 @@ bool repeats(const Circuit& c, const std::vector<Circuit>& known) {
 
 const char* to_string(CircuitEnd end) {
   switch (end) {
-    case CircuitEnd::closed: return "closed";
-    case CircuitEnd::lost: return "lost";
-    case CircuitEnd::too_long: return "too_long";
-    case CircuitEnd::rigid: return "rigid";
+    case CircuitEnd::closed:
+      return "closed";
+    case CircuitEnd::lost:
+      return "lost";
+    case CircuitEnd::too_long:
+      return "too_long";
+    case CircuitEnd::rigid:
+      return "rigid";
   }
   return "lost";
 }
@@ -94,7 +97,8 @@ bool Circuit::moves(int input_joint, double min_travel, double residual_toleranc
 std::vector<JointVector> find_assemblies(const LoopGeometry& geometry, double input_angle, const MotionOptions& o) {
   o.validate();
   validate_geometry(geometry);
-  if (o.input_joint >= geometry.joints()) throw std::invalid_argument("find_assemblies: input_joint beyond the loop's joints");
+  if (o.input_joint >= geometry.joints())
+    throw std::invalid_argument("find_assemblies: input_joint beyond the loop's joints");
   if (!std::isfinite(input_angle)) throw std::invalid_argument("find_assemblies: the input angle is not finite");
   const LoopGeometry g = scaled(geometry, length_scale(geometry));
   const int n = g.joints();
@@ -141,7 +145,8 @@ MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* p
     }
     // One motion of a loop with several freedoms is traced (motion.hpp):
     // a later seed with as many is not, whatever surface it lies on.
-    if (!given && std::any_of(out.circuits.begin(), out.circuits.end(), [](const Circuit& c) { return c.freedoms > 1; })) {
+    if (!given &&
+        std::any_of(out.circuits.begin(), out.circuits.end(), [](const Circuit& c) { return c.freedoms > 1; })) {
       const ClosureSystem free_system(g, {}, seed.x);
       SystemVector F;
       SystemMatrix A;

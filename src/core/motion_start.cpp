@@ -17,7 +17,6 @@ namespace loopfarm {
 
 using namespace detail;
 
-
 bool pose_at_input(const LoopGeometry& geometry, const Circuit& circuit, double angle, JointVector& pose,
                    const MotionOptions& o) {
   o.validate();

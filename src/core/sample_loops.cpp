@@ -17,9 +17,7 @@ struct SplitMix64 {
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
     return z ^ (z >> 31);
   }
-  double uniform(double lo, double hi) {
-    return lo + (hi - lo) * static_cast<double>(next() >> 11) * 0x1p-53;
-  }
+  double uniform(double lo, double hi) { return lo + (hi - lo) * static_cast<double>(next() >> 11) * 0x1p-53; }
 };
 
 }  // namespace
@@ -45,9 +43,7 @@ LoopGeometry bennett_loop_line_symmetric(double a1, double alpha1, double alpha2
   return four_bar(a1, a2, a1, a2, alpha1, -alpha2, alpha1, -alpha2);
 }
 
-LoopGeometry paper_bennett_loop() {
-  return four_bar(2.0, 4.0, 2.0, 4.0, kPi / 6.0, kPi / 2.0, kPi / 6.0, kPi / 2.0);
-}
+LoopGeometry paper_bennett_loop() { return four_bar(2.0, 4.0, 2.0, 4.0, kPi / 6.0, kPi / 2.0, kPi / 6.0, kPi / 2.0); }
 
 JointVector bennett_angles(const LoopGeometry& g, double theta1) {
   const double ratio = std::sin(0.5 * (g.alpha[1] + g.alpha[0])) / std::sin(0.5 * (g.alpha[1] - g.alpha[0]));

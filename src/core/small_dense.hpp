@@ -36,8 +36,8 @@ template <class Kernel, int... Sizes>
 decltype(auto) with_size(int n, long stride, std::integer_sequence<int, Sizes...>, Kernel&& kernel) {
   using Result = decltype(kernel(std::integral_constant<int, 0>{}));
   if constexpr (std::is_void_v<Result>) {
-    const bool done = ((n == Sizes && stride == Sizes ? (kernel(std::integral_constant<int, Sizes>{}), true) : false) ||
-                       ...);
+    const bool done =
+        ((n == Sizes && stride == Sizes ? (kernel(std::integral_constant<int, Sizes>{}), true) : false) || ...);
     if (!done) kernel(std::integral_constant<int, 0>{});
   } else {
     Result result{};

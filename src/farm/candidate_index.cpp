@@ -24,7 +24,6 @@ double canonical_distance(const CanonicalEntry& x, const CanonicalEntry& y, doub
   return distance;
 }
 
-
 std::vector<std::vector<long>> cell_options(const CanonicalEntry& c, double tolerance) {
   const int n = c.joints;
   constexpr double kTwoPi = 2.0 * 3.14159265358979323846;

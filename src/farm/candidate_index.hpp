@@ -26,7 +26,6 @@ struct CanonicalEntry {
   std::int64_t first_start = 0;
 };
 
-
 // The largest difference between two canonical geometries of n joints
 // (twists wrapped), stopping early once it exceeds `tolerance`.
 double canonical_distance(const CanonicalEntry& x, const CanonicalEntry& y, double tolerance);

@@ -173,9 +173,9 @@ FarmSummary run_farm(const Job& job, MPI_Comm comm, StopFlag& stop, const FarmOp
   try {
     MpiTransport transport(comm, ranks);
     Progress progress(options.progress);
-    const CoordinatorSummary c =
-        coordinate(*db, *plan, transport, [&job](std::uint64_t index) { return run_start_record(job, index); },
-                   options.chunk, stop, progress);
+    const CoordinatorSummary c = coordinate(
+        *db, *plan, transport, [&job](std::uint64_t index) { return run_start_record(job, index); }, options.chunk,
+        stop, progress);
     summary.run_id = plan->run_id;
     summary.total = c.total;
     summary.done = c.done;

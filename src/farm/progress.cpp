@@ -42,8 +42,9 @@ std::string Progress::line(const ProgressCounts& c, double elapsed_s) {
   const double eta = rate > 0 ? static_cast<double>(left) / rate : NAN;
   const double percent = c.total > 0 ? 100.0 * static_cast<double>(c.done) / static_cast<double>(c.total) : 100.0;
   char buffer[256];
-  std::snprintf(buffer, sizeof buffer, "%ld/%ld starts (%.1f%%), %.3g starts/s, %ld zero minima, %ld candidates, ETA %s",
-                c.done, c.total, percent, rate, c.zeros, c.candidates, left <= 0 ? "0s" : duration_text(eta).c_str());
+  std::snprintf(buffer, sizeof buffer,
+                "%ld/%ld starts (%.1f%%), %.3g starts/s, %ld zero minima, %ld candidates, ETA %s", c.done, c.total,
+                percent, rate, c.zeros, c.candidates, left <= 0 ? "0s" : duration_text(eta).c_str());
   return buffer;
 }
 

@@ -127,9 +127,9 @@ class Reader {
 
 // The smallest encoding of one record: every field present, every string and
 // list empty. Bounds the record count a buffer can hold.
-constexpr size_t kMinRecordBytes = 8 + 4 + 3 * 8 + 4 + 8 + 2 + 4 * 4  // index .. final_angles
-                                   + 3 * 4 + 6 * 8 + 1 + 2 * 8 + 2 * 4   // family .. free_parameters
-                                   + 4 + 4 + 3 * 4;                      // singular values .. canonical_geometry
+constexpr size_t kMinRecordBytes = 8 + 4 + 3 * 8 + 4 + 8 + 2 + 4 * 4    // index .. final_angles
+                                   + 3 * 4 + 6 * 8 + 1 + 2 * 8 + 2 * 4  // family .. free_parameters
+                                   + 4 + 4 + 3 * 4;                     // singular values .. canonical_geometry
 
 }  // namespace
 
@@ -162,10 +162,18 @@ StartRecord make_start_record(const StartSummary& summary) {
   // put a residual in the wrong column.
   for (const FamilyCheck& check : k.checks) {
     switch (check.family) {
-      case Family::bennett: c.bennett_residual = check.residual; break;
-      case Family::planar: c.planar_residual = check.residual; break;
-      case Family::spherical: c.spherical_residual = check.residual; break;
-      case Family::trivial: c.trivial_residual = check.residual; break;
+      case Family::bennett:
+        c.bennett_residual = check.residual;
+        break;
+      case Family::planar:
+        c.planar_residual = check.residual;
+        break;
+      case Family::spherical:
+        c.spherical_residual = check.residual;
+        break;
+      case Family::trivial:
+        c.trivial_residual = check.residual;
+        break;
       // The 5R and 6R families have no column of their own (yet): their
       // residual is family_residual when the loop is classified as one.
       case Family::goldberg:
@@ -177,7 +185,8 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::bennett_pair:
       case Family::bennett_dyads:
       case Family::degenerate:
-      case Family::unclassified: break;
+      case Family::unclassified:
+        break;
     }
   }
   const VerificationSummary& v = analysis.verification;

@@ -60,10 +60,14 @@ void check_geometry(const std::string& path, const LoopGeometry& g, const char* 
 
 const char* to_string(RunStatus status) {
   switch (status) {
-    case RunStatus::running: return "running";
-    case RunStatus::stopped: return "stopped";
-    case RunStatus::complete: return "complete";
-    case RunStatus::failed: return "failed";
+    case RunStatus::running:
+      return "running";
+    case RunStatus::stopped:
+      return "stopped";
+    case RunStatus::complete:
+      return "complete";
+    case RunStatus::failed:
+      return "failed";
   }
   return "failed";
 }
@@ -96,15 +100,13 @@ std::uint64_t RunInfo::committed_prefix() const {
   return !committed.empty() && committed.front().first == 0 ? committed.front().last : 0;
 }
 
-
 // The stored candidate of the same linkage as `incoming`: the one with its
 // canonical key, else the nearest whose values are all within `tolerance`
 // (largest difference smallest, then lowest id). Looked up through the
 // indexes on (joints, canonical_key) and (joints, grid_cell), so that rank
 // 0's memory does not grow with the number of candidates and a lookup costs
 // the same whatever their number.
-std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const CanonicalEntry& incoming,
-                                                                     double tolerance) {
+std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const CanonicalEntry& incoming, double tolerance) {
   const int n = incoming.joints;
   auto read = [n](Statement& s) {
     CanonicalEntry c;
@@ -122,8 +124,9 @@ std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const Canoni
   };
   static const std::string columns =
       "SELECT candidate_id, canonical_key, first_run, first_start, " + geometry_columns("", "") + " FROM candidates ";
-  Statement& by_key = prepared(select_by_key, columns + "WHERE joints = ?1 AND canonical_key = ?2 "
-                                                        "ORDER BY candidate_id LIMIT 1");
+  Statement& by_key = prepared(select_by_key, columns +
+                                                  "WHERE joints = ?1 AND canonical_key = ?2 "
+                                                  "ORDER BY candidate_id LIMIT 1");
   by_key.bind(1, n);
   by_key.bind(2, incoming.key);
   if (by_key.step("cannot read the candidates")) return read(by_key);
@@ -353,9 +356,9 @@ RunInfo ResultsDatabase::open_run(const RunIdentity& identity, bool new_run) {
     if (held_hash != hash || held_seed != seed) {
       const std::string what = held_hash != hash ? (held_seed != seed ? "job text and seed" : "job text") : "seed";
       fail(m.path, "holds run " + std::to_string(run_id) + " of job " + path + " (job_hash " + held_hash + ", seed " +
-                       std::to_string(static_cast<std::uint64_t>(held_seed)) + "), and this job " +
-                       identity.job_path + " (job_hash " + hash + ", seed " + std::to_string(identity.seed) +
-                       ") differs in its " + what + ": pass --new-run to add a new run to this database");
+                       std::to_string(static_cast<std::uint64_t>(held_seed)) + "), and this job " + identity.job_path +
+                       " (job_hash " + hash + ", seed " + std::to_string(identity.seed) + ") differs in its " + what +
+                       ": pass --new-run to add a new run to this database");
     }
     if (latest.integer(4) != identity.joints || latest.real(5) != identity.zero_threshold ||
         latest.real(6) != identity.report_threshold) {
@@ -365,9 +368,9 @@ RunInfo ResultsDatabase::open_run(const RunIdentity& identity, bool new_run) {
     }
     latest.reset();
     Statement update;
-    update.prepare(m.path, db,
-                   std::string("UPDATE runs SET starts = ?1, job_path = ?2, updated_at = ") + kNow +
-                       " WHERE run_id = ?3");
+    update.prepare(
+        m.path, db,
+        std::string("UPDATE runs SET starts = ?1, job_path = ?2, updated_at = ") + kNow + " WHERE run_id = ?3");
     update.bind(1, static_cast<std::int64_t>(identity.starts));
     update.bind(2, identity.job_path);
     update.bind(3, run_id);
@@ -577,9 +580,9 @@ CommitSummary ResultsDatabase::commit(std::int64_t run_id, const std::vector<Sta
   }
 
   Statement progress;
-  progress.prepare(m.path, db,
-                   std::string("UPDATE runs SET starts_done = starts_done + ?1, updated_at = ") + kNow +
-                       " WHERE run_id = ?2");
+  progress.prepare(
+      m.path, db,
+      std::string("UPDATE runs SET starts_done = starts_done + ?1, updated_at = ") + kNow + " WHERE run_id = ?2");
   progress.bind(1, summary.starts);
   progress.bind(2, run_id);
   progress.run("cannot update the run");

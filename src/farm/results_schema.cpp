@@ -24,8 +24,7 @@ std::string hex32(std::int64_t value) {
 
 // a1..a8, alpha1_deg..alpha8_deg, d1..d8, each with `prefix` and `suffix`;
 // the three lists separated by `list_separator`.
-std::string geometry_columns(const std::string& prefix, const std::string& suffix,
-                             const std::string& list_separator) {
+std::string geometry_columns(const std::string& prefix, const std::string& suffix, const std::string& list_separator) {
   std::string out;
   for (const char* name : {"a", "alpha", "d"}) {
     for (int i = 1; i <= kMaxJoints; ++i) {
@@ -45,10 +44,10 @@ std::vector<std::string> candidate_columns() {
       out.push_back(name + std::to_string(i) + (std::string(name) == "alpha" ? "_deg" : ""));
     }
   }
-  for (const char* name : {"family_residual", "bennett_residual", "planar_residual", "spherical_residual",
-                           "trivial_residual", "rigid_residual", "full_turn", "range_lo_deg", "range_hi_deg",
-                           "local_dimension", "free_parameters", "singular_values", "E_mean", "E_max", "first_run",
-                           "first_start", "grid_cell"}) {
+  for (const char* name :
+       {"family_residual", "bennett_residual", "planar_residual", "spherical_residual", "trivial_residual",
+        "rigid_residual", "full_turn", "range_lo_deg", "range_hi_deg", "local_dimension", "free_parameters",
+        "singular_values", "E_mean", "E_max", "first_run", "first_start", "grid_cell"}) {
     out.push_back(name);
   }
   return out;
@@ -57,114 +56,119 @@ std::vector<std::string> candidate_columns() {
 std::string schema_sql() {
   const std::string geometry = geometry_columns("", " REAL", ",\n  ");
   const std::string start_geometry = geometry_columns("s.", "", ",\n         ");
-  return
-      "CREATE TABLE runs (\n"
-      "  run_id INTEGER PRIMARY KEY,\n"
-      "  job_path TEXT NOT NULL,\n"
-      "  job_text TEXT NOT NULL,\n"
-      "  job_hash TEXT NOT NULL,\n"
-      "  seed INTEGER NOT NULL,\n"
-      "  starts INTEGER NOT NULL,\n"
-      "  joints INTEGER NOT NULL,\n"
-      "  zero_threshold REAL NOT NULL,\n"
-      "  report_threshold REAL NOT NULL,\n"
-      "  loopfarm_version TEXT NOT NULL,\n"
-      "  ranks INTEGER,\n"
-      "  started_at TEXT NOT NULL,\n"
-      "  updated_at TEXT NOT NULL,\n"
-      "  ended_at TEXT,\n"
-      "  status TEXT NOT NULL CHECK (status IN ('running', 'stopped', 'complete', 'failed')),\n"
-      "  starts_done INTEGER NOT NULL DEFAULT 0\n"
-      ");\n"
-      "CREATE TABLE sessions (\n"
-      "  session_id INTEGER PRIMARY KEY,\n"
-      "  run_id INTEGER NOT NULL REFERENCES runs(run_id),\n"
-      "  ranks INTEGER NOT NULL,\n"
-      "  loopfarm_version TEXT NOT NULL,\n"
-      "  started_at TEXT NOT NULL,\n"
-      "  ended_at TEXT,\n"
-      "  status TEXT NOT NULL CHECK (status IN ('running', 'stopped', 'complete', 'failed')),\n"
-      "  starts_done INTEGER NOT NULL DEFAULT 0\n"
-      ");\n"
-      "CREATE INDEX sessions_by_run ON sessions(run_id);\n"
-      "CREATE TABLE candidates (\n"
-      "  candidate_id INTEGER PRIMARY KEY,\n"
-      "  joints INTEGER NOT NULL,\n"
-      "  family TEXT NOT NULL,\n"
-      "  setup TEXT NOT NULL,\n"
-      "  detail TEXT NOT NULL,\n"
-      "  canonical_key TEXT NOT NULL,\n"
-      "  " + geometry + ",\n"
-      "  family_residual REAL,\n"
-      "  bennett_residual REAL,\n"
-      "  planar_residual REAL,\n"
-      "  spherical_residual REAL,\n"
-      "  trivial_residual REAL,\n"
-      "  rigid_residual REAL,\n"
-      "  full_turn INTEGER NOT NULL CHECK (full_turn IN (0, 1)),\n"
-      "  range_lo_deg REAL,\n"
-      "  range_hi_deg REAL,\n"
-      "  local_dimension INTEGER NOT NULL,\n"
-      "  free_parameters INTEGER NOT NULL,\n"
-      "  singular_values TEXT NOT NULL,\n"
-      "  E_mean REAL,\n"
-      "  E_max REAL,\n"
-      "  first_run INTEGER NOT NULL REFERENCES runs(run_id),\n"
-      "  first_start INTEGER NOT NULL,\n"
-      "  grid_cell TEXT NOT NULL,\n"
-      "  hits INTEGER NOT NULL DEFAULT 1\n"
-      ");\n"
-      "CREATE INDEX candidates_by_joints_family ON candidates(joints, family);\n"
-      "CREATE INDEX candidates_by_key ON candidates(joints, canonical_key);\n"
-      "CREATE INDEX candidates_by_cell ON candidates(joints, grid_cell);\n"
-      // WITHOUT ROWID: the primary key is the table's own b-tree, so a start
-      // costs one row and no separate index (the database is sized per start).
-      "CREATE TABLE starts (\n"
-      "  run_id INTEGER NOT NULL REFERENCES runs(run_id),\n"
-      "  start_index INTEGER NOT NULL,\n"
-      "  session_id INTEGER REFERENCES sessions(session_id),\n"
-      "  status TEXT NOT NULL,\n"
-      "  E_mean REAL,\n"
-      "  E_max REAL,\n"
-      "  objective REAL,\n"
-      "  evaluations INTEGER NOT NULL,\n"
-      "  seconds REAL,\n"
-      "  zero INTEGER NOT NULL CHECK (zero IN (0, 1)),\n"
-      "  verified INTEGER NOT NULL CHECK (verified IN (0, 1)),\n"
-      "  candidate_id INTEGER REFERENCES candidates(candidate_id),\n"
-      "  " + geometry + ",\n"
-      "  PRIMARY KEY (run_id, start_index)\n"
-      ") WITHOUT ROWID;\n"
-      "CREATE INDEX starts_zero_by_energy ON starts(E_mean) WHERE zero = 1;\n"
-      "CREATE INDEX starts_by_candidate ON starts(candidate_id) WHERE candidate_id IS NOT NULL;\n"
-      "CREATE VIEW zero_minima AS\n"
-      "  SELECT s.run_id, s.start_index, s.E_mean, s.E_max, s.objective, s.status, s.evaluations, s.seconds,\n"
-      "         s.verified, s.candidate_id, c.family, c.setup, c.local_dimension, c.family_residual,\n"
-      "         c.rigid_residual,\n"
-      "         " + start_geometry + "\n"
-      "  FROM starts AS s LEFT JOIN candidates AS c ON c.candidate_id = s.candidate_id\n"
-      "  WHERE s.zero = 1\n"
-      "  ORDER BY s.E_mean, s.run_id, s.start_index;\n"
-      "CREATE VIEW family_counts AS\n"
-      "  SELECT family, COUNT(*) AS candidates, SUM(hits) AS hits\n"
-      "  FROM candidates GROUP BY family ORDER BY hits DESC, family;\n"
-      "CREATE VIEW status_counts AS\n"
-      "  SELECT run_id, status, COUNT(*) AS starts, SUM(zero) AS zeros, SUM(verified) AS verified\n"
-      "  FROM starts GROUP BY run_id, status ORDER BY run_id, starts DESC, status;\n"
-      "CREATE VIEW energy_histogram AS\n"
-      "  SELECT run_id, CASE WHEN E_mean > 0 THEN CAST(floor(log10(E_mean)) AS INTEGER) END AS log10_E_mean,\n"
-      "         COUNT(*) AS starts\n"
-      "  FROM starts WHERE E_mean IS NOT NULL\n"
-      "  GROUP BY run_id, log10_E_mean ORDER BY run_id, log10_E_mean;\n"
-      "CREATE VIEW run_summary AS\n"
-      "  SELECT r.run_id, r.job_path, r.seed, r.status, r.starts, r.starts_done,\n"
-      "         (SELECT COUNT(*) FROM starts AS s WHERE s.run_id = r.run_id AND s.zero = 1) AS zeros,\n"
-      "         (SELECT COUNT(*) FROM starts AS s WHERE s.run_id = r.run_id AND s.verified = 1) AS verified,\n"
-      "         (SELECT COUNT(*) FROM candidates AS c WHERE c.first_run = r.run_id) AS new_candidates,\n"
-      "         (SELECT MIN(s.E_mean) FROM starts AS s WHERE s.run_id = r.run_id) AS best_E_mean,\n"
-      "         (SELECT SUM(s.seconds) FROM starts AS s WHERE s.run_id = r.run_id) AS start_seconds,\n"
-      "         r.started_at, r.updated_at, r.ended_at\n"
-      "  FROM runs AS r ORDER BY r.run_id;\n";
+  return "CREATE TABLE runs (\n"
+         "  run_id INTEGER PRIMARY KEY,\n"
+         "  job_path TEXT NOT NULL,\n"
+         "  job_text TEXT NOT NULL,\n"
+         "  job_hash TEXT NOT NULL,\n"
+         "  seed INTEGER NOT NULL,\n"
+         "  starts INTEGER NOT NULL,\n"
+         "  joints INTEGER NOT NULL,\n"
+         "  zero_threshold REAL NOT NULL,\n"
+         "  report_threshold REAL NOT NULL,\n"
+         "  loopfarm_version TEXT NOT NULL,\n"
+         "  ranks INTEGER,\n"
+         "  started_at TEXT NOT NULL,\n"
+         "  updated_at TEXT NOT NULL,\n"
+         "  ended_at TEXT,\n"
+         "  status TEXT NOT NULL CHECK (status IN ('running', 'stopped', 'complete', 'failed')),\n"
+         "  starts_done INTEGER NOT NULL DEFAULT 0\n"
+         ");\n"
+         "CREATE TABLE sessions (\n"
+         "  session_id INTEGER PRIMARY KEY,\n"
+         "  run_id INTEGER NOT NULL REFERENCES runs(run_id),\n"
+         "  ranks INTEGER NOT NULL,\n"
+         "  loopfarm_version TEXT NOT NULL,\n"
+         "  started_at TEXT NOT NULL,\n"
+         "  ended_at TEXT,\n"
+         "  status TEXT NOT NULL CHECK (status IN ('running', 'stopped', 'complete', 'failed')),\n"
+         "  starts_done INTEGER NOT NULL DEFAULT 0\n"
+         ");\n"
+         "CREATE INDEX sessions_by_run ON sessions(run_id);\n"
+         "CREATE TABLE candidates (\n"
+         "  candidate_id INTEGER PRIMARY KEY,\n"
+         "  joints INTEGER NOT NULL,\n"
+         "  family TEXT NOT NULL,\n"
+         "  setup TEXT NOT NULL,\n"
+         "  detail TEXT NOT NULL,\n"
+         "  canonical_key TEXT NOT NULL,\n"
+         "  " +
+         geometry +
+         ",\n"
+         "  family_residual REAL,\n"
+         "  bennett_residual REAL,\n"
+         "  planar_residual REAL,\n"
+         "  spherical_residual REAL,\n"
+         "  trivial_residual REAL,\n"
+         "  rigid_residual REAL,\n"
+         "  full_turn INTEGER NOT NULL CHECK (full_turn IN (0, 1)),\n"
+         "  range_lo_deg REAL,\n"
+         "  range_hi_deg REAL,\n"
+         "  local_dimension INTEGER NOT NULL,\n"
+         "  free_parameters INTEGER NOT NULL,\n"
+         "  singular_values TEXT NOT NULL,\n"
+         "  E_mean REAL,\n"
+         "  E_max REAL,\n"
+         "  first_run INTEGER NOT NULL REFERENCES runs(run_id),\n"
+         "  first_start INTEGER NOT NULL,\n"
+         "  grid_cell TEXT NOT NULL,\n"
+         "  hits INTEGER NOT NULL DEFAULT 1\n"
+         ");\n"
+         "CREATE INDEX candidates_by_joints_family ON candidates(joints, family);\n"
+         "CREATE INDEX candidates_by_key ON candidates(joints, canonical_key);\n"
+         "CREATE INDEX candidates_by_cell ON candidates(joints, grid_cell);\n"
+         // WITHOUT ROWID: the primary key is the table's own b-tree, so a start
+         // costs one row and no separate index (the database is sized per start).
+         "CREATE TABLE starts (\n"
+         "  run_id INTEGER NOT NULL REFERENCES runs(run_id),\n"
+         "  start_index INTEGER NOT NULL,\n"
+         "  session_id INTEGER REFERENCES sessions(session_id),\n"
+         "  status TEXT NOT NULL,\n"
+         "  E_mean REAL,\n"
+         "  E_max REAL,\n"
+         "  objective REAL,\n"
+         "  evaluations INTEGER NOT NULL,\n"
+         "  seconds REAL,\n"
+         "  zero INTEGER NOT NULL CHECK (zero IN (0, 1)),\n"
+         "  verified INTEGER NOT NULL CHECK (verified IN (0, 1)),\n"
+         "  candidate_id INTEGER REFERENCES candidates(candidate_id),\n"
+         "  " +
+         geometry +
+         ",\n"
+         "  PRIMARY KEY (run_id, start_index)\n"
+         ") WITHOUT ROWID;\n"
+         "CREATE INDEX starts_zero_by_energy ON starts(E_mean) WHERE zero = 1;\n"
+         "CREATE INDEX starts_by_candidate ON starts(candidate_id) WHERE candidate_id IS NOT NULL;\n"
+         "CREATE VIEW zero_minima AS\n"
+         "  SELECT s.run_id, s.start_index, s.E_mean, s.E_max, s.objective, s.status, s.evaluations, s.seconds,\n"
+         "         s.verified, s.candidate_id, c.family, c.setup, c.local_dimension, c.family_residual,\n"
+         "         c.rigid_residual,\n"
+         "         " +
+         start_geometry +
+         "\n"
+         "  FROM starts AS s LEFT JOIN candidates AS c ON c.candidate_id = s.candidate_id\n"
+         "  WHERE s.zero = 1\n"
+         "  ORDER BY s.E_mean, s.run_id, s.start_index;\n"
+         "CREATE VIEW family_counts AS\n"
+         "  SELECT family, COUNT(*) AS candidates, SUM(hits) AS hits\n"
+         "  FROM candidates GROUP BY family ORDER BY hits DESC, family;\n"
+         "CREATE VIEW status_counts AS\n"
+         "  SELECT run_id, status, COUNT(*) AS starts, SUM(zero) AS zeros, SUM(verified) AS verified\n"
+         "  FROM starts GROUP BY run_id, status ORDER BY run_id, starts DESC, status;\n"
+         "CREATE VIEW energy_histogram AS\n"
+         "  SELECT run_id, CASE WHEN E_mean > 0 THEN CAST(floor(log10(E_mean)) AS INTEGER) END AS log10_E_mean,\n"
+         "         COUNT(*) AS starts\n"
+         "  FROM starts WHERE E_mean IS NOT NULL\n"
+         "  GROUP BY run_id, log10_E_mean ORDER BY run_id, log10_E_mean;\n"
+         "CREATE VIEW run_summary AS\n"
+         "  SELECT r.run_id, r.job_path, r.seed, r.status, r.starts, r.starts_done,\n"
+         "         (SELECT COUNT(*) FROM starts AS s WHERE s.run_id = r.run_id AND s.zero = 1) AS zeros,\n"
+         "         (SELECT COUNT(*) FROM starts AS s WHERE s.run_id = r.run_id AND s.verified = 1) AS verified,\n"
+         "         (SELECT COUNT(*) FROM candidates AS c WHERE c.first_run = r.run_id) AS new_candidates,\n"
+         "         (SELECT MIN(s.E_mean) FROM starts AS s WHERE s.run_id = r.run_id) AS best_E_mean,\n"
+         "         (SELECT SUM(s.seconds) FROM starts AS s WHERE s.run_id = r.run_id) AS start_seconds,\n"
+         "         r.started_at, r.updated_at, r.ended_at\n"
+         "  FROM runs AS r ORDER BY r.run_id;\n";
 }
 
 // The schema version of a loopfarm database, or 0 for an empty database (no
@@ -190,8 +194,9 @@ int check_identity(const std::string& path, sqlite3* db, bool allow_empty) {
                    hex32(kDatabaseApplicationId) + ")");
   }
   if (version > kDatabaseSchemaVersion) {
-    fail(path, "schema version " + std::to_string(version) + " is newer than this loopfarm " LOOPFARM_VERSION
-               " knows (" + std::to_string(kDatabaseSchemaVersion) + "): use a newer loopfarm");
+    fail(path, "schema version " + std::to_string(version) +
+                   " is newer than this loopfarm " LOOPFARM_VERSION " knows (" +
+                   std::to_string(kDatabaseSchemaVersion) + "): use a newer loopfarm");
   }
   if (version != kDatabaseSchemaVersion) fail(path, "unknown schema version " + std::to_string(version));
   return static_cast<int>(version);

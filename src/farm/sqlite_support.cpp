@@ -78,7 +78,6 @@ void exec(const std::string& path, sqlite3* db, const std::string& sql, const ch
   }
 }
 
-
 std::int64_t query_integer(const std::string& path, sqlite3* db, const std::string& sql) {
   Statement s;
   s.prepare(path, db, sql);

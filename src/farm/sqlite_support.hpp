@@ -36,7 +36,6 @@ struct Connection {
   ~Connection() { sqlite3_close_v2(db); }
 };
 
-
 // Opens `path` (or the URI `filename` for it); errors name `path`.
 void open_connection(Connection& c, const std::string& path, int flags, const std::string& filename = {});
 

@@ -73,7 +73,8 @@ CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance) {
 
 JointVector canonical_angles(const CanonicalForm& form, const JointVector& theta) {
   for (const detail::Representation& r : detail::representations(static_cast<int>(theta.size()))) {
-    if (r.shift == form.shift && r.reversed == form.reversed && r.flips == form.flips) return detail::apply_angles(r, theta);
+    if (r.shift == form.shift && r.reversed == form.reversed && r.flips == form.flips)
+      return detail::apply_angles(r, theta);
   }
   throw std::invalid_argument("canonical_angles: the form does not belong to a loop of this size");
 }

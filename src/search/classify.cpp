@@ -103,18 +103,18 @@ FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double fa
     std::vector<int> links = {r.index[0], r.index[static_cast<size_t>(folded_link)], r.index[3]};
     std::sort(links.begin(), links.end());
     const int locked_joint = r.angle_index[loop == 1 ? 4 : 0];
-    const LoopGeometry moving = LoopGeometry{
-        (JointVector(4) << w.a[0], w.a[other_link], w.a[0], w.a[other_link]).finished(),
-        (JointVector(4) << w.alpha[0], w.alpha[other_link], w.alpha[0], w.alpha[other_link]).finished(),
-        JointVector::Zero(4)};
+    const LoopGeometry moving =
+        LoopGeometry{(JointVector(4) << w.a[0], w.a[other_link], w.a[0], w.a[other_link]).finished(),
+                     (JointVector(4) << w.alpha[0], w.alpha[other_link], w.alpha[0], w.alpha[other_link]).finished(),
+                     JointVector::Zero(4)};
     const GeometricFit fit = geometric_fit(moving, tolerance);
     double other_length = 0.0, other_denominator = 0.0;
     const bool both = fold(1 - loop, other_length, other_denominator);
     std::string names;
     for (int k : links) names += (names.empty() ? "" : ", ") + std::to_string(k + 1);
     out.detail = std::string(to_string(family)) + "'s conditions on a folding Bennett loop (links " + names +
-                 " equal): moves with joint " + std::to_string(locked_joint + 1) + " locked; locked 4R: " +
-                 to_string(fit.family) + (both ? " (folding too)" : "");
+                 " equal): moves with joint " + std::to_string(locked_joint + 1) +
+                 " locked; locked 4R: " + to_string(fit.family) + (both ? " (folding too)" : "");
     out.check.family = Family::degenerate;
     out.check.residual = out.residual;
     out.check.conditions = {{std::string(to_string(family)) + " residual", family_residual},
@@ -168,16 +168,20 @@ std::string special_detail(Family family, const LoopGeometry& g) {
   }
   if (family != Family::goldberg && family != Family::myard) {
     switch (family) {
-      case Family::bricard_line_symmetric: return "line symmetry: link i and joint i as link and joint i + 3";
-      case Family::bricard_plane_symmetric: return "plane symmetry through joints 1 and 4 of the best representation";
-      case Family::bricard_trihedral: return "right-angle twists, no offsets, a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2";
-      default: return "";
+      case Family::bricard_line_symmetric:
+        return "line symmetry: link i and joint i as link and joint i + 3";
+      case Family::bricard_plane_symmetric:
+        return "plane symmetry through joints 1 and 4 of the best representation";
+      case Family::bricard_trihedral:
+        return "right-angle twists, no offsets, a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2";
+      default:
+        return "";
     }
   }
   const Best best = family == Family::goldberg ? best_over_representations<Family::goldberg>(g, false)
                                                : best_over_representations<Family::myard>(g, false);
-  std::string d = (best.set & 4) ? "fused links on the same side (a5 = a2 - a3)"
-                                 : "fused links on opposite sides (a5 = a2 + a3)";
+  std::string d =
+      (best.set & 4) ? "fused links on the same side (a5 = a2 - a3)" : "fused links on opposite sides (a5 = a2 + a3)";
   d += std::string(", Bennett loops ") + ((best.set & 1) ? "line-symmetric" : "asymmetric") + " and " +
        ((best.set & 2) ? "line-symmetric" : "asymmetric") + " in the best representation";
   return d;
@@ -231,7 +235,8 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   double least_travel = kInf;
   // 5R: a joint that only rocks (rocking_travel) may be locked too, for the
   // locked-joint rule only (a near-miss of a locked-joint loop, ClassifyOptions).
-  const double lockable_travel = n == 5 ? std::max(options.frozen_travel, options.rocking_travel) : options.frozen_travel;
+  const double lockable_travel =
+      n == 5 ? std::max(options.frozen_travel, options.rocking_travel) : options.frozen_travel;
   for (size_t k = 0; k < joint_travel.size(); ++k) {
     least_travel = std::min(least_travel, joint_travel[k]);
     if (joint_travel[k] <= options.frozen_travel) frozen.push_back(static_cast<int>(k));
@@ -255,8 +260,8 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
     if (!lockable.empty() && !(trivial.residual <= options.tolerance)) {
       FamilyCheck locked_check;
       locked_check.family = Family::degenerate;
-      locked = locked_fit(geometry, pose, lockable, joint_travel, options.tolerance, options.frozen_travel,
-                          locked_check);
+      locked =
+          locked_fit(geometry, pose, lockable, joint_travel, options.tolerance, options.frozen_travel, locked_check);
       if (locked.residual < check.residual) check = locked_check;
     }
     out.checks.push_back(check);

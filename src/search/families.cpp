@@ -8,20 +8,34 @@ namespace loopfarm {
 
 const char* to_string(Family family) {
   switch (family) {
-    case Family::bennett: return "bennett";
-    case Family::planar: return "planar";
-    case Family::spherical: return "spherical";
-    case Family::trivial: return "trivial";
-    case Family::unclassified: return "unclassified";
-    case Family::goldberg: return "goldberg";
-    case Family::myard: return "myard";
-    case Family::bricard_line_symmetric: return "bricard_line_symmetric";
-    case Family::bricard_plane_symmetric: return "bricard_plane_symmetric";
-    case Family::bricard_trihedral: return "bricard_trihedral";
-    case Family::degenerate: return "degenerate";
-    case Family::goldberg_bent: return "goldberg_bent";
-    case Family::bennett_pair: return "bennett_pair";
-    case Family::bennett_dyads: return "bennett_dyads";
+    case Family::bennett:
+      return "bennett";
+    case Family::planar:
+      return "planar";
+    case Family::spherical:
+      return "spherical";
+    case Family::trivial:
+      return "trivial";
+    case Family::unclassified:
+      return "unclassified";
+    case Family::goldberg:
+      return "goldberg";
+    case Family::myard:
+      return "myard";
+    case Family::bricard_line_symmetric:
+      return "bricard_line_symmetric";
+    case Family::bricard_plane_symmetric:
+      return "bricard_plane_symmetric";
+    case Family::bricard_trihedral:
+      return "bricard_trihedral";
+    case Family::degenerate:
+      return "degenerate";
+    case Family::goldberg_bent:
+      return "goldberg_bent";
+    case Family::bennett_pair:
+      return "bennett_pair";
+    case Family::bennett_dyads:
+      return "bennett_dyads";
   }
   return "unknown";
 }
@@ -35,20 +49,24 @@ std::optional<Family> family_from_string(std::string_view name) {
 
 int family_joints(Family family) {
   switch (family) {
-    case Family::bennett: return 4;
+    case Family::bennett:
+      return 4;
     case Family::goldberg:
     case Family::myard:
-    case Family::goldberg_bent: return 5;
+    case Family::goldberg_bent:
+      return 5;
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
     case Family::bricard_trihedral:
     case Family::bennett_pair:
-    case Family::bennett_dyads: return 6;
+    case Family::bennett_dyads:
+      return 6;
     case Family::planar:
     case Family::spherical:
     case Family::trivial:
     case Family::degenerate:
-    case Family::unclassified: return 0;
+    case Family::unclassified:
+      return 0;
   }
   return 0;
 }
@@ -59,29 +77,44 @@ std::optional<int> family_dimension(Family family, int joints) {
   const int needs = family_joints(family);
   if (needs != 0 && joints != needs) return std::nullopt;
   switch (family) {
-    case Family::bennett: return 3;
-    case Family::planar: return 2 * joints - 1;  // n lengths, n - 1 independent offsets
-    case Family::spherical: return joints;       // n twists
-    case Family::goldberg: return 4;
-    case Family::myard: return 2;
-    case Family::goldberg_bent: return 5;
-    case Family::bricard_line_symmetric: return 9;
-    case Family::bricard_plane_symmetric: return 8;
-    case Family::bricard_trihedral: return 5;
-    case Family::bennett_pair: return 4;
-    case Family::bennett_dyads: return 9;
+    case Family::bennett:
+      return 3;
+    case Family::planar:
+      return 2 * joints - 1;  // n lengths, n - 1 independent offsets
+    case Family::spherical:
+      return joints;  // n twists
+    case Family::goldberg:
+      return 4;
+    case Family::myard:
+      return 2;
+    case Family::goldberg_bent:
+      return 5;
+    case Family::bricard_line_symmetric:
+      return 9;
+    case Family::bricard_plane_symmetric:
+      return 8;
+    case Family::bricard_trihedral:
+      return 5;
+    case Family::bennett_pair:
+      return 4;
+    case Family::bennett_dyads:
+      return 9;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
-    case Family::unclassified: return std::nullopt;
+    case Family::unclassified:
+      return std::nullopt;
   }
   return std::nullopt;
 }
 
 const char* to_string(BennettSetup setup) {
   switch (setup) {
-    case BennettSetup::none: return "none";
-    case BennettSetup::asymmetric: return "asymmetric";
-    case BennettSetup::line_symmetric: return "line_symmetric";
+    case BennettSetup::none:
+      return "none";
+    case BennettSetup::asymmetric:
+      return "asymmetric";
+    case BennettSetup::line_symmetric:
+      return "line_symmetric";
   }
   return "unknown";
 }

@@ -300,7 +300,6 @@ void coaxial_13_conditions(const RepresentationView& w, Sink& c) {
         [&]() -> GeometryVector { return s.ratio_gradient(2 * n, w.d(0)) + s.ratio_gradient(2 * n + 2, w.d(2)); });
 }
 
-
 // ---------------------------------------------------------------------------
 // 5R and 6R families (docs/guide/families.md). Helpers for the conditions they
 // share: a length difference, a twist sum or difference, an offset or a sum
@@ -310,8 +309,7 @@ void coaxial_13_conditions(const RepresentationView& w, Sink& c) {
 template <class RepresentationView, class Sink>
 void add_length(const RepresentationView& w, Sink& c, const char* text, int i, int j, double sign) {
   const Scale& s = w.scale();
-  c.add([&] { return std::string(text); },
-        [&] { return (w.a(i) + (j >= 0 ? sign * w.a(j) : 0.0)) / s.L; },
+  c.add([&] { return std::string(text); }, [&] { return (w.a(i) + (j >= 0 ? sign * w.a(j) : 0.0)) / s.L; },
         [&]() -> GeometryVector {
           GeometryVector g = s.ratio_gradient(i, w.a(i));
           if (j >= 0) g += sign * s.ratio_gradient(j, w.a(j));
@@ -324,8 +322,7 @@ template <class RepresentationView, class Sink>
 void add_offset(const RepresentationView& w, Sink& c, const char* text, int i, int j, double sign) {
   const int n = w.joints();
   const Scale& s = w.scale();
-  c.add([&] { return std::string(text); },
-        [&] { return (w.d(i) + (j >= 0 ? sign * w.d(j) : 0.0)) / s.L; },
+  c.add([&] { return std::string(text); }, [&] { return (w.d(i) + (j >= 0 ? sign * w.d(j) : 0.0)) / s.L; },
         [&]() -> GeometryVector {
           GeometryVector g = s.ratio_gradient(2 * n + i, w.d(i));
           if (j >= 0) g += sign * s.ratio_gradient(2 * n + j, w.d(j));
@@ -459,21 +456,22 @@ void goldberg_bent_conditions(int set, const RepresentationView& w, Sink& c) {
     return w.a(4) * w.sin_alpha(1) * w.sin_alpha(4) -
            w.a(1) * (sigma * w.cos_alpha(1) + w.cos_alpha(2)) * (1.0 - sigma * w.cos_alpha(4));
   };
-  c.add([&] {
-          return sigma > 0 ? "a5 sin(alpha2) sin(alpha5) - a2 (cos(alpha2) + cos(alpha3)) (1 - cos(alpha5))"
-                           : "a5 sin(alpha2) sin(alpha5) - a2 (cos(alpha3) - cos(alpha2)) (1 + cos(alpha5))";
-        },
-        [&] { return length_term() / s.L; },
-        [&] {
-          const double P = sigma * w.cos_alpha(1) + w.cos_alpha(2), Q = 1.0 - sigma * w.cos_alpha(4);
-          GeometryVector g = -(length_term() / (s.L * s.L)) * s.dL;
-          g[4] += w.sin_alpha(1) * w.sin_alpha(4) / s.L;
-          g[1] += -P * Q / s.L;
-          g[n + 1] += (w.a(4) * w.cos_alpha(1) * w.sin_alpha(4) + w.a(1) * sigma * w.sin_alpha(1) * Q) / s.L;
-          g[n + 2] += w.a(1) * w.sin_alpha(2) * Q / s.L;
-          g[n + 4] += (w.a(4) * w.sin_alpha(1) * w.cos_alpha(4) - w.a(1) * P * sigma * w.sin_alpha(4)) / s.L;
-          return g;
-        });
+  c.add(
+      [&] {
+        return sigma > 0 ? "a5 sin(alpha2) sin(alpha5) - a2 (cos(alpha2) + cos(alpha3)) (1 - cos(alpha5))"
+                         : "a5 sin(alpha2) sin(alpha5) - a2 (cos(alpha3) - cos(alpha2)) (1 + cos(alpha5))";
+      },
+      [&] { return length_term() / s.L; },
+      [&] {
+        const double P = sigma * w.cos_alpha(1) + w.cos_alpha(2), Q = 1.0 - sigma * w.cos_alpha(4);
+        GeometryVector g = -(length_term() / (s.L * s.L)) * s.dL;
+        g[4] += w.sin_alpha(1) * w.sin_alpha(4) / s.L;
+        g[1] += -P * Q / s.L;
+        g[n + 1] += (w.a(4) * w.cos_alpha(1) * w.sin_alpha(4) + w.a(1) * sigma * w.sin_alpha(1) * Q) / s.L;
+        g[n + 2] += w.a(1) * w.sin_alpha(2) * Q / s.L;
+        g[n + 4] += (w.a(4) * w.sin_alpha(1) * w.cos_alpha(4) - w.a(1) * P * sigma * w.sin_alpha(4)) / s.L;
+        return g;
+      });
   // The offsets against the fusion angle: sin^2(psi) from the real cosine rule, G.
   auto gram = [&] {
     const double c2 = w.cos_alpha(1), c3 = w.cos_alpha(2), c5 = w.cos_alpha(4);
@@ -483,25 +481,26 @@ void goldberg_bent_conditions(int set, const RepresentationView& w, Sink& c) {
     const double k = w.sin_alpha(1) * w.d(4) * (1.0 + sigma * w.cos_alpha(4));
     return k * k - w.a(1) * w.a(1) * gram();
   };
-  c.add([&] {
-          return sigma > 0 ? "(sin(alpha2) d5 (1 + cos(alpha5)))^2 - a2^2 G, over L^2"
-                           : "(sin(alpha2) d5 (1 - cos(alpha5)))^2 - a2^2 G, over L^2";
-        },
-        [&] { return offset_term() / (s.L * s.L); },
-        [&] {
-          const double c2 = w.cos_alpha(1), c3 = w.cos_alpha(2), c5 = w.cos_alpha(4);
-          const double s2v = w.sin_alpha(1), s3v = w.sin_alpha(2), s5v = w.sin_alpha(4);
-          const double R = 1.0 + sigma * c5, k = s2v * w.d(4) * R, a2 = w.a(1), G = gram();
-          const double L2 = s.L * s.L;
-          GeometryVector g = -(2.0 * offset_term() / (L2 * s.L)) * s.dL;
-          // dG/dalpha_i = 2 sin(alpha_i) (cos(alpha_i) - product of the other two cosines).
-          g[n + 1] += (2.0 * k * c2 * w.d(4) * R - a2 * a2 * 2.0 * s2v * (c2 - c3 * c5)) / L2;
-          g[n + 2] += (-a2 * a2 * 2.0 * s3v * (c3 - c2 * c5)) / L2;
-          g[n + 4] += (2.0 * k * s2v * w.d(4) * (-sigma * s5v) - a2 * a2 * 2.0 * s5v * (c5 - c2 * c3)) / L2;
-          g[2 * n + 4] += 2.0 * k * s2v * R / L2;
-          g[1] += -2.0 * a2 * G / L2;
-          return g;
-        });
+  c.add(
+      [&] {
+        return sigma > 0 ? "(sin(alpha2) d5 (1 + cos(alpha5)))^2 - a2^2 G, over L^2"
+                         : "(sin(alpha2) d5 (1 - cos(alpha5)))^2 - a2^2 G, over L^2";
+      },
+      [&] { return offset_term() / (s.L * s.L); },
+      [&] {
+        const double c2 = w.cos_alpha(1), c3 = w.cos_alpha(2), c5 = w.cos_alpha(4);
+        const double s2v = w.sin_alpha(1), s3v = w.sin_alpha(2), s5v = w.sin_alpha(4);
+        const double R = 1.0 + sigma * c5, k = s2v * w.d(4) * R, a2 = w.a(1), G = gram();
+        const double L2 = s.L * s.L;
+        GeometryVector g = -(2.0 * offset_term() / (L2 * s.L)) * s.dL;
+        // dG/dalpha_i = 2 sin(alpha_i) (cos(alpha_i) - product of the other two cosines).
+        g[n + 1] += (2.0 * k * c2 * w.d(4) * R - a2 * a2 * 2.0 * s2v * (c2 - c3 * c5)) / L2;
+        g[n + 2] += (-a2 * a2 * 2.0 * s3v * (c3 - c2 * c5)) / L2;
+        g[n + 4] += (2.0 * k * s2v * w.d(4) * (-sigma * s5v) - a2 * a2 * 2.0 * s5v * (c5 - c2 * c3)) / L2;
+        g[2 * n + 4] += 2.0 * k * s2v * R / L2;
+        g[1] += -2.0 * a2 * G / L2;
+        return g;
+      });
 }
 
 // Bricard line-symmetric 6R: a_i = a_{i+3}, alpha_i = alpha_{i+3}, d_i = d_{i+3}.
@@ -547,8 +546,7 @@ void bricard_trihedral_conditions(const RepresentationView& w, Sink& c) {
     for (int k = 0; k < n; ++k) q += (k % 2 == 0 ? 1.0 : -1.0) * w.a(k) * w.a(k);
     return q;
   };
-  c.add([] { return "(a1^2 - a2^2 + a3^2 - a4^2 + a5^2 - a6^2) / L^2"; },
-        [&] { return squares() / (s.L * s.L); },
+  c.add([] { return "(a1^2 - a2^2 + a3^2 - a4^2 + a5^2 - a6^2) / L^2"; }, [&] { return squares() / (s.L * s.L); },
         [&] {
           const double q = squares();
           GeometryVector g = -(2.0 * q / (s.L * s.L * s.L)) * s.dL;
@@ -632,20 +630,29 @@ constexpr bool goldberg_type(Family family) {
 // sets as goldberg_conditions and myard_conditions say; Bricard loops one.
 inline int condition_sets(Family family, int joints) {
   switch (family) {
-    case Family::bennett: return 2;
-    case Family::planar: return 1;
-    case Family::trivial: return joints == 4 ? 2 : 1;
-    case Family::goldberg: return 8;
-    case Family::myard: return 16;
-    case Family::goldberg_bent: return 4;
-    case Family::bennett_pair: return 4;
+    case Family::bennett:
+      return 2;
+    case Family::planar:
+      return 1;
+    case Family::trivial:
+      return joints == 4 ? 2 : 1;
+    case Family::goldberg:
+      return 8;
+    case Family::myard:
+      return 16;
+    case Family::goldberg_bent:
+      return 4;
+    case Family::bennett_pair:
+      return 4;
     case Family::bennett_dyads:
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
-    case Family::bricard_trihedral: return 1;
+    case Family::bricard_trihedral:
+      return 1;
     case Family::spherical:
     case Family::degenerate:
-    case Family::unclassified: break;
+    case Family::unclassified:
+      break;
   }
   return 0;  // no representations
 }

@@ -70,8 +70,8 @@ RepresentationTable build_representation_table(int n) {
       w.a[ia] = static_cast<std::uint8_t>(r.index[ia]);
       // alpha'_k = wrap(1 * alpha_j + m pi).
       assert(r.sign[it] == 1.0);
-      const auto m = static_cast<int>(std::find(kTwistOffsets.begin(), kTwistOffsets.end(), r.offset[it]) -
-                                      kTwistOffsets.begin());
+      const auto m =
+          static_cast<int>(std::find(kTwistOffsets.begin(), kTwistOffsets.end(), r.offset[it]) - kTwistOffsets.begin());
       assert(m < 3);
       w.twist[ia] = static_cast<std::uint8_t>(3 * (r.index[it] - n) + m);
       // d'_k = +-1 * d_j +- 0 (the offset's zero carries the sign).
@@ -96,11 +96,16 @@ const RepresentationTable& representation_table_for() {
 const RepresentationTable& representation_table(int n) {
   static_assert(kMinJoints == 4 && kMaxJoints == 8, "one case per joint count");
   switch (n) {
-    case 4: return representation_table_for<4>();
-    case 5: return representation_table_for<5>();
-    case 6: return representation_table_for<6>();
-    case 7: return representation_table_for<7>();
-    case 8: return representation_table_for<8>();
+    case 4:
+      return representation_table_for<4>();
+    case 5:
+      return representation_table_for<5>();
+    case 6:
+      return representation_table_for<6>();
+    case 7:
+      return representation_table_for<7>();
+    case 8:
+      return representation_table_for<8>();
   }
   throw std::logic_error("representation_table: unvalidated joint count " + std::to_string(n));
 }
@@ -168,8 +173,8 @@ double length_scale_of(const Tables& t, const CompiledRepresentation& w) {
 struct Search {
   double sum = kInf;  // of squares, of the best representation's conditions
   double norm = kInf;
-  int representation = -1;   // index in detail::representations order
-  int set = 0;        // which condition set (condition_set)
+  int representation = -1;  // index in detail::representations order
+  int set = 0;              // which condition set (condition_set)
 
   void keep(const SquaredNorm& c, int index, int which) {
     // A sum not below the best's cannot have a smaller sqrt.
@@ -268,21 +273,32 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
     case Family::bennett:
       if (geometry.joints() != 4) throw std::invalid_argument("family_distance: Bennett loops have 4 joints");
       return distance_over_representations<Family::bennett>(geometry, gradient);
-    case Family::planar: return distance_over_representations<Family::planar>(geometry, gradient);
-    case Family::spherical: return spherical_distance(geometry, gradient);
-    case Family::trivial: return distance_over_representations<Family::trivial>(geometry, gradient);
-    case Family::goldberg: return distance_over_representations<Family::goldberg>(geometry, gradient);
-    case Family::myard: return distance_over_representations<Family::myard>(geometry, gradient);
-    case Family::goldberg_bent: return distance_over_representations<Family::goldberg_bent>(geometry, gradient);
+    case Family::planar:
+      return distance_over_representations<Family::planar>(geometry, gradient);
+    case Family::spherical:
+      return spherical_distance(geometry, gradient);
+    case Family::trivial:
+      return distance_over_representations<Family::trivial>(geometry, gradient);
+    case Family::goldberg:
+      return distance_over_representations<Family::goldberg>(geometry, gradient);
+    case Family::myard:
+      return distance_over_representations<Family::myard>(geometry, gradient);
+    case Family::goldberg_bent:
+      return distance_over_representations<Family::goldberg_bent>(geometry, gradient);
     case Family::bricard_line_symmetric:
       return distance_over_representations<Family::bricard_line_symmetric>(geometry, gradient);
     case Family::bricard_plane_symmetric:
       return distance_over_representations<Family::bricard_plane_symmetric>(geometry, gradient);
-    case Family::bricard_trihedral: return distance_over_representations<Family::bricard_trihedral>(geometry, gradient);
-    case Family::bennett_pair: return distance_over_representations<Family::bennett_pair>(geometry, gradient);
-    case Family::bennett_dyads: return distance_over_representations<Family::bennett_dyads>(geometry, gradient);
-    case Family::degenerate: throw std::invalid_argument("family_distance: degenerate loops have no distance");
-    case Family::unclassified: break;
+    case Family::bricard_trihedral:
+      return distance_over_representations<Family::bricard_trihedral>(geometry, gradient);
+    case Family::bennett_pair:
+      return distance_over_representations<Family::bennett_pair>(geometry, gradient);
+    case Family::bennett_dyads:
+      return distance_over_representations<Family::bennett_dyads>(geometry, gradient);
+    case Family::degenerate:
+      throw std::invalid_argument("family_distance: degenerate loops have no distance");
+    case Family::unclassified:
+      break;
   }
   throw std::invalid_argument("family_distance: not a family");
 }
@@ -310,10 +326,13 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::bricard_plane_symmetric:
     case Family::bricard_trihedral:
     case Family::bennett_pair:
-    case Family::bennett_dyads: best = best_for(family, geometry, true); break;
+    case Family::bennett_dyads:
+      best = best_for(family, geometry, true);
+      break;
     case Family::degenerate:
       throw std::invalid_argument("family_distance_report: degenerate loops have no distance");
-    case Family::unclassified: throw std::invalid_argument("family_distance_report: not a family");
+    case Family::unclassified:
+      throw std::invalid_argument("family_distance_report: not a family");
   }
   if (gradient) {
     const GeometryVector g = best.conditions.norm_gradient(3 * n);

@@ -55,20 +55,32 @@ FamilyCheck check_from(Family family, const Best& best) {
 
 Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
   switch (family) {
-    case Family::bennett: return best_over_representations<Family::bennett>(g, by_norm);
-    case Family::planar: return best_over_representations<Family::planar>(g, by_norm);
-    case Family::trivial: return best_over_representations<Family::trivial>(g, by_norm);
-    case Family::goldberg: return best_over_representations<Family::goldberg>(g, by_norm);
-    case Family::myard: return best_over_representations<Family::myard>(g, by_norm);
-    case Family::goldberg_bent: return best_over_representations<Family::goldberg_bent>(g, by_norm);
-    case Family::bricard_line_symmetric: return best_over_representations<Family::bricard_line_symmetric>(g, by_norm);
-    case Family::bricard_plane_symmetric: return best_over_representations<Family::bricard_plane_symmetric>(g, by_norm);
-    case Family::bricard_trihedral: return best_over_representations<Family::bricard_trihedral>(g, by_norm);
-    case Family::bennett_pair: return best_over_representations<Family::bennett_pair>(g, by_norm);
-    case Family::bennett_dyads: return best_over_representations<Family::bennett_dyads>(g, by_norm);
+    case Family::bennett:
+      return best_over_representations<Family::bennett>(g, by_norm);
+    case Family::planar:
+      return best_over_representations<Family::planar>(g, by_norm);
+    case Family::trivial:
+      return best_over_representations<Family::trivial>(g, by_norm);
+    case Family::goldberg:
+      return best_over_representations<Family::goldberg>(g, by_norm);
+    case Family::myard:
+      return best_over_representations<Family::myard>(g, by_norm);
+    case Family::goldberg_bent:
+      return best_over_representations<Family::goldberg_bent>(g, by_norm);
+    case Family::bricard_line_symmetric:
+      return best_over_representations<Family::bricard_line_symmetric>(g, by_norm);
+    case Family::bricard_plane_symmetric:
+      return best_over_representations<Family::bricard_plane_symmetric>(g, by_norm);
+    case Family::bricard_trihedral:
+      return best_over_representations<Family::bricard_trihedral>(g, by_norm);
+    case Family::bennett_pair:
+      return best_over_representations<Family::bennett_pair>(g, by_norm);
+    case Family::bennett_dyads:
+      return best_over_representations<Family::bennett_dyads>(g, by_norm);
     case Family::spherical:
     case Family::degenerate:
-    case Family::unclassified: break;
+    case Family::unclassified:
+      break;
   }
   throw std::logic_error(std::string("best_for: no representations for ") + to_string(family));
 }
@@ -91,12 +103,15 @@ FamilyCheck family_check(Family family, const LoopGeometry& g) {
 
 std::vector<Family> special_families(int n) {
   switch (n) {
-    case 4: return {Family::bennett};
-    case 5: return {Family::myard, Family::goldberg, Family::goldberg_bent};
+    case 4:
+      return {Family::bennett};
+    case 5:
+      return {Family::myard, Family::goldberg, Family::goldberg_bent};
     case 6:
       return {Family::bricard_trihedral, Family::bricard_plane_symmetric, Family::bricard_line_symmetric,
               Family::bennett_pair, Family::bennett_dyads};
-    default: return {};
+    default:
+      return {};
   }
 }
 
@@ -141,10 +156,10 @@ GeometricFit degenerate_fit(const LoopGeometry& g, double tolerance, FamilyCheck
       out.detail = "axes " + std::to_string(k + 1) + " and " + std::to_string(j + 1) + " coincide; merged " +
                    std::to_string(n - 1) + "R: " + merged.detail;
       check.residual = residual;
-      check.conditions = {{label("a", k) + " / L", g.a[k] / L},
-                          {"sin(" + label("alpha", k) + ")", std::sin(g.alpha[k])},
-                          {"merged " + std::to_string(n - 1) + "R loop: " + to_string(merged.family) + " residual",
-                           merged.residual}};
+      check.conditions = {
+          {label("a", k) + " / L", g.a[k] / L},
+          {"sin(" + label("alpha", k) + ")", std::sin(g.alpha[k])},
+          {"merged " + std::to_string(n - 1) + "R loop: " + to_string(merged.family) + " residual", merged.residual}};
     }
   }
   return out;

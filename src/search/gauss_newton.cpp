@@ -168,8 +168,10 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
       } else {
         mu *= nu;
         nu *= 2.0;
-        if (taken.cwiseAbs().maxCoeff() == 0.0) return finish(SearchStatus::xtol_reached, "step vanished at the bounds");
-        if (evaluations() >= opt.max_evaluations) return finish(SearchStatus::maxeval_reached, "max_evaluations reached");
+        if (taken.cwiseAbs().maxCoeff() == 0.0)
+          return finish(SearchStatus::xtol_reached, "step vanished at the bounds");
+        if (evaluations() >= opt.max_evaluations)
+          return finish(SearchStatus::maxeval_reached, "max_evaluations reached");
         if (opt.time_limit > 0 && seconds_since(start_time) >= opt.time_limit) {
           return finish(SearchStatus::maxtime_reached, "time limit reached");
         }

@@ -74,8 +74,9 @@ Job parse_table(const toml::table& root, const std::string& file) {
   for (const auto& [key, node] : root) {
     const std::string k(key.str());
     if (!kTables.count(k)) {
-      r.fail(key.source(), k, "unknown table or key; a job has [loop], [space], [optimizer], [search], "
-                              "[steering] and [output]");
+      r.fail(key.source(), k,
+             "unknown table or key; a job has [loop], [space], [optimizer], [search], "
+             "[steering] and [output]");
     }
     r.table(node, k);
   }
@@ -85,8 +86,9 @@ Job parse_table(const toml::table& root, const std::string& file) {
   };
 
   if (const toml::table* t = section("loop")) {
-    for_each_key(r, *t, "loop", {"joints", "compliance", "stiffness_ratio", "samples", "range_deg", "closure_tolerance",
-                                        "stationarity_tolerance", "objective"},
+    for_each_key(r, *t, "loop",
+                 {"joints", "compliance", "stiffness_ratio", "samples", "range_deg", "closure_tolerance",
+                  "stationarity_tolerance", "objective"},
                  [&](const std::string& k, const std::string& full, const toml::node& node) {
                    if (k == "joints") {
                      const long long n = r.integer(node, full);
@@ -97,8 +99,10 @@ Job parse_table(const toml::table& root, const std::string& file) {
                    } else if (k == "compliance") {
                      const std::string c = r.string(node, full);
                      if (c != "paper" && c != "full") {
-                       r.fail(node.source(), full, "got \"" + c + "\"; expected \"paper\" (a and alpha springy) or "
-                                                   "\"full\" (a, alpha and d)");
+                       r.fail(node.source(), full,
+                              "got \"" + c +
+                                  "\"; expected \"paper\" (a and alpha springy) or "
+                                  "\"full\" (a, alpha and d)");
                      }
                      // Checked just above; not compliance_from_string, which lives in the
                      // equilibrium solver, so that the parser stands alone (fuzz/).
@@ -107,7 +111,8 @@ Job parse_table(const toml::table& root, const std::string& file) {
                      job.loop.stiffness_ratio = r.positive(node, full, true);
                    } else if (k == "samples") {
                      const long long n = r.integer(node, full);
-                     if (n < 4 || n > 100000) r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [4, 100000]");
+                     if (n < 4 || n > 100000)
+                       r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [4, 100000]");
                      job.loop.samples = static_cast<int>(n);
                    } else if (k == "range_deg") {
                      const double range = r.number(node, full);
@@ -149,8 +154,10 @@ Job parse_table(const toml::table& root, const std::string& file) {
                        r.fail(node.source(), full, "\"" + a + "\" is not built into Debian's NLopt");
                      }
                      if (!is_known_algorithm(a)) {
-                       r.fail(node.source(), full, "unknown algorithm \"" + a + "\"; expected \"gauss-newton\" or an "
-                                                   "NLopt name such as \"LD_LBFGS\" or \"LN_BOBYQA\"");
+                       r.fail(node.source(), full,
+                              "unknown algorithm \"" + a +
+                                  "\"; expected \"gauss-newton\" or an "
+                                  "NLopt name such as \"LD_LBFGS\" or \"LN_BOBYQA\"");
                      }
                    } else if (k == "xtol_rel") {
                      job.optimizer.xtol_rel = r.positive(node, full, false);
@@ -162,7 +169,8 @@ Job parse_table(const toml::table& root, const std::string& file) {
                      job.optimizer.stopval = r.number(node, full);
                    } else if (k == "max_evaluations") {
                      const long long n = r.integer(node, full);
-                     if (n <= 0 || n > 100000000) r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [1, 1e8]");
+                     if (n <= 0 || n > 100000000)
+                       r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [1, 1e8]");
                      job.optimizer.max_evaluations = static_cast<int>(n);
                    } else if (k == "time_limit_s") {
                      job.optimizer.time_limit = r.positive(node, full, false);
@@ -188,68 +196,69 @@ Job parse_table(const toml::table& root, const std::string& file) {
                  });
   }
   if (const toml::table* t = section("steering")) {
-    for_each_key(r, *t, "steering", {"nontrivial", "min_travel_deg", "deflate", "deflation_power", "deflation_shift"},
-                 [&](const std::string& k, const std::string& full, const toml::node& node) {
-                   if (k == "nontrivial") {
-                     job.steering.nontrivial = r.boolean(node, full);
-                   } else if (k == "min_travel_deg") {
-                     job.steering.min_travel = r.positive(node, full, true) * kRadiansPerDegree;
-                   } else if (k == "deflation_power") {
-                     job.steering.deflation_power = r.positive(node, full, true);
-                   } else if (k == "deflation_shift") {
-                     job.steering.deflation_shift = r.positive(node, full, false);
-                   } else if (k == "deflate") {
-                     const toml::array* list = node.as_array();
-                     if (list == nullptr) {
-                       r.fail(node.source(), full, "expected a list of families such as [\"planar\", \"trivial\"], got " +
-                                                       Reader::describe(node));
-                     }
-                     for (const toml::node& item : *list) {
-                       const std::string family = r.string(item, full);
-                       const DeflatableFamily* known = nullptr;
-                       std::string names;
-                       for (const DeflatableFamily& f : kDeflatable) {
-                         if (family == f.name) known = &f;
-                         names += std::string(names.empty() ? "" : ", ") + f.name;
-                       }
-                       if (known == nullptr) {
-                         r.fail(item.source(), full, "unknown family \"" + family + "\"; expected one of " + names);
-                       }
-                       if (known->joints != 0 && known->joints != job.loop.joints) {
-                         r.fail(item.source(), full, "\"" + family + "\" needs joints = " +
-                                                         std::to_string(known->joints) + " (" + known->why +
-                                                         "), the job has " + std::to_string(job.loop.joints));
-                       }
-                       if (std::count(job.steering.deflate.begin(), job.steering.deflate.end(), family)) {
-                         r.fail(item.source(), full, "\"" + family + "\" is listed twice");
-                       }
-                       job.steering.deflate.push_back(family);
-                     }
-                   }
-                 });
+    for_each_key(
+        r, *t, "steering", {"nontrivial", "min_travel_deg", "deflate", "deflation_power", "deflation_shift"},
+        [&](const std::string& k, const std::string& full, const toml::node& node) {
+          if (k == "nontrivial") {
+            job.steering.nontrivial = r.boolean(node, full);
+          } else if (k == "min_travel_deg") {
+            job.steering.min_travel = r.positive(node, full, true) * kRadiansPerDegree;
+          } else if (k == "deflation_power") {
+            job.steering.deflation_power = r.positive(node, full, true);
+          } else if (k == "deflation_shift") {
+            job.steering.deflation_shift = r.positive(node, full, false);
+          } else if (k == "deflate") {
+            const toml::array* list = node.as_array();
+            if (list == nullptr) {
+              r.fail(node.source(), full,
+                     "expected a list of families such as [\"planar\", \"trivial\"], got " + Reader::describe(node));
+            }
+            for (const toml::node& item : *list) {
+              const std::string family = r.string(item, full);
+              const DeflatableFamily* known = nullptr;
+              std::string names;
+              for (const DeflatableFamily& f : kDeflatable) {
+                if (family == f.name) known = &f;
+                names += std::string(names.empty() ? "" : ", ") + f.name;
+              }
+              if (known == nullptr) {
+                r.fail(item.source(), full, "unknown family \"" + family + "\"; expected one of " + names);
+              }
+              if (known->joints != 0 && known->joints != job.loop.joints) {
+                r.fail(item.source(), full,
+                       "\"" + family + "\" needs joints = " + std::to_string(known->joints) + " (" + known->why +
+                           "), the job has " + std::to_string(job.loop.joints));
+              }
+              if (std::count(job.steering.deflate.begin(), job.steering.deflate.end(), family)) {
+                r.fail(item.source(), full, "\"" + family + "\" is listed twice");
+              }
+              job.steering.deflate.push_back(family);
+            }
+          }
+        });
   }
   if (const toml::table* t = section("output")) {
     for_each_key(r, *t, "output", {"database", "report_threshold"},
                  [&](const std::string& k, const std::string& full, const toml::node& node) {
-      if (k == "report_threshold") {
-        job.output.report_threshold = r.positive(node, full, true);
-        return;
-      }
-      const std::string path = r.string(node, full);
-      if (path.empty()) r.fail(node.source(), full, "empty path");
-      // Relative to the job file, so that a job runs the same from anywhere.
-      const std::filesystem::path p(path);
-      job.output.database = p.is_absolute() || file.empty()
-                                ? path
-                                : (std::filesystem::path(file).parent_path() / p).lexically_normal().string();
-    });
+                   if (k == "report_threshold") {
+                     job.output.report_threshold = r.positive(node, full, true);
+                     return;
+                   }
+                   const std::string path = r.string(node, full);
+                   if (path.empty()) r.fail(node.source(), full, "empty path");
+                   // Relative to the job file, so that a job runs the same from anywhere.
+                   const std::filesystem::path p(path);
+                   job.output.database =
+                       p.is_absolute() || file.empty()
+                           ? path
+                           : (std::filesystem::path(file).parent_path() / p).lexically_normal().string();
+                 });
     if (!t->contains("database")) {
       job.output.database =
           (std::filesystem::path(file).parent_path() / job.output.database).lexically_normal().string();
     }
   } else {
-    job.output.database =
-        (std::filesystem::path(file).parent_path() / job.output.database).lexically_normal().string();
+    job.output.database = (std::filesystem::path(file).parent_path() / job.output.database).lexically_normal().string();
   }
   return job;
 }

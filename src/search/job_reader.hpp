@@ -13,7 +13,6 @@
 
 namespace loopfarm::detail {
 
-
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kRadiansPerDegree = kPi / 180.0;
 // The largest magnitude of a length (a, d). Energies are divided by L^2, L the

@@ -11,7 +11,6 @@
 namespace loopfarm::detail {
 namespace {
 
-
 // A parameter name in [space]: kind and 1-based joint, or a default ("a").
 struct ParameterName {
   ParameterKind kind = ParameterKind::a;
@@ -49,16 +48,17 @@ bool is_angle(ParameterKind kind) { return kind == ParameterKind::alpha || kind 
 bool is_length(ParameterKind kind) { return kind == ParameterKind::a || kind == ParameterKind::d; }
 
 // What a tie may point at: lengths to lengths, twists to twists, angles to angles.
-bool same_unit(ParameterKind a, ParameterKind b) {
-  return (is_length(a) && is_length(b)) || a == b;
-}
+bool same_unit(ParameterKind a, ParameterKind b) { return (is_length(a) && is_length(b)) || a == b; }
 
 const char* unit_name(ParameterKind kind) {
   switch (kind) {
     case ParameterKind::a:
-    case ParameterKind::d: return "a length (a or d)";
-    case ParameterKind::alpha: return "a twist (alpha)";
-    case ParameterKind::theta: return "an initial angle (theta)";
+    case ParameterKind::d:
+      return "a length (a or d)";
+    case ParameterKind::alpha:
+      return "a twist (alpha)";
+    case ParameterKind::theta:
+      return "an initial angle (theta)";
   }
   return "";
 }
@@ -77,8 +77,10 @@ ParameterSpec read_spec(const Reader& r, const toml::node& node, const std::stri
   // Lengths beyond kMaxLength overflow the length scale; say so at the value.
   auto check_magnitude = [&](const toml::node& at, double value) {
     if (is_length(kind) && !(std::abs(value) <= kMaxLength)) {
-      r.fail(at.source(), key, "got " + format(value) + "; a length must be in [-1e150, 1e150] (larger ones "
-                               "overflow the length scale L)");
+      r.fail(at.source(), key,
+             "got " + format(value) +
+                 "; a length must be in [-1e150, 1e150] (larger ones "
+                 "overflow the length scale L)");
     }
   };
   if (node.is_integer() || node.is_floating_point()) {
@@ -201,12 +203,15 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
       if (name == "symmetry") {
         symmetry = r.string(node, full);
         if (symmetry != "none" && symmetry != "line" && symmetry != "plane") {
-          r.fail(node.source(), full, "got \"" + symmetry + "\"; expected \"none\", \"line\" (a_i = a_{i+n/2}, "
-                                      "alpha and d likewise) or \"plane\" (mirror through joints 1 and n/2+1)");
+          r.fail(node.source(), full,
+                 "got \"" + symmetry +
+                     "\"; expected \"none\", \"line\" (a_i = a_{i+n/2}, "
+                     "alpha and d likewise) or \"plane\" (mirror through joints 1 and n/2+1)");
         }
         if (symmetry != "none" && joints % 2 != 0) {
-          r.fail(node.source(), full, "\"" + symmetry + "\" needs an even number of joints, the job has " +
-                                          std::to_string(joints) + " (write the ties per parameter instead)");
+          r.fail(node.source(), full,
+                 "\"" + symmetry + "\" needs an even number of joints, the job has " + std::to_string(joints) +
+                     " (write the ties per parameter instead)");
         }
         symmetry_line = static_cast<int>(node.source().begin.line);
         continue;
@@ -214,11 +219,13 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
       const std::optional<ParameterName> p = parse_parameter_name(name);
       if (!p) {
         r.fail(key.source(), full,
-               "unknown parameter; expected a1..a" + std::to_string(joints) + ", alpha1_deg.., d1.., theta1_deg.., "
-               "a default a, alpha_deg, d, theta_deg, or symmetry");
+               "unknown parameter; expected a1..a" + std::to_string(joints) +
+                   ", alpha1_deg.., d1.., theta1_deg.., "
+                   "a default a, alpha_deg, d, theta_deg, or symmetry");
       }
       if (p->joint > joints) {
-        r.fail(key.source(), full, "joint " + std::to_string(p->joint) + " but [loop] joints = " + std::to_string(joints));
+        r.fail(key.source(), full,
+               "joint " + std::to_string(p->joint) + " but [loop] joints = " + std::to_string(joints));
       }
       if (p->joint == 0) defaults[static_cast<size_t>(p->kind)] = read_spec(r, node, full, p->kind, false, nullptr);
     }
@@ -249,8 +256,8 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
                                  : "makes " + space.name(i) + " = " + (t.sign < 0 ? "-" : "") + space.name(t.source) +
                                        "; give " + space.name(t.source) + " instead"));
       }
-      space.specs[static_cast<size_t>(i)] = read_spec(r, node, keys[static_cast<size_t>(i)], p.kind, true,
-                                                      &ties[static_cast<size_t>(i)]);
+      space.specs[static_cast<size_t>(i)] =
+          read_spec(r, node, keys[static_cast<size_t>(i)], p.kind, true, &ties[static_cast<size_t>(i)]);
       places[static_cast<size_t>(i)] = node.source();
       named[static_cast<size_t>(i)] = true;
     }
@@ -267,17 +274,18 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
     if (!ties[i]) continue;
     const std::string& key = keys[i];
     const std::optional<ParameterName> p = parse_parameter_name(ties[i]->source);
-    if (!p || p->joint == 0 || p->joint > joints ||
-        space.name(space.index(p->kind, p->joint - 1)) != ties[i]->source) {
-      r.fail(places[i], key, "tied to \"" + ties[i]->source + "\", which is not a parameter of this " +
-                                 std::to_string(joints) + "-joint loop");
+    if (!p || p->joint == 0 || p->joint > joints || space.name(space.index(p->kind, p->joint - 1)) != ties[i]->source) {
+      r.fail(places[i], key,
+             "tied to \"" + ties[i]->source + "\", which is not a parameter of this " + std::to_string(joints) +
+                 "-joint loop");
     }
     const int source = space.index(p->kind, p->joint - 1);
     const ParameterKind kind = static_cast<ParameterKind>(static_cast<int>(i) / joints);
     if (source == static_cast<int>(i)) r.fail(places[i], key, "tied to itself");
     if (!same_unit(kind, p->kind)) {
-      r.fail(places[i], key, "tied to " + ties[i]->source + ", " + unit_name(p->kind) + "; " + space.name(static_cast<int>(i)) +
-                                 " is " + unit_name(kind));
+      r.fail(places[i], key,
+             "tied to " + ties[i]->source + ", " + unit_name(p->kind) + "; " + space.name(static_cast<int>(i)) +
+                 " is " + unit_name(kind));
     }
     if (space.specs[static_cast<size_t>(source)].mode == ParameterSpec::Mode::tied) {
       r.fail(places[i], key, "tied to " + ties[i]->source + ", which is itself tied; tie to its source instead");
@@ -306,8 +314,12 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
     const ParameterSpec& s = space.specs[i];
     double lo = 0.0;
     switch (s.mode) {
-      case ParameterSpec::Mode::fixed: lo = s.value; break;
-      case ParameterSpec::Mode::range: lo = s.lo; break;
+      case ParameterSpec::Mode::fixed:
+        lo = s.value;
+        break;
+      case ParameterSpec::Mode::range:
+        lo = s.lo;
+        break;
       case ParameterSpec::Mode::tied: {
         const ParameterSpec& src = space.specs[static_cast<size_t>(s.source)];
         const double src_lo = src.mode == ParameterSpec::Mode::fixed ? src.value : src.lo;
@@ -317,8 +329,8 @@ ParameterSpace read_space(const Reader& r, const toml::table* table, int joints)
       }
     }
     if (lo < 0.0) {
-      const std::string why = s.mode == ParameterSpec::Mode::tied ? "the tie can make it " + format(lo)
-                                                                   : "it can be " + format(lo);
+      const std::string why =
+          s.mode == ParameterSpec::Mode::tied ? "the tie can make it " + format(lo) : "it can be " + format(lo);
       const toml::source_region where = named[i] ? places[i] : toml::source_region{};
       r.fail(where, keys[i], "a link length must be >= 0, but " + why);
     }

@@ -15,8 +15,7 @@ Eigen::MatrixXd dimensionless_columns(const Eigen::MatrixXd& jacobian, const std
   return out;
 }
 
-LocalDimension local_dimension(const Eigen::MatrixXd& jacobian, double relative_tolerance,
-                               double absolute_tolerance) {
+LocalDimension local_dimension(const Eigen::MatrixXd& jacobian, double relative_tolerance, double absolute_tolerance) {
   LocalDimension out;
   out.parameters = static_cast<int>(jacobian.cols());
   if (jacobian.size() == 0) {

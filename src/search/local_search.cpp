@@ -7,18 +7,30 @@ namespace loopfarm {
 
 const char* to_string(SearchStatus status) {
   switch (status) {
-    case SearchStatus::stopval_reached: return "stopval_reached";
-    case SearchStatus::ftol_reached: return "ftol_reached";
-    case SearchStatus::xtol_reached: return "xtol_reached";
-    case SearchStatus::maxeval_reached: return "maxeval_reached";
-    case SearchStatus::maxtime_reached: return "maxtime_reached";
-    case SearchStatus::roundoff_limited: return "roundoff_limited";
-    case SearchStatus::stalled: return "stalled";
-    case SearchStatus::forced_stop: return "forced_stop";
-    case SearchStatus::failure: return "failure";
-    case SearchStatus::invalid_args: return "invalid_args";
-    case SearchStatus::out_of_memory: return "out_of_memory";
-    case SearchStatus::evaluation_failed: return "evaluation_failed";
+    case SearchStatus::stopval_reached:
+      return "stopval_reached";
+    case SearchStatus::ftol_reached:
+      return "ftol_reached";
+    case SearchStatus::xtol_reached:
+      return "xtol_reached";
+    case SearchStatus::maxeval_reached:
+      return "maxeval_reached";
+    case SearchStatus::maxtime_reached:
+      return "maxtime_reached";
+    case SearchStatus::roundoff_limited:
+      return "roundoff_limited";
+    case SearchStatus::stalled:
+      return "stalled";
+    case SearchStatus::forced_stop:
+      return "forced_stop";
+    case SearchStatus::failure:
+      return "failure";
+    case SearchStatus::invalid_args:
+      return "invalid_args";
+    case SearchStatus::out_of_memory:
+      return "out_of_memory";
+    case SearchStatus::evaluation_failed:
+      return "evaluation_failed";
   }
   return "unknown";
 }

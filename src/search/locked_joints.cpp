@@ -158,8 +158,8 @@ GeometricFit locked_fit(const LoopGeometry& g, const JointVector& pose, const st
     } else {
       std::snprintf(buffer, sizeof buffer, " locked (travel %.2g rad); ", most);
     }
-    out.detail = (locked.size() > 1 ? "joints " : "joint ") + joints + buffer + "locked " + remaining + ": " +
-                 fit.detail;
+    out.detail =
+        (locked.size() > 1 ? "joints " : "joint ") + joints + buffer + "locked " + remaining + ": " + fit.detail;
     check.conditions = {{(locked.size() > 1 ? "largest travel of joints " : "joint ") + joints + " [rad]", most},
                         {"locked " + remaining + " loop: " + to_string(fit.family) + " residual", fit.residual}};
   }

@@ -59,17 +59,28 @@ double objective_function(unsigned k, const double* x, double* grad, void* data)
 
 SearchStatus status_of(nlopt::result result) {
   switch (result) {
-    case nlopt::SUCCESS: return SearchStatus::xtol_reached;
-    case nlopt::STOPVAL_REACHED: return SearchStatus::stopval_reached;
-    case nlopt::FTOL_REACHED: return SearchStatus::ftol_reached;
-    case nlopt::XTOL_REACHED: return SearchStatus::xtol_reached;
-    case nlopt::MAXEVAL_REACHED: return SearchStatus::maxeval_reached;
-    case nlopt::MAXTIME_REACHED: return SearchStatus::maxtime_reached;
-    case nlopt::ROUNDOFF_LIMITED: return SearchStatus::roundoff_limited;
-    case nlopt::FORCED_STOP: return SearchStatus::forced_stop;
-    case nlopt::INVALID_ARGS: return SearchStatus::invalid_args;
-    case nlopt::OUT_OF_MEMORY: return SearchStatus::out_of_memory;
-    default: return SearchStatus::failure;
+    case nlopt::SUCCESS:
+      return SearchStatus::xtol_reached;
+    case nlopt::STOPVAL_REACHED:
+      return SearchStatus::stopval_reached;
+    case nlopt::FTOL_REACHED:
+      return SearchStatus::ftol_reached;
+    case nlopt::XTOL_REACHED:
+      return SearchStatus::xtol_reached;
+    case nlopt::MAXEVAL_REACHED:
+      return SearchStatus::maxeval_reached;
+    case nlopt::MAXTIME_REACHED:
+      return SearchStatus::maxtime_reached;
+    case nlopt::ROUNDOFF_LIMITED:
+      return SearchStatus::roundoff_limited;
+    case nlopt::FORCED_STOP:
+      return SearchStatus::forced_stop;
+    case nlopt::INVALID_ARGS:
+      return SearchStatus::invalid_args;
+    case nlopt::OUT_OF_MEMORY:
+      return SearchStatus::out_of_memory;
+    default:
+      return SearchStatus::failure;
   }
 }
 

@@ -143,7 +143,8 @@ double CycleObjective::steering(const Eigen::MatrixXd* angle_jacobian, GeometryV
       if (gradient && angle_jacobian) {
         // d travel / dp = d theta_i(argmax) / dp - d theta_i(argmin) / dp;
         // d log f / d travel = -2 ratio^2 / (travel f).
-        const Eigen::VectorXd dtravel = (angle_jacobian->row(t.argmax * n + i) - angle_jacobian->row(t.argmin * n + i)).transpose();
+        const Eigen::VectorXd dtravel =
+            (angle_jacobian->row(t.argmax * n + i) - angle_jacobian->row(t.argmin * n + i)).transpose();
         log_gradient += (-2.0 * ratio * ratio / (std::max(t.travel, 1e-300) * f)) * dtravel;
       }
     }

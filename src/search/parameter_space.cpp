@@ -61,7 +61,8 @@ LoopGeometry ParameterSpace::geometry(const Eigen::VectorXd& x) const {
   }
   for (int i = 0; i < 3 * joints; ++i) {
     const ParameterSpec& s = specs[static_cast<size_t>(i)];
-    if (s.mode == ParameterSpec::Mode::tied) value[static_cast<size_t>(i)] = s.sign * value[static_cast<size_t>(s.source)];
+    if (s.mode == ParameterSpec::Mode::tied)
+      value[static_cast<size_t>(i)] = s.sign * value[static_cast<size_t>(s.source)];
   }
   LoopGeometry g;
   g.a.resize(joints);
@@ -93,9 +94,15 @@ Eigen::VectorXd ParameterSpace::free_values(const LoopGeometry& g) const {
     const int i = free[k];
     const int joint = i % joints;
     switch (static_cast<ParameterKind>(i / joints)) {
-      case ParameterKind::a: x[static_cast<int>(k)] = g.a[joint]; break;
-      case ParameterKind::alpha: x[static_cast<int>(k)] = g.alpha[joint]; break;
-      default: x[static_cast<int>(k)] = g.d[joint]; break;
+      case ParameterKind::a:
+        x[static_cast<int>(k)] = g.a[joint];
+        break;
+      case ParameterKind::alpha:
+        x[static_cast<int>(k)] = g.alpha[joint];
+        break;
+      default:
+        x[static_cast<int>(k)] = g.d[joint];
+        break;
     }
   }
   return x;
@@ -111,8 +118,8 @@ int ParameterSpace::random_angle_count() const {
 
 JointVector ParameterSpace::initial_angles(const Eigen::VectorXd& draws) const {
   if (draws.size() != random_angle_count()) {
-    throw std::invalid_argument("ParameterSpace::initial_angles: " + std::to_string(draws.size()) +
-                                " values for " + std::to_string(random_angle_count()) + " random angles");
+    throw std::invalid_argument("ParameterSpace::initial_angles: " + std::to_string(draws.size()) + " values for " +
+                                std::to_string(random_angle_count()) + " random angles");
   }
   JointVector theta(joints);
   int next = 0;

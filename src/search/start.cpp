@@ -154,8 +154,7 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   analysis.verification.all_circuits = false;
   analysis.verification.all_extremes = false;
   analysis.verification.steps_per_turn = std::min(analysis.verification.steps_per_turn, 360);
-  const Eigen::MatrixXd columns =
-      dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry));
+  const Eigen::MatrixXd columns = dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry));
   out.candidate = analyse_candidate(out.final_geometry, out.final_angles, columns, analysis);
   // The circuit through the search's pose cannot always be followed from it:
   // a window's samples may step over a gap in the input's range that holds

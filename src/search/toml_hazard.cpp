@@ -10,7 +10,6 @@
 
 namespace loopfarm {
 
-
 namespace {
 
 bool is_bare_key_char(unsigned char c) {
@@ -64,10 +63,10 @@ std::optional<TomlHazard> find_toml_hazard(std::string_view text) {
   };
   // A UTF-8 byte order mark is allowed at the very start.
   if (text.substr(0, 3) == "\xEF\xBB\xBF") i = 3;
-  std::string open;           // the [ of arrays and { of inline tables now open, innermost last
+  std::string open;             // the [ of arrays and { of inline tables now open, innermost last
   bool statement_start = true;  // at the start of a line outside any value
-  bool in_header = false;     // inside [table] or [[array.of.tables]]
-  unsigned char prev = '\n';  // the last character outside strings, blanks and comments
+  bool in_header = false;       // inside [table] or [[array.of.tables]]
+  unsigned char prev = '\n';    // the last character outside strings, blanks and comments
   while (i < text.size()) {
     const unsigned char c = at(i);
     if (c == '\n') {

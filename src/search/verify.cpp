@@ -73,7 +73,8 @@ void VerificationOptions::validate() const {
   if (!(residual_tolerance > 0.0 && residual_tolerance < 1e-3)) {
     throw std::invalid_argument("VerificationOptions: residual_tolerance must be in (0, 1e-3)");
   }
-  if (input_joint < 0 || input_joint >= kMaxJoints) throw std::invalid_argument("VerificationOptions: input_joint out of range");
+  if (input_joint < 0 || input_joint >= kMaxJoints)
+    throw std::invalid_argument("VerificationOptions: input_joint out of range");
   if (!(min_input_travel > 0.0 && min_input_travel < 2.0 * kPi)) {
     throw std::invalid_argument("VerificationOptions: min_input_travel must be in (0, 2 pi)");
   }
@@ -81,9 +82,7 @@ void VerificationOptions::validate() const {
   motion().validate();
 }
 
-JointVector VerificationSummary::pose() const {
-  return joint_angles.empty() ? JointVector() : joint_angles.front();
-}
+JointVector VerificationSummary::pose() const { return joint_angles.empty() ? JointVector() : joint_angles.front(); }
 
 VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector& start_angles,
                                   const VerificationOptions& options) {
@@ -166,8 +165,8 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
                  (m.given_pose_closes ? "is not on this motion" : "does not close the rigid loop");
   }
   if (c.freedoms > 1) {
-    out.limit += std::string(out.limit.empty() ? "" : "; ") + std::to_string(c.freedoms) +
-                 " freedoms: traced with joints held";
+    out.limit +=
+        std::string(out.limit.empty() ? "" : "; ") + std::to_string(c.freedoms) + " freedoms: traced with joints held";
   }
   return out;
 }

@@ -162,9 +162,8 @@ GroundTruthCase bennett_case(const GroundTruthOptions& o, BennettSetup setup, in
   const LoopGeometry g = make(scale / length_scale(make(1.0, alpha1, alpha2)), alpha1, alpha2);
   const double theta0 = draws.input_angle(o.pose_margin);
   JointVector pose = asymmetric ? bennett_angles(g, theta0) : bennett_angles_line_symmetric(g, theta0);
-  return movable_case(GroundTruthFamily::bennett, setup, std::string("bennett-") + to_string(setup) + "-" +
-                                                             index_text(index),
-                      g, std::move(pose));
+  return movable_case(GroundTruthFamily::bennett, setup,
+                      std::string("bennett-") + to_string(setup) + "-" + index_text(index), g, std::move(pose));
 }
 
 // ---------------------------------------------------------------------------
@@ -214,8 +213,7 @@ GroundTruthCase planar_case(const GroundTruthOptions& o, int index) {
   const double theta0 = draws.input_angle(o.pose_margin);
   JointVector pose = planar_pose(g, theta0, draws.coin() ? 1.0 : -1.0);
   if (variant == 2) flip_some_axes(draws, g, pose);
-  return movable_case(GroundTruthFamily::planar, BennettSetup::none, "planar-" + index_text(index), g,
-                      std::move(pose));
+  return movable_case(GroundTruthFamily::planar, BennettSetup::none, "planar-" + index_text(index), g, std::move(pose));
 }
 
 // ---------------------------------------------------------------------------
@@ -236,8 +234,7 @@ JointVector spherical_pose(const LoopGeometry& g, double theta1, double elbow) {
   const Eigen::Matrix3d R1 = rz(theta1) * rx(alpha1);
   const Eigen::Vector3d z4 = rx(-alpha4) * Eigen::Vector3d::UnitZ();
   const Eigen::Vector3d w = R1.transpose() * z4;  // z4 in frame 2
-  const double cos_theta3 =
-      (std::cos(alpha2) * std::cos(alpha3) - w.z()) / (std::sin(alpha2) * std::sin(alpha3));
+  const double cos_theta3 = (std::cos(alpha2) * std::cos(alpha3) - w.z()) / (std::sin(alpha2) * std::sin(alpha3));
   const double theta3 = elbow * std::acos(std::clamp(cos_theta3, -1.0, 1.0));
   const Eigen::Vector3d u = rx(alpha2) * rz(theta3) * rx(alpha3) * Eigen::Vector3d::UnitZ();
   const double theta2 = std::atan2(w.y(), w.x()) - std::atan2(u.y(), u.x());
@@ -259,12 +256,15 @@ GroundTruthCase spherical_case(const GroundTruthOptions& o, int index) {
   Draws draws(o.seed, StreamFamily::spherical, index);
   const double m = o.twist_margin;
   double alpha[4] = {};
-  draw_until([&] { for (double& t : alpha) t = draws.uniform(m, kPi - m); },
-             [&] {
-               return std::abs(alpha[0] - alpha[3]) - std::abs(alpha[1] - alpha[2]) >= m &&
-                      widest_arc(alpha[1], alpha[2]) - widest_arc(alpha[0], alpha[3]) >= m;
-             },
-             "spherical crank");
+  draw_until(
+      [&] {
+        for (double& t : alpha) t = draws.uniform(m, kPi - m);
+      },
+      [&] {
+        return std::abs(alpha[0] - alpha[3]) - std::abs(alpha[1] - alpha[2]) >= m &&
+               widest_arc(alpha[1], alpha[2]) - widest_arc(alpha[0], alpha[3]) >= m;
+      },
+      "spherical crank");
   const LoopGeometry g = spherical_four_bar(alpha[0], alpha[1], alpha[2], alpha[3]);
   const double theta0 = draws.input_angle(o.pose_margin);
   JointVector pose = spherical_pose(g, theta0, draws.coin() ? 1.0 : -1.0);
@@ -324,17 +324,22 @@ std::vector<Parameter> destroying_parameters(GroundTruthFamily family) {
   switch (family) {
     // Off a1 = a3, alpha2 = alpha4, or d = 0: no Bennett representation, and the
     // twists are away from planar, the lengths from spherical.
-    case GroundTruthFamily::bennett: return {{K::a, 0}, {K::alpha, 1}, {K::d, 2}};
+    case GroundTruthFamily::bennett:
+      return {{K::a, 0}, {K::alpha, 1}, {K::d, 2}};
     // A twist off 0/180 deg: the axes are no longer parallel; an offset:
     // their signed sum is no longer zero, the loop cannot close at all.
-    case GroundTruthFamily::planar: return {{K::alpha, 0}, {K::d, 1}, {K::alpha, 2}, {K::d, 3}};
+    case GroundTruthFamily::planar:
+      return {{K::alpha, 0}, {K::d, 1}, {K::alpha, 2}, {K::d, 3}};
     // Any length or offset: the axes no longer meet in one point, and the
     // loop cannot close at all.
-    case GroundTruthFamily::spherical: return {{K::a, 0}, {K::d, 1}, {K::a, 2}, {K::d, 3}};
+    case GroundTruthFamily::spherical:
+      return {{K::a, 0}, {K::d, 1}, {K::a, 2}, {K::d, 3}};
     // Off a1 = a2, alpha3 = alpha4, d2 = 0 or d1 + d3 = 0: axes 1 and 3 no
     // longer coincide, and the loop is none of the other families.
-    case GroundTruthFamily::trivial: return {{K::a, 0}, {K::alpha, 2}, {K::d, 1}, {K::d, 0}};
-    case GroundTruthFamily::generic: break;
+    case GroundTruthFamily::trivial:
+      return {{K::a, 0}, {K::alpha, 2}, {K::d, 1}, {K::d, 0}};
+    case GroundTruthFamily::generic:
+      break;
   }
   return {};
 }
@@ -357,9 +362,15 @@ GroundTruthCase perturbed_case(const GroundTruthCase& parent, const Parameter& p
   c.geometry = parent.geometry;
   const double L = length_scale(parent.geometry);
   switch (parameter.kind) {
-    case ParameterKind::a: c.geometry.a[parameter.joint] += size * L; break;
-    case ParameterKind::alpha: c.geometry.alpha[parameter.joint] += size; break;
-    case ParameterKind::d: c.geometry.d[parameter.joint] += size * L; break;
+    case ParameterKind::a:
+      c.geometry.a[parameter.joint] += size * L;
+      break;
+    case ParameterKind::alpha:
+      c.geometry.alpha[parameter.joint] += size;
+      break;
+    case ParameterKind::d:
+      c.geometry.d[parameter.joint] += size * L;
+      break;
   }
   c.pose = parent.pose;
   c.pose_residual = pose_residual(c.geometry, c.pose);
@@ -406,17 +417,23 @@ void GroundTruthOptions::validate() const {
   if (!(max_length_scale >= min_length_scale && std::isfinite(max_length_scale))) {
     fail("max_length_scale must be finite and >= min_length_scale", max_length_scale);
   }
-  if (!(twist_margin > 0.0 && twist_margin <= 10.0 * kDegree)) fail("twist_margin must be in (0, 10 deg]", twist_margin);
+  if (!(twist_margin > 0.0 && twist_margin <= 10.0 * kDegree))
+    fail("twist_margin must be in (0, 10 deg]", twist_margin);
   if (!(pose_margin > 0.0 && pose_margin <= 45.0 * kDegree)) fail("pose_margin must be in (0, 45 deg]", pose_margin);
 }
 
 const char* to_string(GroundTruthFamily family) {
   switch (family) {
-    case GroundTruthFamily::bennett: return "bennett";
-    case GroundTruthFamily::planar: return "planar";
-    case GroundTruthFamily::spherical: return "spherical";
-    case GroundTruthFamily::trivial: return "trivial";
-    case GroundTruthFamily::generic: return "generic";
+    case GroundTruthFamily::bennett:
+      return "bennett";
+    case GroundTruthFamily::planar:
+      return "planar";
+    case GroundTruthFamily::spherical:
+      return "spherical";
+    case GroundTruthFamily::trivial:
+      return "trivial";
+    case GroundTruthFamily::generic:
+      return "generic";
   }
   return "unknown";
 }
@@ -424,11 +441,16 @@ const char* to_string(GroundTruthFamily family) {
 Family expected_classification(const GroundTruthCase& c) {
   if (!c.movable) return Family::unclassified;
   switch (c.family) {
-    case GroundTruthFamily::bennett: return Family::bennett;
-    case GroundTruthFamily::planar: return Family::planar;
-    case GroundTruthFamily::spherical: return Family::spherical;
-    case GroundTruthFamily::trivial: return Family::trivial;
-    case GroundTruthFamily::generic: break;
+    case GroundTruthFamily::bennett:
+      return Family::bennett;
+    case GroundTruthFamily::planar:
+      return Family::planar;
+    case GroundTruthFamily::spherical:
+      return Family::spherical;
+    case GroundTruthFamily::trivial:
+      return Family::trivial;
+    case GroundTruthFamily::generic:
+      break;
   }
   return Family::unclassified;
 }

@@ -65,8 +65,7 @@ bool same_reading(const LoopSection& a, const LoopSection& b) {
 
 }  // namespace
 
-std::vector<double> ground_truth_energies(const std::vector<GroundTruthCase>& ground_truth,
-                                          const LoopSection& loop) {
+std::vector<double> ground_truth_energies(const std::vector<GroundTruthCase>& ground_truth, const LoopSection& loop) {
   std::vector<double> energies;
   energies.reserve(ground_truth.size());
   for (const GroundTruthCase& c : ground_truth) energies.push_back(ground_truth_energy(c, loop));
@@ -175,8 +174,8 @@ TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
 }
 
 TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
-                                  const std::vector<GroundTruthCase>& ground_truth,
-                                  const std::vector<double>& energies, const TradeoffOptions& options) {
+                                  const std::vector<GroundTruthCase>& ground_truth, const std::vector<double>& energies,
+                                  const TradeoffOptions& options) {
   if (energies.size() != ground_truth.size()) {
     throw std::invalid_argument("measure_configuration: " + std::to_string(energies.size()) + " energies for " +
                                 std::to_string(ground_truth.size()) + " ground-truth loops");

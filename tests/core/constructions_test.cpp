@@ -12,20 +12,20 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/SVD>
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 
+#include "four_bar_cases.hpp"
 #include "loopfarm/core/constructions.hpp"
 #include "loopfarm/core/loop.hpp"
 #include "loopfarm/core/sample_loops.hpp"
-#include "four_bar_cases.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {
 namespace {
 
-using testing::FourBarCase;
 using testing::four_bar_cases;
+using testing::FourBarCase;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -376,8 +376,8 @@ TEST(Constructions, TrihedralBricardClosesAlongItsMotionInEverySignPattern) {
   // that moves over an interval of p: the exact DH loop (lengths as given,
   // twists +-90 deg of the pattern, no offsets) is closed by the poses read
   // off the construction at five parameters, and its joints move.
-  for (const std::array<double, 5>& lengths : {std::array<double, 5>{1.5, 1.0, 1.2, 0.8, 1.0},
-                                               std::array<double, 5>{0.7, 1.3, 1.6, 0.9, 1.1}}) {
+  for (const std::array<double, 5>& lengths :
+       {std::array<double, 5>{1.5, 1.0, 1.2, 0.8, 1.0}, std::array<double, 5>{0.7, 1.3, 1.6, 0.9, 1.1}}) {
     for (unsigned pattern = 0; pattern < 64; ++pattern) {
       TrihedralBricard t{lengths, pattern, 0};
       const std::vector<double> ps = moving_branch(t, 5);
@@ -421,7 +421,8 @@ TEST(Constructions, TrihedralBricardMovesWithOneDegreeOfFreedom) {
       EXPECT_GT(svd.singularValues()[4], 1e-4 * svd.singularValues()[0]) << pattern;
       EXPECT_LT(svd.singularValues()[5], 1e-10 * svd.singularValues()[0]) << pattern;
       JointVector theta;
-      ASSERT_TRUE(testing::assemble_by_levenberg_marquardt(at.geometry, at.theta[0], rng, theta, 40)) << pattern << " p " << p;
+      ASSERT_TRUE(testing::assemble_by_levenberg_marquardt(at.geometry, at.theta[0], rng, theta, 40))
+          << pattern << " p " << p;
       // In the pose found, axes 1, 3, 5 meet in one point and so do 2, 4, 6:
       // the geometry the construction starts from.
       const std::vector<Axis> axes = joint_axes(at.geometry, theta);
@@ -464,7 +465,8 @@ TEST(Constructions, TrihedralBricardParityDecidesWhetherSomeLengthsMove) {
     int assembled = 0;
     for (int i = 0; i < 24; ++i) {
       JointVector theta;
-      if (testing::assemble_by_levenberg_marquardt(g, -kPi + (i + 0.5) * kPi / 12, rng, theta, odd ? 10 : 40)) ++assembled;
+      if (testing::assemble_by_levenberg_marquardt(g, -kPi + (i + 0.5) * kPi / 12, rng, theta, odd ? 10 : 40))
+        ++assembled;
     }
     if (odd) {
       EXPECT_GE(assembled, 12) << pattern;

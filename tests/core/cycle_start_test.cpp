@@ -84,8 +84,8 @@ TEST(CycleStart, ABennettLoopsInputTurnsFully) {
 }
 
 TEST(CycleStart, ARigidLoopHasNoMotion) {
-  const LoopGeometry g = LoopGeometry::from_degrees(std::vector<double>{1, 2, 3, 2.5}, std::vector<double>{20, 70, 40, 110},
-                                                    std::vector<double>{0.1, -0.3, 0.2, 0});
+  const LoopGeometry g = LoopGeometry::from_degrees(
+      std::vector<double>{1, 2, 3, 2.5}, std::vector<double>{20, 70, 40, 110}, std::vector<double>{0.1, -0.3, 0.2, 0});
   const LoopModel model(g);
   EquilibriumWorkspace ws(model);
   const CycleStart start = choose_cycle_start(model, ws, 0.0, nullptr);

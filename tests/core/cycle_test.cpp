@@ -288,8 +288,7 @@ TEST(Cycle, ResultDoesNotDependOnTheSampleCountAtSharedAngles) {
   const CycleSummary a = run_cycle(long_link_loop(), paper_start(), {}, coarse);
   const CycleSummary b = run_cycle(long_link_loop(), paper_start(), {}, fine);
   for (int j = 0; j < 16; ++j) {
-    EXPECT_NEAR(a.samples[static_cast<size_t>(j)].energy, b.samples[static_cast<size_t>(4 * j)].energy,
-                1e-9 * b.E_max)
+    EXPECT_NEAR(a.samples[static_cast<size_t>(j)].energy, b.samples[static_cast<size_t>(4 * j)].energy, 1e-9 * b.E_max)
         << j;
   }
 }
@@ -351,15 +350,15 @@ TEST(Cycle, CycleFromANearbyGeometryAgreesWithTheWalk) {
       EXPECT_EQ(reused.samples[j].theta_in, walked.samples[j].theta_in);
       EXPECT_NEAR(reused.samples[j].energy, walked.samples[j].energy, 1e-9 * walked.samples[j].energy) << j;
       for (int i = 0; i < 4; ++i) {
-        EXPECT_NEAR(wrap_angle(reused.samples[j].state.theta[i] - walked.samples[j].state.theta[i]), 0.0, 1e-9)
-            << j;
+        EXPECT_NEAR(wrap_angle(reused.samples[j].state.theta[i] - walked.samples[j].state.theta[i]), 0.0, 1e-9) << j;
       }
     }
     EXPECT_NEAR(reused.E_mean, walked.E_mean, 1e-9 * walked.E_mean);
-    EXPECT_EQ(reused.E_max, std::max_element(reused.samples.begin(), reused.samples.end(),
-                                             [](const CycleSample& a, const CycleSample& b) {
-                                               return a.energy < b.energy;
-                                             })->energy);
+    EXPECT_EQ(
+        reused.E_max,
+        std::max_element(reused.samples.begin(), reused.samples.end(), [](const CycleSample& a, const CycleSample& b) {
+          return a.energy < b.energy;
+        })->energy);
     EXPECT_LE(reused.total_iterations, 4 * N);
     if (N == 4) {
       EXPECT_LT(reused.total_iterations, walked.total_iterations / 3)
@@ -572,8 +571,8 @@ TEST(Cycle, LooseMidpointsChangeNoSample) {
           EXPECT_LE(sample.closure_residual, model.options().closure_tolerance) << seed << " at " << sample.theta_in;
         }
       });
-  EXPECT_GE(totals.jumps_b, 5);           // the comparison passes folds
-  EXPECT_GE(totals.refinements_b, 100);   // and has midpoints to loosen
+  EXPECT_GE(totals.jumps_b, 5);          // the comparison passes folds
+  EXPECT_GE(totals.refinements_b, 100);  // and has midpoints to loosen
   EXPECT_LT(totals.iterations_a, totals.iterations_b);
 }
 

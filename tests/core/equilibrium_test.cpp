@@ -122,16 +122,17 @@ TEST(Equilibrium, SolutionSatisfiesKktConditionsCheckedByFiniteDifferences) {
         auto residual_moved = [&](double step) {
           EquilibriumState moved = s.state;
           const int k = model.unknown_deformation(u);
-          if (k >= 0) moved.deformations[k] += step;
-          else moved.theta[model.unknown_joint(u)] += step;
+          if (k >= 0)
+            moved.deformations[k] += step;
+          else
+            moved.theta[model.unknown_joint(u)] += step;
           LoopGeometry gm;
           deformed_geometry(model, moved.deformations, gm);
           return closure_residual(gm, moved.theta);
         };
         const Vector6 column = (residual_moved(h) - residual_moved(-h)) / (2 * h);
         const int k = model.unknown_deformation(u);
-        const double energy_gradient =
-            k >= 0 ? model.deformation_stiffness(k) * s.state.deformations[k] : 0.0;
+        const double energy_gradient = k >= 0 ? model.deformation_stiffness(k) * s.state.deformations[k] : 0.0;
         EXPECT_NEAR(energy_gradient + column.dot(s.state.multipliers), 0.0, 1e-8)
             << "seed " << seed << " unknown " << u;
       }
@@ -185,8 +186,8 @@ TEST(Equilibrium, WarmStartFromTheAnswerConvergesAtOnce) {
   g.a[0] = 2.03;
   const LoopModel model(g);
   EquilibriumWorkspace ws(model);
-  const EquilibriumSummary cold =
-      solve_equilibrium(model, ws, rad(120), EquilibriumState::at_angles(model, bennett_angles(paper_bennett_loop(), rad(120))));
+  const EquilibriumSummary cold = solve_equilibrium(
+      model, ws, rad(120), EquilibriumState::at_angles(model, bennett_angles(paper_bennett_loop(), rad(120))));
   ASSERT_EQ(cold.status, SolveStatus::converged);
   const EquilibriumSummary again = solve_equilibrium(model, ws, rad(120), cold.state);
   EXPECT_EQ(again.status, SolveStatus::converged);
@@ -244,7 +245,8 @@ TEST(Equilibrium, PathTangentMatchesCentralDifferences) {
       }
       for (int k = 0; k < model.deformation_count(); ++k) {
         const double fd = (plus.state.deformations[k] - minus.state.deformations[k]) / (2 * h);
-        EXPECT_NEAR(t.deformations[k], fd, tol * std::max(1.0, std::abs(fd))) << what << " " << deformation_name(model, k);
+        EXPECT_NEAR(t.deformations[k], fd, tol * std::max(1.0, std::abs(fd)))
+            << what << " " << deformation_name(model, k);
       }
       for (int k = 0; k < 6; ++k) {
         const double fd = (plus.state.multipliers[k] - minus.state.multipliers[k]) / (2 * h);
@@ -297,7 +299,8 @@ TEST(Equilibrium, StructuredStepIsTheGeneralNewtonStep) {
     }
     const double theta_in = c.start[c.input_joint];
     for (int limit : {1, 2, 3, 0}) {
-      const EquilibriumSummary s = solve_equilibrium(structured, ws_structured, theta_in, guess, {.max_iterations = limit});
+      const EquilibriumSummary s =
+          solve_equilibrium(structured, ws_structured, theta_in, guess, {.max_iterations = limit});
       const EquilibriumSummary g = solve_equilibrium(general, ws_general, theta_in, guess, {.max_iterations = limit});
       // The first step always is one (the guess's multipliers are zero); in
       // between, the multipliers of a guess off the closure curve can grow
@@ -463,7 +466,8 @@ TEST(Equilibrium, GaussNewtonLimitStopsBeforeTheNextGaussNewtonStep) {
       EXPECT_LT(s.iterations, free.iterations) << "seed " << seed;
     }
     // A limit the solve does not reach changes nothing.
-    const EquilibriumSummary same = solve_equilibrium(model, ws, 0.4, guess, {.max_gauss_newton_steps = free.gauss_newton_steps});
+    const EquilibriumSummary same =
+        solve_equilibrium(model, ws, 0.4, guess, {.max_gauss_newton_steps = free.gauss_newton_steps});
     EXPECT_EQ(same.status, free.status) << "seed " << seed;
     EXPECT_EQ(same.iterations, free.iterations) << "seed " << seed;
     EXPECT_EQ(same.energy, free.energy) << "seed " << seed;

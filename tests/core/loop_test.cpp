@@ -19,10 +19,18 @@ using testing::relative_error;
 void perturb(LoopGeometry& g, JointVector& theta, int e, double h) {
   const int joint = e / kElementsPerJoint;
   switch (static_cast<ChainParameter>(e % kElementsPerJoint)) {
-    case ChainParameter::theta: theta[joint] += h; break;
-    case ChainParameter::d: g.d[joint] += h; break;
-    case ChainParameter::a: g.a[joint] += h; break;
-    case ChainParameter::alpha: g.alpha[joint] += h; break;
+    case ChainParameter::theta:
+      theta[joint] += h;
+      break;
+    case ChainParameter::d:
+      g.d[joint] += h;
+      break;
+    case ChainParameter::a:
+      g.a[joint] += h;
+      break;
+    case ChainParameter::alpha:
+      g.alpha[joint] += h;
+      break;
   }
 }
 
@@ -238,12 +246,14 @@ TEST(Loop, AxisFlipLeavesTheLoopProductUnchanged) {
       const Eigen::Matrix4d flipped = forward_transform(f, axis_flipped_angles(theta, j)).matrix();
       Eigen::Isometry3d rx = Eigen::Isometry3d::Identity();
       rx.rotate(Eigen::AngleAxisd(3.14159265358979323846, Vector3::UnitX()));
-      const Eigen::Matrix4d expected = j == 0 ? Eigen::Matrix4d(rx.matrix().transpose() * product * rx.matrix()) : product;
+      const Eigen::Matrix4d expected =
+          j == 0 ? Eigen::Matrix4d(rx.matrix().transpose() * product * rx.matrix()) : product;
       EXPECT_LT((flipped - expected).cwiseAbs().maxCoeff(), 1e-12) << n << " " << j;
       EXPECT_DOUBLE_EQ(f.d[j], -g.d[j]);
       // Flipping twice is the identity (up to the wrap of the twists).
       const LoopGeometry back = axis_flipped(f, j);
-      for (int k = 0; k < n; ++k) EXPECT_NEAR(std::remainder(back.alpha[k] - g.alpha[k], 2 * 3.14159265358979323846), 0.0, 1e-14);
+      for (int k = 0; k < n; ++k)
+        EXPECT_NEAR(std::remainder(back.alpha[k] - g.alpha[k], 2 * 3.14159265358979323846), 0.0, 1e-14);
     }
   }
   // A closed pose stays closed: the Bennett loop with axis 2 flipped.

@@ -7,12 +7,12 @@
 // motion from every theta0 tried, and their near misses refused.
 #include "loopfarm/core/motion.hpp"
 
-#include <cmath>
-#include <optional>
-#include <string>
-#include <stdexcept>
 #include <bit>
+#include <cmath>
 #include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -242,9 +242,9 @@ TEST(Motion, AStructureThatClosesButCannotMoveDoesNotMove) {
 }
 
 TEST(Motion, CoaxialTrivialLoopTurnsWithTwoJointsFrozen) {
-  const LoopGeometry g = LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5},
-                                                    std::vector<double>{40, 40, 70, 70},
-                                                    std::vector<double>{0.3, 0.0, -0.3, 0.0});
+  const LoopGeometry g =
+      LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5}, std::vector<double>{40, 40, 70, 70},
+                                 std::vector<double>{0.3, 0.0, -0.3, 0.0});
   JointVector start(4);
   start << rad(30), kPi, rad(-30), kPi;
   const Circuit c = trace_circuit(g, start);
@@ -258,8 +258,8 @@ TEST(Motion, CoaxialTrivialLoopTurnsWithTwoJointsFrozen) {
 // ---------------------------------------------------------------------------
 // Ground truth of every kind
 
-using testing::FourBarCase;
 using testing::four_bar_cases;
+using testing::FourBarCase;
 
 // |a - b| as angles (any 2 pi apart).
 double angle_gap(double a, double b) { return std::abs(wrap_angle(a - b)); }
@@ -302,11 +302,13 @@ TEST(MotionGroundTruth, FourBarCircuitsAndRangesAreTheClosedFormsToAMicroDegree)
             matched = matched || r.crank();
           } else {
             matched = matched || (!r.crank() && angle_gap(r.lo, e.lo) < kRangeTolerance &&
-                                  angle_gap(r.hi, e.hi) < kRangeTolerance && std::abs((r.hi - r.lo) - (e.hi - e.lo)) < kRangeTolerance);
+                                  angle_gap(r.hi, e.hi) < kRangeTolerance &&
+                                  std::abs((r.hi - r.lo) - (e.hi - e.lo)) < kRangeTolerance);
           }
         }
         EXPECT_TRUE(matched) << c.name << " joint " << j + 1 << ": [" << deg(r.lo) << ", " << deg(r.hi) << "] turns "
-                             << r.turns << ", closed form [" << deg(expected[0].lo) << ", " << deg(expected[0].hi) << "]";
+                             << r.turns << ", closed form [" << deg(expected[0].lo) << ", " << deg(expected[0].hi)
+                             << "]";
       }
     }
   }
@@ -416,9 +418,8 @@ TEST(Motion, MotionStartKeepsTheGivenAssemblyMode) {
   ASSERT_TRUE(from_far.has_value());
   EXPECT_LT(closure_residual(g, from_far->pose).cwiseAbs().maxCoeff(), 1e-12);
 
-  const LoopGeometry rigid = LoopGeometry::from_degrees(std::vector<double>{1, 2, 3, 2.5},
-                                                        std::vector<double>{20, 70, 40, 110},
-                                                        std::vector<double>{0.1, -0.3, 0.2, 0});
+  const LoopGeometry rigid = LoopGeometry::from_degrees(
+      std::vector<double>{1, 2, 3, 2.5}, std::vector<double>{20, 70, 40, 110}, std::vector<double>{0.1, -0.3, 0.2, 0});
   for (double theta0 : {0.0, 1.0, 2.5}) EXPECT_FALSE(motion_start(rigid, theta0, nullptr, rad(1)).has_value());
   // Closes only stretched flat (theta1 = pi), and cannot move there.
   JointVector flat(4);
@@ -590,7 +591,7 @@ TEST(MotionGroundTruth, NearMissesAreRefused) {
   struct Kind {
     std::string name;
     LoopGeometry g;
-    int parameter;  // index in (a, alpha, d)
+    int parameter;      // index in (a, alpha, d)
     double resolution;  // the smallest move refused
   };
   std::vector<Kind> kinds;

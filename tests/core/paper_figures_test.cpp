@@ -3,8 +3,8 @@
 #include <cmath>
 #include <vector>
 
-#include <Eigen/SVD>
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 
 #include "loopfarm/core/assembly.hpp"
 #include "loopfarm/core/cycle.hpp"
@@ -60,8 +60,7 @@ TEST(PaperFigure6, BennettLoopHasZeroEnergyOverTheCycleOnItsClosureCurve) {
     EXPECT_NEAR(wrap_angle(t[3] + t[1]), 0.0, 1e-10);
     // tan(theta1/2) tan(theta2/2) = ratio, written without the poles of tan:
     // sin(t1/2) sin(t2/2) - ratio cos(t1/2) cos(t2/2) = 0.
-    EXPECT_NEAR(std::sin(t[0] / 2) * std::sin(t[1] / 2) - ratio * std::cos(t[0] / 2) * std::cos(t[1] / 2), 0.0,
-                1e-10);
+    EXPECT_NEAR(std::sin(t[0] / 2) * std::sin(t[1] / 2) - ratio * std::cos(t[0] / 2) * std::cos(t[1] / 2), 0.0, 1e-10);
   }
 }
 
@@ -78,8 +77,7 @@ TEST(PaperFigure6, LineSymmetricSetupHasZeroEnergyOnItsClosureCurve) {
     const JointVector& t = sample.state.theta;
     EXPECT_NEAR(wrap_angle(t[2] - t[0]), 0.0, 1e-10);
     EXPECT_NEAR(wrap_angle(t[3] - t[1]), 0.0, 1e-10);
-    EXPECT_NEAR(std::sin(t[0] / 2) * std::sin(t[1] / 2) - ratio * std::cos(t[0] / 2) * std::cos(t[1] / 2), 0.0,
-                1e-10);
+    EXPECT_NEAR(std::sin(t[0] / 2) * std::sin(t[1] / 2) - ratio * std::cos(t[0] / 2) * std::cos(t[1] / 2), 0.0, 1e-10);
   }
 }
 
@@ -161,8 +159,7 @@ TEST(PaperFoldedPoses, SolveConvergesAtTheCuspAndAgreesWithASecondMethod) {
     // Cusp: lower than the neighbours on either side, at 1 and 3 degrees.
     for (double offset_deg : {1.0, 3.0}) {
       for (double side : {-1.0, 1.0}) {
-        const EquilibriumSummary near =
-            solve_equilibrium(model, ws, to + side * rad(offset_deg), folded.state);
+        const EquilibriumSummary near = solve_equilibrium(model, ws, to + side * rad(offset_deg), folded.state);
         ASSERT_EQ(near.status, SolveStatus::converged);
         EXPECT_GT(near.energy, folded.energy) << folded_deg << " " << side * offset_deg;
       }

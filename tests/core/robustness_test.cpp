@@ -52,11 +52,16 @@ class Draws {
 enum class Kind { generic, special_values, extreme_scales, near_family, count };
 const char* name(Kind kind) {
   switch (kind) {
-    case Kind::generic: return "generic";
-    case Kind::special_values: return "special values";
-    case Kind::extreme_scales: return "extreme scales";
-    case Kind::near_family: return "near a family";
-    case Kind::count: break;
+    case Kind::generic:
+      return "generic";
+    case Kind::special_values:
+      return "special values";
+    case Kind::extreme_scales:
+      return "extreme scales";
+    case Kind::near_family:
+      return "near a family";
+    case Kind::count:
+      break;
   }
   return "?";
 }
@@ -127,7 +132,8 @@ LoopGeometry draw_geometry(Kind kind, Draws& draws) {
       }
       break;
     }
-    case Kind::count: break;
+    case Kind::count:
+      break;
   }
   return g;
 }
@@ -159,8 +165,7 @@ TEST_P(Robustness, RandomGeometriesGiveFiniteResultsStatusesAndBoundedIterations
   // The most Newton iterations one cycle may spend: every sample refined to
   // the finest step, each sub-step at its cap.
   const long long cycle_iteration_cap = static_cast<long long>(cycle_options.samples) *
-                                        (1LL << cycle_options.max_refinements) *
-                                        cycle_options.max_iterations_per_step;
+                                        (1LL << cycle_options.max_refinements) * cycle_options.max_iterations_per_step;
 
   std::map<std::string, int> statuses;
   int invalid = 0, cycles = 0, failed_cycles = 0, non_finite = 0;
@@ -200,8 +205,8 @@ TEST_P(Robustness, RandomGeometriesGiveFiniteResultsStatusesAndBoundedIterations
     ++statuses[to_string(far.status)];
     ASSERT_LE(far.iterations, options.max_iterations) << where;
     if (far.status != SolveStatus::non_finite) {
-      EXPECT_TRUE(std::isfinite(far.energy) && std::isfinite(far.closure_residual) &&
-                  std::isfinite(far.stationarity) && finite(far.state))
+      EXPECT_TRUE(std::isfinite(far.energy) && std::isfinite(far.closure_residual) && std::isfinite(far.stationarity) &&
+                  finite(far.state))
           << where << ": non-finite result with status " << to_string(far.status);
     } else {
       ++non_finite;
@@ -246,10 +251,11 @@ TEST_P(Robustness, RandomGeometriesGiveFiniteResultsStatusesAndBoundedIterations
   std::printf("robustness, %s, shard %d: %llu geometries (n = 4..8:", name(kind), shard,
               static_cast<unsigned long long>(count));
   for (int n = kMinJoints; n <= kMaxJoints; ++n) std::printf(" %d", joints[n]);
-  std::printf("), %d refused by validate_geometry, %d cycles (%d with failed samples), "
-              "cycle iterations mean %.1f max %d (cap %lld), non-finite solves %d\n",
-              invalid, cycles, failed_cycles, cycles ? double(total_cycle_iterations) / cycles : 0.0,
-              max_cycle_iterations, cycle_iteration_cap, non_finite);
+  std::printf(
+      "), %d refused by validate_geometry, %d cycles (%d with failed samples), "
+      "cycle iterations mean %.1f max %d (cap %lld), non-finite solves %d\n",
+      invalid, cycles, failed_cycles, cycles ? double(total_cycle_iterations) / cycles : 0.0, max_cycle_iterations,
+      cycle_iteration_cap, non_finite);
   for (const auto& [status, n] : statuses) std::printf("  %-30s %d\n", status.c_str(), n);
 
   // Non-finite inputs are the only source of non_finite; none are drawn here.
@@ -259,8 +265,8 @@ TEST_P(Robustness, RandomGeometriesGiveFiniteResultsStatusesAndBoundedIterations
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinds, Robustness,
-                         ::testing::Combine(::testing::Values(Kind::generic, Kind::special_values,
-                                                              Kind::extreme_scales, Kind::near_family),
+                         ::testing::Combine(::testing::Values(Kind::generic, Kind::special_values, Kind::extreme_scales,
+                                                              Kind::near_family),
                                             ::testing::Range(0, kShards)),
                          [](const ::testing::TestParamInfo<std::tuple<Kind, int>>& info) {
                            std::string text = name(std::get<0>(info.param));

@@ -1,8 +1,8 @@
 // The solver's hand-written dense kernels against Eigen's own factorisation.
 #include "../../src/core/small_dense.hpp"
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 #include "loopfarm/core/types.hpp"
 

@@ -31,11 +31,11 @@
 #include <gtest/gtest.h>
 
 #include "loopfarm/core/assembly.hpp"
-#include "loopfarm/search/classify.hpp"
 #include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/classify.hpp"
 #include "loopfarm/search/local_search.hpp"
 #include "loopfarm/search/objective.hpp"
-#include "loopfarm/core/sample_loops.hpp"
 #include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
@@ -429,7 +429,8 @@ TEST(Stability, PlanarFourBarsWithChangePointsReadZeroAndVerify) {
       EXPECT_TRUE(m.verification.full_turn) << c.name;
       // The rhombus assembles at 90 deg on its coaxial branch (axes 1 and 3
       // coincide, joints 2 and 4 frozen): also a motion, the trivial one.
-      const Family expected = std::string(bar.name) == "rhombus 1,1,1,1" && theta0 > 0 ? Family::trivial : Family::planar;
+      const Family expected =
+          std::string(bar.name) == "rhombus 1,1,1,1" && theta0 > 0 ? Family::trivial : Family::planar;
       EXPECT_EQ(m.classification.family, expected) << c.name << ": " << m.classification.detail;
     }
   }
@@ -565,7 +566,8 @@ TEST(Stability, NearPlanarLoopsReadTheSquareOfTheirDistanceFromPlanar) {
     int pattern;  // 0: all twists eps; 1: twists 0, pi - eps, pi - eps, 0; 2: twist 1 only
     double c;     // E_mean / eps^2, measured
   };
-  const Variant variants[] = {{"all twists eps", 0, 1.28681}, {"two twists pi - eps", 1, 0.835471}, {"twist 1 eps", 2, 0.318848}};
+  const Variant variants[] = {
+      {"all twists eps", 0, 1.28681}, {"two twists pi - eps", 1, 0.835471}, {"twist 1 eps", 2, 0.318848}};
   for (const Variant& v : variants) {
     for (double eps : {1e-4, 1e-5, 1e-6}) {
       LoopGeometry g = crank;
@@ -848,7 +850,7 @@ TEST(StabilityKnownLimit, RandomAnglesCanAssembleAMovableLoopOnASpuriousEquilibr
     EquilibriumState tangent;
     EXPECT_TRUE(equilibrium_tangent(model, ws, m.assembly.state, tangent));  // a minimum, not a saddle
   }
-  EXPECT_GT(m.cycle.E_mean, 0.01);  // 0.1199 seen
+  EXPECT_GT(m.cycle.E_mean, 0.01);     // 0.1199 seen
   EXPECT_GT(m.cycle.branch_jumps, 0);  // 2 seen: the cycle does flag it
   EXPECT_TRUE(m.verification.verified);
   const ParameterSpace space = a1_free(rigid_paper_loop(), start, 1.9, 2.1);
@@ -856,7 +858,7 @@ TEST(StabilityKnownLimit, RandomAnglesCanAssembleAMovableLoopOnASpuriousEquilibr
     CycleSummary final_cycle;
     const LocalSearchSummary s = search(space, rigid_paper_loop(), algorithm, {}, &final_cycle, false);
     EXPECT_GT(s.E_mean, 1e-6) << algorithm << " " << to_string(s.status);  // 5.9e-5 (GN), 7.8e-5 (LBFGS)
-    EXPECT_GT(std::abs(s.x[0] - 2.0), 0.01) << algorithm;                    // 1.948, 1.940
+    EXPECT_GT(std::abs(s.x[0] - 2.0), 0.01) << algorithm;                  // 1.948, 1.940
     EXPECT_EQ(final_cycle.branch_jumps + final_cycle.failed_samples, 0) << algorithm;
 
     const LocalSearchSummary reused = search(space, rigid_paper_loop(), algorithm, {}, &final_cycle, true);
@@ -975,8 +977,8 @@ TEST(Stability, AStartOnAZeroReportsZeroAndDoesNotMove) {
       {"near-planar Bennett", near_planar, bennett_angles(near_planar, rad(120)), 0.1, 0.2},
       {"planar crank", crank, run_methods({"crank", crank, JointVector(), 0.0}).assembly.state.theta, 0.1, 0.2},
       {"parallelogram at its change point", planar_four_bar(1, 2, 1, 2), change_point, 0.1, 0.2},
-      {"spherical, lengths fixed at 0", spherical, run_methods({"sph", spherical, JointVector(), 0.0}).assembly.state.theta,
-       0.0, 0.2},
+      {"spherical, lengths fixed at 0", spherical,
+       run_methods({"sph", spherical, JointVector(), 0.0}).assembly.state.theta, 0.0, 0.2},
   };
   for (const Start& s : starts) {
     const ParameterSpace space = space_around(s.geometry, s.angles, s.rel_a, s.span_alpha);

@@ -172,8 +172,8 @@ class CoordinatorTest : public ::testing::Test {
                     std::to_string(c.hits) + " a1 " + std::to_string(c.a.at(0)));
     }
     const StartCounts counts = db.start_counts();
-    out.push_back("starts " + std::to_string(counts.starts) + " zeros " + std::to_string(counts.zeros) +
-                  " verified " + std::to_string(counts.verified));
+    out.push_back("starts " + std::to_string(counts.starts) + " zeros " + std::to_string(counts.zeros) + " verified " +
+                  std::to_string(counts.verified));
     return out;
   }
 

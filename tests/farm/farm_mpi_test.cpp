@@ -100,7 +100,8 @@ class FarmMpiTest : public ::testing::Test {
       ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
       const ResumePlan plan = plan_run(db, job, false, 1);
       std::vector<StartRecord> records;
-      for (long i = 0; i < job.search.starts; ++i) records.push_back(run_start_record(job, static_cast<std::uint64_t>(i)));
+      for (long i = 0; i < job.search.starts; ++i)
+        records.push_back(run_start_record(job, static_cast<std::uint64_t>(i)));
       db.commit(plan.run_id, records);
       db.end_session(RunStatus::complete);
     }

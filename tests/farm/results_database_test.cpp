@@ -78,15 +78,20 @@ std::vector<std::vector<std::string>> rows(sqlite3* db, const std::string& sql) 
     std::vector<std::string> row;
     for (int c = 0; c < sqlite3_column_count(s); ++c) {
       switch (sqlite3_column_type(s, c)) {
-        case SQLITE_NULL: row.push_back("NULL"); break;
-        case SQLITE_INTEGER: row.push_back(std::to_string(sqlite3_column_int64(s, c))); break;
+        case SQLITE_NULL:
+          row.push_back("NULL");
+          break;
+        case SQLITE_INTEGER:
+          row.push_back(std::to_string(sqlite3_column_int64(s, c)));
+          break;
         case SQLITE_FLOAT: {
           char buffer[40];
           std::snprintf(buffer, sizeof buffer, "%.17g", sqlite3_column_double(s, c));
           row.push_back(buffer);
           break;
         }
-        default: row.push_back(reinterpret_cast<const char*>(sqlite3_column_text(s, c)));
+        default:
+          row.push_back(reinterpret_cast<const char*>(sqlite3_column_text(s, c)));
       }
     }
     out.push_back(row);
@@ -258,10 +263,9 @@ TEST_F(ResultsDatabaseTest, CreatesTheSchemaWithItsPragmas) {
   for (const auto& row : objects) names.push_back(row[0] + " " + row[1]);
   EXPECT_EQ(names, (std::vector<std::string>{
                        "index candidates_by_cell", "index candidates_by_joints_family", "index candidates_by_key",
-                       "index sessions_by_run", "index starts_by_candidate",
-                       "index starts_zero_by_energy", "table candidates", "table runs", "table sessions",
-                       "table starts", "view energy_histogram", "view family_counts", "view run_summary",
-                       "view status_counts", "view zero_minima"}));
+                       "index sessions_by_run", "index starts_by_candidate", "index starts_zero_by_energy",
+                       "table candidates", "table runs", "table sessions", "table starts", "view energy_histogram",
+                       "view family_counts", "view run_summary", "view status_counts", "view zero_minima"}));
   // Reopening an existing database neither fails nor changes the schema.
   { ResultsDatabase again = ResultsDatabase::open(path, DatabaseMode::write); }
   EXPECT_EQ(rows(raw.db, schema), objects);
@@ -355,10 +359,9 @@ TEST_F(ResultsDatabaseTest, DuplicateStartIndexThrowsAndWritesNothing) {
   db.commit(run, {plain_start(0, 1.0), verified_start(1, bennett_canonical(), "k1"), plain_start(5, 1.0)});
   const ResultsDatabase& h = db;
   auto snapshot = [&] {
-    return std::vector<std::int64_t>{count(h, "starts"), count(h, "candidates"),
-                                     std::stoll(value(h, "SELECT starts_done FROM runs")),
-                                     std::stoll(value(h, "SELECT hits FROM candidates")),
-                                     std::stoll(value(h, "SELECT starts_done FROM sessions"))};
+    return std::vector<std::int64_t>{
+        count(h, "starts"), count(h, "candidates"), std::stoll(value(h, "SELECT starts_done FROM runs")),
+        std::stoll(value(h, "SELECT hits FROM candidates")), std::stoll(value(h, "SELECT starts_done FROM sessions"))};
   };
   const auto before = snapshot();
   EXPECT_EQ(before, (std::vector<std::int64_t>{3, 1, 3, 1, 3}));
@@ -370,7 +373,9 @@ TEST_F(ResultsDatabaseTest, DuplicateStartIndexThrowsAndWritesNothing) {
   });
   EXPECT_NE(text.find("start 5 of run 1 is already committed"), std::string::npos) << text;
   EXPECT_EQ(snapshot(), before);
-  EXPECT_NE(error_of([&] { db.commit(run, {plain_start(4, 1.0), plain_start(4, 1.0)}); }).find("appears twice"),
+  EXPECT_NE(error_of([&] {
+              db.commit(run, {plain_start(4, 1.0), plain_start(4, 1.0)});
+            }).find("appears twice"),
             std::string::npos);
   EXPECT_EQ(snapshot(), before);
   EXPECT_NE(error_of([&] { db.commit(9, {plain_start(4, 1.0)}); }).find("no run 9"), std::string::npos);
@@ -407,8 +412,9 @@ TEST_F(ResultsDatabaseTest, DeduplicationIsIndependentOfCommitOrder) {
 
   const std::string path = file("forward.sqlite");
   ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
-  EXPECT_EQ(rows(db, "SELECT candidate_id, canonical_key, first_run, first_start, hits, E_mean, "
-                              "family_residual FROM candidates ORDER BY candidate_id"),
+  EXPECT_EQ(rows(db,
+                 "SELECT candidate_id, canonical_key, first_run, first_start, hits, E_mean, "
+                 "family_residual FROM candidates ORDER BY candidate_id"),
             (std::vector<std::vector<std::string>>{{"1", "key-a", "1", "3", "2", fmt(1e-22), fmt(1e-15 * 4.0)},
                                                    {"2", "key-c", "1", "5", "1", fmt(1e-20), fmt(1e-15 * 6.0)}}));
   EXPECT_EQ(rows(db, "SELECT start_index, candidate_id FROM starts ORDER BY start_index"),
@@ -452,9 +458,10 @@ TEST_F(ResultsDatabaseTest, DeduplicationAcrossGridCellEdgesAndAmongManyEqualVal
   ResultsDatabase db = ResultsDatabase::open(file("r.sqlite"), DatabaseMode::write);
   const std::int64_t run = db.open_run(identity()).run_id;
   LoopGeometry edge = bennett_canonical();
-  edge.a << 0.632, 1.265, 0.632, 1.265;                  // lengths on cell edges (multiples of 1e-3)
+  edge.a << 0.632, 1.265, 0.632, 1.265;  // lengths on cell edges (multiples of 1e-3)
   const double twist_cell = 2 * kPi / 6283;
-  edge.alpha << -kPi + 100 * twist_cell, -kPi + 2000 * twist_cell, -kPi + 100 * twist_cell, kPi;  // twist edges; pi wraps
+  edge.alpha << -kPi + 100 * twist_cell, -kPi + 2000 * twist_cell, -kPi + 100 * twist_cell,
+      kPi;  // twist edges; pi wraps
   std::vector<StartRecord> records;
   records.push_back(verified_start(0, shifted(edge, -4e-6), "edge-below"));
   records.push_back(verified_start(1, shifted(edge, 4e-6), "edge-above"));
@@ -551,9 +558,9 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
   EXPECT_NE(error_of([&] { ResultsDatabase::open(file("missing.sqlite"), DatabaseMode::read); }).find("no such file"),
             std::string::npos);
   EXPECT_FALSE(fs::exists(file("missing.sqlite")));
-  EXPECT_NE(error_of([&] { ResultsDatabase::open(file("no/such/dir/r.sqlite"), DatabaseMode::write); })
-                .find("cannot open"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of([&] { ResultsDatabase::open(file("no/such/dir/r.sqlite"), DatabaseMode::write); }).find("cannot open"),
+      std::string::npos);
   fs::create_directories(file("dir.sqlite"));
   for (const DatabaseMode mode : {DatabaseMode::write, DatabaseMode::read}) {
     const std::string text = error_of([&] { ResultsDatabase::open(file("dir.sqlite"), mode); });
@@ -593,9 +600,7 @@ TEST_F(ResultsDatabaseTest, TheWriterLeavesEverythingInTheFile) {
     // Another connection stays open: the close cannot checkpoint, ~Impl does.
     RawConnection other(path, SQLITE_OPEN_READONLY);
     EXPECT_EQ(count(other.db, "starts"), 200);
-    {
-      ResultsDatabase moved = std::move(db);
-    }
+    { ResultsDatabase moved = std::move(db); }
     fs::copy_file(path, copy);
   }
   RawConnection raw(copy, SQLITE_OPEN_READONLY);
@@ -611,8 +616,9 @@ TEST_F(ResultsDatabaseTest, ReadModeWorksWhileAWriterHoldsATransaction) {
 
   RawConnection busy(path);
   exec(busy.db, "BEGIN IMMEDIATE");
-  exec(busy.db, "INSERT INTO starts (run_id, start_index, status, evaluations, zero, verified) "
-                "VALUES (1, 99, 'failure', 0, 0, 0)");
+  exec(busy.db,
+       "INSERT INTO starts (run_id, start_index, status, evaluations, zero, verified) "
+       "VALUES (1, 99, 'failure', 0, 0, 0)");
   {
     ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
     EXPECT_EQ(count(reader, "starts"), 2);  // the committed state only
@@ -638,8 +644,8 @@ TEST_F(ResultsDatabaseTest, GeometryColumnsAreNullBeyondNAndAboveTheReportThresh
   std::string presence = "SELECT start_index";
   for (const char* name : {"a", "alpha", "d"}) {
     for (int i = 1; i <= 8; ++i) {
-      presence += std::string(", ") + name + std::to_string(i) + (std::string(name) == "alpha" ? "_deg" : "") +
-                  " IS NOT NULL";
+      presence +=
+          std::string(", ") + name + std::to_string(i) + (std::string(name) == "alpha" ? "_deg" : "") + " IS NOT NULL";
     }
   }
   const std::string four = "1,1,1,1,0,0,0,0";
@@ -662,8 +668,9 @@ TEST_F(ResultsDatabaseTest, GeometryColumnsAreNullBeyondNAndAboveTheReportThresh
   EXPECT_EQ(real(h, "SELECT a2 FROM candidates"), 1.264911);
   EXPECT_EQ(rows(h, "SELECT E_mean, E_max, objective, zero, verified, candidate_id FROM starts WHERE start_index = 2"),
             (std::vector<std::vector<std::string>>{{"NULL", "NULL", "NULL", "0", "0", "NULL"}}));
-  EXPECT_EQ(rows(h, "SELECT joints, family, setup, d4, a5, alpha5_deg, d8, trivial_residual, planar_residual, "
-                    "full_turn, singular_values, local_dimension, free_parameters FROM candidates"),
+  EXPECT_EQ(rows(h,
+                 "SELECT joints, family, setup, d4, a5, alpha5_deg, d8, trivial_residual, planar_residual, "
+                 "full_turn, singular_values, local_dimension, free_parameters FROM candidates"),
             (std::vector<std::vector<std::string>>{{"4", "bennett", "asymmetric", "0", "NULL", "NULL", "NULL", "NULL",
                                                     "0.5", "1", "[2,0.5," + fmt(1e-13) + "]", "3", "12"}}));
 }
@@ -688,8 +695,9 @@ TEST_F(ResultsDatabaseTest, SessionsTrackInvocations) {
   db.commit(run, {plain_start(2, 1.0)});
   db.commit(run, {plain_start(3, 1.0)});
   db.end_session(RunStatus::complete);
-  EXPECT_EQ(rows(db, "SELECT session_id, run_id, ranks, status, starts_done, ended_at IS NOT NULL, "
-                              "loopfarm_version FROM sessions ORDER BY 1"),
+  EXPECT_EQ(rows(db,
+                 "SELECT session_id, run_id, ranks, status, starts_done, ended_at IS NOT NULL, "
+                 "loopfarm_version FROM sessions ORDER BY 1"),
             (std::vector<std::vector<std::string>>{{"1", "1", "4", "stopped", "2", "1", LOOPFARM_VERSION},
                                                    {"2", "1", "2", "complete", "2", "1", LOOPFARM_VERSION}}));
   EXPECT_EQ(rows(db, "SELECT status, ranks, starts_done, ended_at IS NOT NULL, loopfarm_version FROM runs"),
@@ -752,9 +760,9 @@ TEST_F(ResultsDatabaseTest, TypedQueriesAgreeWithPlainSql) {
   db.begin_session(first, 3);
   StartRecord failed = plain_start(6, std::numeric_limits<double>::quiet_NaN());
   failed.status = "evaluation_failed";
-  db.commit(first, {plain_start(0, 0.5), verified_start(1, bennett_canonical(), "k", 3e-20),
-                    verified_start(2, bennett_canonical(), "k", 3e-25), plain_start(3, 0.005), plain_start(5, 0.0),
-                    failed});
+  db.commit(first,
+            {plain_start(0, 0.5), verified_start(1, bennett_canonical(), "k", 3e-20),
+             verified_start(2, bennett_canonical(), "k", 3e-25), plain_start(3, 0.005), plain_start(5, 0.0), failed});
   db.end_session(RunStatus::stopped);
   RunIdentity other = identity("other job", 7);
   other.starts = 5;
@@ -779,13 +787,13 @@ TEST_F(ResultsDatabaseTest, TypedQueriesAgreeWithPlainSql) {
   EXPECT_EQ(runs[1].seed, 7u);
   EXPECT_EQ(runs[0].started_at, value(db, "SELECT started_at FROM runs WHERE run_id = 1"));
 
-  for (const std::optional<std::int64_t> run : {std::optional<std::int64_t>{}, std::optional<std::int64_t>{first},
-                                                std::optional<std::int64_t>{second}}) {
+  for (const std::optional<std::int64_t> run :
+       {std::optional<std::int64_t>{}, std::optional<std::int64_t>{first}, std::optional<std::int64_t>{second}}) {
     const std::string where = run ? " WHERE run_id = " + std::to_string(*run) : "";
     const StartCounts c = db.start_counts(run);
     EXPECT_EQ(c.starts, count(db, "starts" + where));
-    EXPECT_EQ(c.zeros, std::stoll(value(db, "SELECT COUNT(*) FROM starts" + where + (run ? " AND" : " WHERE") +
-                                                " zero = 1")));
+    EXPECT_EQ(c.zeros,
+              std::stoll(value(db, "SELECT COUNT(*) FROM starts" + where + (run ? " AND" : " WHERE") + " zero = 1")));
     EXPECT_EQ(c.verified, std::stoll(value(db, "SELECT COUNT(*) FROM starts" + where + (run ? " AND" : " WHERE") +
                                                    " verified = 1")));
     EXPECT_EQ(c.total_seconds, real(db, "SELECT SUM(seconds) FROM starts" + where));
@@ -793,8 +801,9 @@ TEST_F(ResultsDatabaseTest, TypedQueriesAgreeWithPlainSql) {
 
     std::vector<std::vector<std::string>> statuses;
     for (const StatusCount& s : db.status_counts(run)) statuses.push_back({s.status, std::to_string(s.starts)});
-    EXPECT_EQ(statuses, rows(db, "SELECT status, COUNT(*) AS n FROM starts" + where + " GROUP BY status ORDER BY n "
-                                 "DESC, status"));
+    EXPECT_EQ(statuses, rows(db, "SELECT status, COUNT(*) AS n FROM starts" + where +
+                                     " GROUP BY status ORDER BY n "
+                                     "DESC, status"));
 
     const std::string found_first = run ? " WHERE first_run = " + std::to_string(*run) : "";
     std::vector<std::vector<std::string>> families;
@@ -845,13 +854,14 @@ TEST_F(ResultsDatabaseTest, TypedQueriesAgreeWithPlainSql) {
 
   // One row's every field against its columns.
   const CandidateRow row = db.candidates(bennett).at(0);
-  EXPECT_EQ(rows(db, "SELECT family, setup, detail, hits, first_run, first_start, local_dimension, free_parameters, "
-                     "full_turn, joints FROM candidates WHERE candidate_id = " + std::to_string(row.id)),
-            (std::vector<std::vector<std::string>>{{row.family, row.setup, row.detail, std::to_string(row.hits),
-                                                    std::to_string(row.first_run), std::to_string(row.first_start),
-                                                    std::to_string(row.local_dimension),
-                                                    std::to_string(row.free_parameters), row.full_turn ? "1" : "0",
-                                                    std::to_string(row.joints)}}));
+  EXPECT_EQ(rows(db,
+                 "SELECT family, setup, detail, hits, first_run, first_start, local_dimension, free_parameters, "
+                 "full_turn, joints FROM candidates WHERE candidate_id = " +
+                     std::to_string(row.id)),
+            (std::vector<std::vector<std::string>>{
+                {row.family, row.setup, row.detail, std::to_string(row.hits), std::to_string(row.first_run),
+                 std::to_string(row.first_start), std::to_string(row.local_dimension),
+                 std::to_string(row.free_parameters), row.full_turn ? "1" : "0", std::to_string(row.joints)}}));
   const std::string id = " FROM candidates WHERE candidate_id = " + std::to_string(row.id);
   EXPECT_EQ(row.E_mean, real(db, "SELECT E_mean" + id));
   EXPECT_EQ(row.family_residual, real(db, "SELECT family_residual" + id));
@@ -914,9 +924,9 @@ TEST_F(ResultsDatabaseTest, AClosedDatabaseAndItsReadersLeaveOneFile) {
       const ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
       EXPECT_EQ(reader.candidates({}).size(), 1u);
       EXPECT_TRUE(reader.connection_settings().query_only);
-      EXPECT_NE(error_of([&] { const_cast<ResultsDatabase&>(reader).commit(1, {plain_start(5, 1.0)}); })
-                    .find("read-only"),
-                std::string::npos);
+      EXPECT_NE(
+          error_of([&] { const_cast<ResultsDatabase&>(reader).commit(1, {plain_start(5, 1.0)}); }).find("read-only"),
+          std::string::npos);
     }
     EXPECT_EQ(companions(), none);
     EXPECT_EQ(file_bytes(path), bytes);  // read, not written

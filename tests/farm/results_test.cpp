@@ -109,10 +109,14 @@ void expect_same_record(const StartRecord& x, const StartRecord& y) {
   EXPECT_EQ(a.family, b.family);
   EXPECT_EQ(a.setup, b.setup);
   EXPECT_EQ(a.detail, b.detail);
-  for (auto [p, q] : {std::pair{a.family_residual, b.family_residual}, {a.bennett_residual, b.bennett_residual},
-                      {a.planar_residual, b.planar_residual}, {a.spherical_residual, b.spherical_residual},
-                      {a.trivial_residual, b.trivial_residual}, {a.rigid_residual, b.rigid_residual},
-                      {a.range_lo_deg, b.range_lo_deg}, {a.range_hi_deg, b.range_hi_deg}}) {
+  for (auto [p, q] : {std::pair{a.family_residual, b.family_residual},
+                      {a.bennett_residual, b.bennett_residual},
+                      {a.planar_residual, b.planar_residual},
+                      {a.spherical_residual, b.spherical_residual},
+                      {a.trivial_residual, b.trivial_residual},
+                      {a.rigid_residual, b.rigid_residual},
+                      {a.range_lo_deg, b.range_lo_deg},
+                      {a.range_hi_deg, b.range_hi_deg}}) {
     EXPECT_TRUE(same_bits(p, q)) << p << " " << q;
   }
   EXPECT_EQ(a.full_turn, b.full_turn);

@@ -189,7 +189,9 @@ TEST(FamilyDistance, GradientAgreesWithCentralDifferences) {
         fd[j] = (at(1e-6) - at(-1e-6)) / 2e-6;
       }
       EXPECT_LT((gradient - fd).cwiseAbs().maxCoeff(), 1e-6 * std::max(1.0, fd.cwiseAbs().maxCoeff()))
-          << to_string(family) << " " << seed << "\n" << gradient.transpose() << "\n" << fd.transpose();
+          << to_string(family) << " " << seed << "\n"
+          << gradient.transpose() << "\n"
+          << fd.transpose();
     }
   }
 }
@@ -205,8 +207,9 @@ LoopGeometry comparison_geometry(int n, std::uint64_t seed) {
   auto pick = [&](int count) { return static_cast<int>(rng() % static_cast<std::uint64_t>(count)); };
   LoopGeometry g = random_loop(n, seed);
   switch (seed % 6) {
-    case 0: break;  // generic
-    case 1:         // twists written with extra turns and half turns
+    case 0:
+      break;  // generic
+    case 1:   // twists written with extra turns and half turns
       for (int k = 0; k < n; ++k) g.alpha[k] += (pick(7) - 3) * kPi;
       break;
     case 2:  // near planar: twists tiny, 0, pi or -pi
@@ -276,7 +279,9 @@ TEST(FamilyDistance, NumericPathEqualsTheReportingPath) {
         ASSERT_EQ(gradient.size(), 3 * n) << where();
         EXPECT_LE((gradient - reference_gradient).cwiseAbs().maxCoeff(),
                   1e-14 * reference_gradient.cwiseAbs().maxCoeff())
-            << where() << "\n" << gradient.transpose() << "\n" << reference_gradient.transpose();
+            << where() << "\n"
+            << gradient.transpose() << "\n"
+            << reference_gradient.transpose();
         ++compared;
         if (value == reference.residual && gradient == reference_gradient) ++identical;
       }

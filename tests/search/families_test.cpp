@@ -22,15 +22,15 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
-#include <gtest/gtest.h>
 
 #include "allocation_counter.hpp"
-#include "loopfarm/search/classify.hpp"
 #include "loopfarm/core/constructions.hpp"
 #include "loopfarm/core/loop.hpp"
 #include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/classify.hpp"
 #include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
@@ -93,7 +93,9 @@ Posed random_representation(const Posed& p, std::mt19937_64& rng, const std::vec
   }
 }
 
-double uniform(std::mt19937_64& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return std::uniform_real_distribution<double>(lo, hi)(rng);
+}
 
 // A twist away from 0 and pi (and its sign random).
 double twist(std::mt19937_64& rng) {
@@ -281,9 +283,12 @@ LoopGeometry perturbed(const LoopGeometry& g, int p, double eps) {
   const int n = g.joints();
   LoopGeometry out = g;
   const double L = length_scale(g);
-  if (p < n) out.a[p] += eps * L;
-  else if (p < 2 * n) out.alpha[p - n] += eps;
-  else out.d[p - 2 * n] += eps * L;
+  if (p < n)
+    out.a[p] += eps * L;
+  else if (p < 2 * n)
+    out.alpha[p - n] += eps;
+  else
+    out.d[p - 2 * n] += eps * L;
   return out;
 }
 
@@ -291,9 +296,12 @@ LoopGeometry perturbed(const LoopGeometry& g, int p, double eps) {
 LoopGeometry perturbed_raw(const LoopGeometry& g, int p, double h) {
   const int n = g.joints();
   LoopGeometry out = g;
-  if (p < n) out.a[p] += h;
-  else if (p < 2 * n) out.alpha[p - n] += h;
-  else out.d[p - 2 * n] += h;
+  if (p < n)
+    out.a[p] += h;
+  else if (p < 2 * n)
+    out.alpha[p - n] += h;
+  else
+    out.d[p - 2 * n] += h;
   return out;
 }
 
@@ -306,8 +314,7 @@ void expect_near_misses_rigid(const Posed& member, Family family, int p, const s
   for (double eps : kNearMisses) {
     const LoopGeometry g = perturbed(member.geometry, p, eps);
     const VerificationSummary v = verify_from(g, member.theta);
-    EXPECT_FALSE(v.verified) << tag << " parameter " << p << " + " << eps << ": worst residual "
-                             << v.worst_residual;
+    EXPECT_FALSE(v.verified) << tag << " parameter " << p << " + " << eps << ": worst residual " << v.worst_residual;
     const Classification c = classified({g, member.theta}, v);
     EXPECT_NE(c.family, family) << tag << " parameter " << p << " + " << eps;
     for (const FamilyCheck& check : c.checks) {
@@ -487,8 +494,8 @@ TEST(Families, BennettWithAnIdleJointIsDegenerate) {
 Posed with_locked_joint(const Posed& p, int k, std::mt19937_64& rng) {
   std::vector<Axis> axes = joint_axes(p.geometry, p.theta);
   const double L = length_scale(p.geometry);
-  const Vector3 point = axes[static_cast<size_t>(k)].point +
-                        L * Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+  const Vector3 point =
+      axes[static_cast<size_t>(k)].point + L * Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
   const Vector3 direction = Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
   axes.insert(axes.begin() + k + 1, Axis{point, direction});
   return dh_from_axes(axes);
@@ -614,8 +621,8 @@ TEST(Families, GoldbergOnAnEquilateralBennettLoopMovesWithALockedJoint) {
   for (int i = 0; i < 6; ++i) {
     const double a = uniform(rng, 0.5, 2.0), alpha = twist(rng), beta = twist(rng);
     const double b = a * std::abs(std::sin(beta) / std::sin(alpha));
-    const LoopGeometry g = make_loop({b, a, b, b, a + b}, {beta, alpha, beta, beta, wrap_angle(alpha + beta)},
-                                     {0, 0, 0, 0, 0});
+    const LoopGeometry g =
+        make_loop({b, a, b, b, a + b}, {beta, alpha, beta, beta, wrap_angle(alpha + beta)}, {0, 0, 0, 0, 0});
     const std::vector<double> turning(5, 2 * kPi);
     for (const FamilyCheck& check : classify(g, JointVector::Zero(5), turning).checks) {
       if (check.family == Family::goldberg) {
@@ -709,7 +716,8 @@ TEST(Families, GoldbergOnAFoldingBennettLoopIsDegenerateWhateverTheWalk) {
     other << kPi, s, kPi, -s;
     x1 = joint_axes(l1, bennett_pose(l1, kPi - phi));
     x2 = joint_axes(l2, other);
-    const Posed q = rewritten(dh_from_axes(std::vector<Axis>{x1[1], x1[2], x1[3], x2[2], x2[1]}), 2, false, 0);  // joint D first
+    const Posed q =
+        rewritten(dh_from_axes(std::vector<Axis>{x1[1], x1[2], x1[3], x2[2], x2[1]}), 2, false, 0);  // joint D first
     ASSERT_LT(closure_error(q), 1e-12) << tag;
     const VerificationSummary vq = verify_from(q.geometry, q.theta);
     ASSERT_TRUE(vq.verified) << tag << ": " << vq.limit;
@@ -734,7 +742,8 @@ TEST(Families, GoldbergOnAFoldingBennettLoopIsDegenerateWhateverTheWalk) {
   for (int i = 0; i < 16; ++i) {
     const double beta = twist(rng), b = uniform(rng, 0.5, 2.0);
     const double alpha = beta + std::pow(10.0, uniform(rng, -3.7, -2.9));
-    const double a = b * std::abs(std::sin(alpha) / std::sin(beta)), phi = i % 2 ? kPi : 0.0, t = uniform(rng, 0.3, 2.8);
+    const double a = b * std::abs(std::sin(alpha) / std::sin(beta)), phi = i % 2 ? kPi : 0.0,
+                 t = uniform(rng, 0.3, 2.8);
     const LoopGeometry l1 = bennett(a, alpha, b, beta), l2 = bennett(b, beta, b, beta);
     JointVector folded(4);
     folded << t + phi, kPi, -(t + phi), kPi;
@@ -816,7 +825,8 @@ TEST(Families, TwoBennettLoopsSharingALinkMoveAndAreABennettPair) {
     EXPECT_GT(sv[3], 1e-3 * sv[0]) << tag;
     EXPECT_LT(sv[4], 1e-10 * sv[0]) << tag;
     EXPECT_NE(classify(m.geometry, m.theta, std::vector<double>(6, 2 * kPi)).detail.find("two Bennett loops"),
-              std::string::npos) << tag;
+              std::string::npos)
+        << tag;
     // a1, alpha2, d3, a4, alpha5, d1, a2, alpha6 in turn.
     const std::array<int, 8> parameters = {0, 6 + 1, 12 + 2, 3, 6 + 4, 12 + 0, 1, 6 + 5};
     expect_near_misses_rigid(m, Family::bennett_pair, parameters[static_cast<size_t>(i)], tag);
@@ -930,7 +940,8 @@ TEST(Families, ALineSymmetricBricardLoopFoundMovingWithTwoLockedJointsStaysBrica
     const double L = length_scale(b.geometry);
     const Vector3 point = axes[0].point + L * Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
     const Vector3 direction = Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
-    const Posed six = dh_from_axes(std::vector<Axis>{axes[0], {point, direction}, axes[1], axes[2], {R * point + t, R * direction}, axes[3]});
+    const Posed six = dh_from_axes(
+        std::vector<Axis>{axes[0], {point, direction}, axes[1], axes[2], {R * point + t, R * direction}, axes[3]});
     const std::string tag = "symmetric locked " + std::to_string(i);
     const VerificationSummary v = verify_from(six.geometry, six.theta);
     ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
@@ -948,15 +959,15 @@ TEST(Families, PlanarAndSpherical5RAnd6RKeepTheirFamilies) {
   // Planar and spherical loops of any n were classified before; a planar 6R
   // with a closed pose, a spherical 5R.
   std::mt19937_64 rng(26);
-  const LoopGeometry planar = make_loop({1.0, 2.2, 1.7, 2.0, 1.5, 1.9}, std::vector<double>(6, 0.0),
-                                        std::vector<double>(6, 0.0));
+  const LoopGeometry planar =
+      make_loop({1.0, 2.2, 1.7, 2.0, 1.5, 1.9}, std::vector<double>(6, 0.0), std::vector<double>(6, 0.0));
   JointVector theta;
   ASSERT_TRUE(closed_pose(planar, rng, theta));
   const VerificationSummary v = verify_from(planar, theta);
   EXPECT_TRUE(v.verified);
   EXPECT_EQ(classified({planar, theta}, v).family, Family::planar);
-  const LoopGeometry spherical = make_loop(std::vector<double>(5, 0.0), {0.9, 1.2, 0.7, 1.4, 1.1},
-                                           std::vector<double>(5, 0.0));
+  const LoopGeometry spherical =
+      make_loop(std::vector<double>(5, 0.0), {0.9, 1.2, 0.7, 1.4, 1.1}, std::vector<double>(5, 0.0));
   EXPECT_EQ(classify(spherical, JointVector::Zero(5), std::vector<double>(5, 1.0)).family, Family::spherical);
 }
 
@@ -1009,8 +1020,9 @@ TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
         // Against central differences.
         const double h = 1e-6;
         for (int p = 0; p < 3 * n; ++p) {
-          const double fd = (family_distance(c.family, perturbed_raw(g, p, h)) -
-                             family_distance(c.family, perturbed_raw(g, p, -h))) / (2 * h);
+          const double fd =
+              (family_distance(c.family, perturbed_raw(g, p, h)) - family_distance(c.family, perturbed_raw(g, p, -h))) /
+              (2 * h);
           EXPECT_NEAR(numeric_gradient[p], fd, 1e-5 * std::max(1.0, std::abs(fd))) << to_string(c.family) << " " << p;
         }
       }

@@ -323,12 +323,12 @@ INSTANTIATE_TEST_SUITE_P(
         BadJob{"deflate_unknown", "[steering]\ndeflate = [\"conic\"]\n", 2, "steering.deflate", "\"conic\""},
         BadJob{"deflate_twice", "[steering]\ndeflate = [\"planar\", \"planar\"]\n", 2, "steering.deflate", "twice"},
         BadJob{"output_type", "[output]\ndatabase = 3\n", 2, "output.database", "expected a string"},
-        BadJob{"deflate_bennett_5r", "[loop]\njoints = 5\n[steering]\ndeflate = [\"bennett\"]\n", 4,
-               "steering.deflate", "joints = 4"},
+        BadJob{"deflate_bennett_5r", "[loop]\njoints = 5\n[steering]\ndeflate = [\"bennett\"]\n", 4, "steering.deflate",
+               "joints = 4"},
         BadJob{"deflate_goldberg_6r", "[loop]\njoints = 6\n[steering]\ndeflate = [\"goldberg\"]\n", 4,
                "steering.deflate", "\"goldberg\" needs joints = 5"},
-        BadJob{"deflate_bricard_5r", "[loop]\njoints = 5\n[steering]\ndeflate = [\"planar\", \"bricard_trihedral\"]\n", 4,
-               "steering.deflate", "\"bricard_trihedral\" needs joints = 6"},
+        BadJob{"deflate_bricard_5r", "[loop]\njoints = 5\n[steering]\ndeflate = [\"planar\", \"bricard_trihedral\"]\n",
+               4, "steering.deflate", "\"bricard_trihedral\" needs joints = 6"},
         BadJob{"deflate_degenerate", "[loop]\njoints = 5\n[steering]\ndeflate = [\"degenerate\"]\n", 4,
                "steering.deflate", "unknown family \"degenerate\""},
         BadJob{"symmetry_unknown", "[loop]\njoints = 6\n[space]\nsymmetry = \"diagonal\"\n", 4, "space.symmetry",
@@ -358,7 +358,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadJob{"hazard_header_brace", "[{earc_]\nstarts = 0\n", 1, "(syntax)", "must begin with a name, not '{'"},
         BadJob{"hazard_header_brackets", "[search]\n[[[loop]]]\n", 2, "(syntax)", "must begin with a name, not '['"},
         BadJob{"hazard_header_newline", "[\nloop]\n", 1, "(syntax)", "not byte 0x0A"},
-        BadJob{"hazard_non_ascii_value", "[space]\nalpha1_deg = 30\xc2\xb0\n", 2, "(syntax)", "U+00B0 outside a string"},
+        BadJob{"hazard_non_ascii_value", "[space]\nalpha1_deg = 30\xc2\xb0\n", 2, "(syntax)",
+               "U+00B0 outside a string"},
         BadJob{"hazard_escape", "[optimizer]\nalgorithm = \"\"\"\\\xc2\xa7\"\"\"\n", 2, "(syntax)",
                "U+00A7 right after a backslash"},
         BadJob{"hazard_line_ending_backslash", "[optimizer]\nalgorithm = \"\"\"\\\n\xc2\xa7\"\"\"\n", 3, "(syntax)",
@@ -387,7 +388,8 @@ TEST(Job, NonAsciiInCommentsAndStringsIsAccepted) {
   EXPECT_EQ(job.optimizer.algorithm, "gauss-newton");
   EXPECT_EQ(job.steering.deflate, std::vector<std::string>{"planar"});
   EXPECT_EQ(job.output.database, "dir/r\xC3\xA9sultats-\xC2\xA7.sqlite");
-  EXPECT_FALSE(find_toml_hazard("s = '''\n\xC2\xA7'''\nt = \"\"\"\xC2\xA7\\n\"\"\"\nu = \"\xC2\xA7\\\"\"\n").has_value());
+  EXPECT_FALSE(
+      find_toml_hazard("s = '''\n\xC2\xA7'''\nt = \"\"\"\xC2\xA7\\n\"\"\"\nu = \"\xC2\xA7\\\"\"\n").has_value());
 }
 
 // Found by fuzz/job_file_fuzzer: a quoted key with a newline made the message two lines.

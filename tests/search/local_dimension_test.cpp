@@ -3,8 +3,8 @@
 #include <cmath>
 #include <vector>
 
-#include <Eigen/SVD>
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 
 #include "loopfarm/core/assembly.hpp"
 #include "loopfarm/core/cycle.hpp"
@@ -96,9 +96,9 @@ TEST(LocalDimension, CoaxialTrivialFamilyHasFiveParameters) {
   // links 2 and 4 fold back over links 1 and 3, and the loop turns about the
   // shared axis with theta3 = -theta1.
   const int n = 4;
-  LoopGeometry g = LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5},
-                                              std::vector<double>{40, 40, 70, 70},
-                                              std::vector<double>{0.3, 0.0, -0.3, 0.0});
+  LoopGeometry g =
+      LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5}, std::vector<double>{40, 40, 70, 70},
+                                 std::vector<double>{0.3, 0.0, -0.3, 0.0});
   JointVector start(4);
   start << rad(30), rad(180), rad(-30), rad(180);
   Eigen::MatrixXd C = Eigen::MatrixXd::Zero(7, 3 * n);

@@ -23,9 +23,7 @@ Job bennett_job(const std::string& algorithm, int max_evaluations = 300) {
 }
 
 // The asymmetric Bennett condition, written without division.
-double bennett_condition(const Eigen::VectorXd& x) {
-  return x[1] * std::sin(x[2]) - x[0] * std::sin(x[3]);
-}
+double bennett_condition(const Eigen::VectorXd& x) { return x[1] * std::sin(x[2]) - x[0] * std::sin(x[3]); }
 
 LocalSearchSummary minimise(const Job& job, const Eigen::VectorXd& x0) {
   CycleObjective objective(job.space, ObjectiveOptions::from_loop(job.loop),

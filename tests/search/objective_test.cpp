@@ -199,7 +199,8 @@ TEST(Objective, MaxMeasureHasTheWorstSamplesGradientAndResiduals) {
     EXPECT_NEAR(v.value, v.steering_factor * v.E_max, 1e-15 * v.value);
     const Eigen::VectorXd fd = central_gradient(objective, f.x0(), 1e-6);
     EXPECT_LT(relative_error(gradient, fd), 1e-6) << "steered " << steered << "\n"
-                                                  << gradient.transpose() << "\n" << fd.transpose();
+                                                  << gradient.transpose() << "\n"
+                                                  << fd.transpose();
     objective.evaluate_residuals(f.x0(), r, &J);
     EXPECT_NEAR(0.5 * r.squaredNorm(), v.value, 1e-13 * v.value);
     EXPECT_LT(relative_error(J.transpose() * r, gradient), 1e-9);
@@ -243,7 +244,7 @@ TEST(Objective, AFarStepFallsBackToTheFreshCycle) {
   CycleObjective fresh(f.job.space, fresh_options, f.theta);
   CycleObjective reused(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
   Eigen::VectorXd far = f.x0();
-  far[0] = 4.5;  // a1 from 2.1
+  far[0] = 4.5;       // a1 from 2.1
   far[4] = rad(120);  // alpha3 from 25 deg
   ASSERT_TRUE(reused.evaluate(f.x0(), nullptr).ok);
   const ObjectiveValue b = reused.evaluate(far, nullptr);

@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "loopfarm/search/job.hpp"
 #include "loopfarm/core/loop.hpp"
+#include "loopfarm/search/job.hpp"
 #include "loopfarm/search/start.hpp"
 #include "test_support.hpp"
 
@@ -31,7 +31,9 @@ const Job& table1_job() {
 
 // Closed-form Bennett conditions (paper eqs. 1 and 3), independent of the
 // elastic model and of the classifier.
-double asymmetric_condition(const LoopGeometry& g) { return g.a[1] * std::sin(g.alpha[0]) - g.a[0] * std::sin(g.alpha[1]); }
+double asymmetric_condition(const LoopGeometry& g) {
+  return g.a[1] * std::sin(g.alpha[0]) - g.a[0] * std::sin(g.alpha[1]);
+}
 double line_symmetric_condition(const LoopGeometry& g) {
   return g.a[1] * std::sin(g.alpha[0]) + g.a[0] * std::sin(g.alpha[1]);
 }
@@ -107,7 +109,8 @@ TEST(PaperTable1, EveryZeroIsABennettLoopAndTheZerosFormAFamily) {
 TEST(PaperTable1, ThePapersPointIsOnTheFamilyAndThePosePinsIt) {
   // (2, 4, 30, 90) is a zero of the same objective.
   const Job& job = table1_job();
-  CycleObjective objective(job.space, ObjectiveOptions::from_loop(job.loop), job.space.initial_angles(Eigen::VectorXd()));
+  CycleObjective objective(job.space, ObjectiveOptions::from_loop(job.loop),
+                           job.space.initial_angles(Eigen::VectorXd()));
   Eigen::VectorXd paper(4);
   paper << 2.0, 4.0, rad(30), rad(90);
   const ObjectiveValue v = objective.evaluate(paper, nullptr);
@@ -126,10 +129,9 @@ TEST(PaperTable1, ThePapersPointIsOnTheFamilyAndThePosePinsIt) {
     // is 1e-6 deg off).
     const double principal = alpha1_deg == 30.0 ? kPi / 2 : std::asin(2.0 * std::sin(alpha1));
     for (double alpha2 : {principal, kPi - principal}) {
-      const LoopGeometry g = LoopGeometry::from_degrees(std::vector<double>{2, 4, 2, 4},
-                                                        std::vector<double>{alpha1_deg, deg(alpha2), alpha1_deg,
-                                                                            deg(alpha2)},
-                                                        std::vector<double>{0, 0, 0, 0});
+      const LoopGeometry g = LoopGeometry::from_degrees(
+          std::vector<double>{2, 4, 2, 4}, std::vector<double>{alpha1_deg, deg(alpha2), alpha1_deg, deg(alpha2)},
+          std::vector<double>{0, 0, 0, 0});
       const double residual = closure_residual(g, pose).cwiseAbs().maxCoeff();
       if (alpha1_deg == 30.0) {
         EXPECT_LT(residual, 1e-12) << deg(alpha2);

@@ -7,9 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include "loopfarm/core/sample_loops.hpp"
 #include "loopfarm/search/classify.hpp"
 #include "loopfarm/search/job.hpp"
-#include "loopfarm/core/sample_loops.hpp"
 #include "loopfarm/search/start.hpp"
 #include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
@@ -94,8 +94,8 @@ theta4_deg = -90
 zero_threshold = 1e-20
 )";
   for (const char* objective : {"mean", "max"}) {
-    const Job job = parse_job(std::string("[loop]\nsamples = 8\nobjective = \"") + objective + "\"\n" + space,
-                              "bennett.toml");
+    const Job job =
+        parse_job(std::string("[loop]\nsamples = 8\nobjective = \"") + objective + "\"\n" + space, "bennett.toml");
     const StartSummary s = run_start(job, 0);
     ASSERT_TRUE(s.zero) << objective << ": E_mean " << s.E_mean;
     EXPECT_TRUE(s.candidate.verification.verified) << objective;
@@ -131,8 +131,7 @@ TEST(RunStart, TheRockerJobFindsTrihedralLoopsWhoseInputRocks) {
     // the middle of the range.
     const double middle = 0.5 * (v.range_lo + v.range_hi);
     for (int j = 0; j < job.loop.samples; ++j) {
-      const double sample =
-          s.initial_angles[0] - 0.5 * job.loop.range + j * job.loop.range / (job.loop.samples - 1);
+      const double sample = s.initial_angles[0] - 0.5 * job.loop.range + j * job.loop.range / (job.loop.samples - 1);
       const double image = middle + std::remainder(sample - middle, 2.0 * kPi);
       EXPECT_GE(image, v.range_lo - 1e-9) << index << " sample " << j;
       EXPECT_LE(image, v.range_hi + 1e-9) << index << " sample " << j;
@@ -234,13 +233,17 @@ TEST(ObjectiveOptions, EveryDeflatableFamilyMeasuresItsDistance) {
       // docs/guide/families.md's bent Goldberg example: the Goldberg loop's links fused at 90 deg.
       {"goldberg_bent", from_degrees({2, 1, s3, 2, 1.7185034823583989}, {90, 30, 60, 90, 64.341093726744717},
                                      {0.60433895850392444, 0, 0, 0, 0.60433895850392444})},
-      {"bricard_line_symmetric", from_degrees({1, 1.7, 0.8, 1, 1.7, 0.8}, {51.566, 120.321, -34.377, 51.566, 120.321, -34.377},
-                                              {0.4, 0.3, -0.5, 0.4, 0.3, -0.5})},
-      {"bricard_plane_symmetric", from_degrees({1, 1.7, 0.8, 0.8, 1.7, 1}, {51.566, 120.321, -34.377, 34.377, -120.321, -51.566},
-                                               {0, 0.3, -0.5, 0, 0.5, -0.3})},
-      {"bricard_trihedral", from_degrees({1.5, 1, 1.2, 0.8, 1, std::sqrt(1.5 * 1.5 + 1.2 * 1.2 + 1.0 - 1.0 - 0.8 * 0.8)},
-                                         {90, -90, 90, -90, 90, -90}, {0, 0, 0, 0, 0, 0})},
-      // docs/guide/families.md's example: Bennett loops (1, 30 deg, 2, 90 deg) and (sqrt 3, 60 deg, 2, 90 deg) sharing a link.
+      {"bricard_line_symmetric",
+       from_degrees({1, 1.7, 0.8, 1, 1.7, 0.8}, {51.566, 120.321, -34.377, 51.566, 120.321, -34.377},
+                    {0.4, 0.3, -0.5, 0.4, 0.3, -0.5})},
+      {"bricard_plane_symmetric",
+       from_degrees({1, 1.7, 0.8, 0.8, 1.7, 1}, {51.566, 120.321, -34.377, 34.377, -120.321, -51.566},
+                    {0, 0.3, -0.5, 0, 0.5, -0.3})},
+      {"bricard_trihedral",
+       from_degrees({1.5, 1, 1.2, 0.8, 1, std::sqrt(1.5 * 1.5 + 1.2 * 1.2 + 1.0 - 1.0 - 0.8 * 0.8)},
+                    {90, -90, 90, -90, 90, -90}, {0, 0, 0, 0, 0, 0})},
+      // docs/guide/families.md's example: Bennett loops (1, 30 deg, 2, 90 deg) and (sqrt 3, 60 deg, 2, 90 deg) sharing
+      // a link.
       {"bennett_pair", from_degrees({1, 2, 1, s3, 2, s3}, {30, 90, 30, 60, 90, 60}, {0, 0, 0, 0, 0, 0})},
       // docs/guide/families.md's example of two Bennett dyads joined by equal links.
       {"bennett_dyads",
@@ -252,9 +255,9 @@ TEST(ObjectiveOptions, EveryDeflatableFamilyMeasuresItsDistance) {
   };
   for (const Case& c : cases) {
     const int n = c.member.joints();
-    const Job job = parse_job("[loop]\njoints = " + std::to_string(n) + "\n[steering]\ndeflate = [\"" + c.family +
-                                  "\", \"planar\"]\n",
-                              "deflate.toml");
+    const Job job = parse_job(
+        "[loop]\njoints = " + std::to_string(n) + "\n[steering]\ndeflate = [\"" + c.family + "\", \"planar\"]\n",
+        "deflate.toml");
     const ObjectiveOptions options = objective_options(job);
     ASSERT_EQ(options.deflation.size(), 2u) << c.family;
     EXPECT_EQ(options.deflation[0].family, c.family);

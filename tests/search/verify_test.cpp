@@ -45,7 +45,8 @@ TEST(Verify, BennettLoopsTurnFullyOnTheirClosedFormPath) {
     // Independent: the closed-form Bennett angles (eqs. 2a, 4a).
     for (size_t i = 0; i < v.input_angles.size(); i += 37) {
       const JointVector expected = c.angles(c.g, v.input_angles[i]);
-      for (int k = 0; k < 4; ++k) EXPECT_NEAR(wrap_angle(v.joint_angles[i][k] - expected[k]), 0.0, 1e-9) << i << " " << k;
+      for (int k = 0; k < 4; ++k)
+        EXPECT_NEAR(wrap_angle(v.joint_angles[i][k] - expected[k]), 0.0, 1e-9) << i << " " << k;
     }
   }
 }
@@ -66,7 +67,8 @@ TEST(Verify, PlanarCrankTurnsFullyOnTheLawOfCosines) {
   EXPECT_TRUE(v.verified);
   EXPECT_TRUE(v.full_turn);
   for (size_t i = 0; i < v.joint_angles.size(); i += 11) {
-    EXPECT_NEAR(diagonal_from_input(g, v.joint_angles[i][0]), diagonal_from_coupler(g, v.joint_angles[i][2]), 1e-9) << i;
+    EXPECT_NEAR(diagonal_from_input(g, v.joint_angles[i][0]), diagonal_from_coupler(g, v.joint_angles[i][2]), 1e-9)
+        << i;
   }
 }
 
@@ -85,7 +87,8 @@ TEST(Verify, PlanarRockerStopsAtItsClosedFormDeadPoints) {
   EXPECT_NEAR(v.range_lo, lo, rad(1e-6)) << deg(v.range_lo) << " vs " << deg(lo);
   EXPECT_NEAR(v.range_hi, hi, rad(1e-6)) << deg(v.range_hi) << " vs " << deg(hi);
   for (size_t i = 0; i < v.joint_angles.size(); i += 7) {
-    EXPECT_NEAR(diagonal_from_input(g, v.joint_angles[i][0]), diagonal_from_coupler(g, v.joint_angles[i][2]), 1e-9) << i;
+    EXPECT_NEAR(diagonal_from_input(g, v.joint_angles[i][0]), diagonal_from_coupler(g, v.joint_angles[i][2]), 1e-9)
+        << i;
   }
 }
 
@@ -192,9 +195,9 @@ TEST(Verify, AStructureThatClosesButCannotMoveIsNotVerified) {
 TEST(Verify, CoaxialTrivialLoopMovesWithTwoJointsFrozen) {
   // Axes 1 and 3 coincide when theta2 = theta4 = pi (links 2 and 4 folded
   // back over links 1 and 3); the loop then turns about that axis only.
-  const LoopGeometry g = LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5},
-                                                    std::vector<double>{40, 40, 70, 70},
-                                                    std::vector<double>{0.3, 0.0, -0.3, 0.0});
+  const LoopGeometry g =
+      LoopGeometry::from_degrees(std::vector<double>{1.5, 1.5, 2.5, 2.5}, std::vector<double>{40, 40, 70, 70},
+                                 std::vector<double>{0.3, 0.0, -0.3, 0.0});
   JointVector start(4);
   start << rad(30), kPi, rad(-30), kPi;
   const VerificationSummary v = verify_motion(g, start);

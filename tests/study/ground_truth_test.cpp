@@ -16,8 +16,8 @@
 #include <gtest/gtest.h>
 
 #include "loopfarm/core/assembly.hpp"
-#include "loopfarm/search/classify.hpp"
 #include "loopfarm/core/cycle.hpp"
+#include "loopfarm/search/classify.hpp"
 #include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
@@ -410,7 +410,8 @@ TEST(GroundTruth, CoversTheRangesItPromises) {
         for (int j = 0; j < 4; ++j) EXPECT_GE(std::abs(std::sin(g.alpha[j])), std::sin(m) * (1 - 1e-12));
         break;
       case GroundTruthFamily::trivial:
-      case GroundTruthFamily::generic: break;
+      case GroundTruthFamily::generic:
+        break;
     }
   }
   EXPECT_EQ(setups[BennettSetup::asymmetric], 64);
@@ -434,10 +435,16 @@ TEST(GroundTruthOptions, InvalidOptionsThrowNamingTheOption) {
   const Bad cases[] = {
       {"cases_per_family", [](GroundTruthOptions& o) { o.cases_per_family = -1; }},
       {"generic_loops", [](GroundTruthOptions& o) { o.generic_loops = 2000000; }},
-      {"relative perturbation", [](GroundTruthOptions& o) { o.relative_perturbations = {1e-3, 0.0}; }},
+      {"relative perturbation",
+       [](GroundTruthOptions& o) {
+         o.relative_perturbations = {1e-3, 0.0};
+       }},
       {"relative perturbation", [](GroundTruthOptions& o) { o.relative_perturbations = {1.0}; }},
       {"relative perturbation", [](GroundTruthOptions& o) { o.relative_perturbations = {NAN}; }},
-      {"relative perturbations", [](GroundTruthOptions& o) { o.relative_perturbations = {1e-3, 1e-3 * (1 + 1e-12)}; }},
+      {"relative perturbations",
+       [](GroundTruthOptions& o) {
+         o.relative_perturbations = {1e-3, 1e-3 * (1 + 1e-12)};
+       }},
       {"min_length_scale", [](GroundTruthOptions& o) { o.min_length_scale = 0.0; }},
       {"max_length_scale", [](GroundTruthOptions& o) { o.max_length_scale = 0.05; }},
       {"max_length_scale", [](GroundTruthOptions& o) { o.max_length_scale = INFINITY; }},

@@ -40,13 +40,13 @@ TradeoffOptions small_options() {
 TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
   const Job base = parse_job(kJob, "job.toml");
   TradeoffOptions o;
-  o.samples = {8, 16, 32};            // 16 is the base's
+  o.samples = {8, 16, 32};  // 16 is the base's
   o.closure_tolerances = {1e-8};
   o.compliances = {"paper", "full"};  // paper is the base's
   o.objectives = {"mean"};            // the base's: no configuration
   o.algorithms = {"gauss-newton", "LD_LBFGS"};
   o.zero_thresholds = {1e-12, 1e-20};
-  o.ftol_rels = {0.0, 1e-3};          // 0 is the base's
+  o.ftol_rels = {0.0, 1e-3};              // 0 is the base's
   o.reuse_nearby_cycles = {true, false};  // true is the base's
   o.ranges_deg = {360, 90};               // 360 is the base's
   const auto configurations = tradeoff_configurations(base, o);
@@ -62,12 +62,10 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
     EXPECT_EQ(c.job.loop.range != base.loop.range, c.axis == "range_deg") << c.name();
     EXPECT_EQ(c.job.search.zero_threshold != base.search.zero_threshold, c.axis == "zero_threshold") << c.name();
     EXPECT_EQ(c.job.optimizer.ftol_rel != base.optimizer.ftol_rel, c.axis == "ftol_rel") << c.name();
-    EXPECT_EQ(c.job.optimizer.reuse_nearby_cycle != base.optimizer.reuse_nearby_cycle,
-              c.axis == "reuse_nearby_cycle")
+    EXPECT_EQ(c.job.optimizer.reuse_nearby_cycle != base.optimizer.reuse_nearby_cycle, c.axis == "reuse_nearby_cycle")
         << c.name();
     EXPECT_EQ(c.job.loop.objective, "mean") << c.name();
-    EXPECT_EQ(c.job.loop.closure_tolerance != base.loop.closure_tolerance, c.axis == "closure_tolerance")
-        << c.name();
+    EXPECT_EQ(c.job.loop.closure_tolerance != base.loop.closure_tolerance, c.axis == "closure_tolerance") << c.name();
     if (samples_axis) {
       ++changed_samples;
       EXPECT_EQ(std::to_string(c.job.loop.samples), c.value);
@@ -110,7 +108,7 @@ TEST(Tradeoff, TheBaseReadsEveryMovableLoopAsZeroAndTellsThePerturbedOnesApart) 
   EXPECT_LE(row.verified + row.false_zeros, row.zeros);
   EXPECT_EQ(row.movable_cases, 5);  // Bennett in both setups, planar, spherical, trivial
   EXPECT_EQ(row.missed_zeros, 0);
-  EXPECT_EQ(row.rigid_cases, 6);    // the five perturbed and one generic
+  EXPECT_EQ(row.rigid_cases, 6);  // the five perturbed and one generic
   EXPECT_EQ(row.rigid_read_as_zero, 0);
   EXPECT_EQ(row.smallest_told_apart, 1e-2);
 }

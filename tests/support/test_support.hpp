@@ -1,14 +1,14 @@
 // Helpers shared by the tests: central differences and small comparisons.
 #pragma once
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <random>
 #include <vector>
 
-#include <Eigen/Core>
 #include <Eigen/Cholesky>
+#include <Eigen/Core>
 #include <Eigen/QR>
 
 #include "loopfarm/core/equilibrium.hpp"
@@ -40,8 +40,8 @@ inline double rad(double degrees) { return degrees * 3.14159265358979323846 / 18
 struct ReferenceEquilibrium {
   bool converged = false;
   double energy = 0.0;
-  double closure = 0.0;       // max-norm of the final closure residual
-  JointVector theta;          // all joint angles
+  double closure = 0.0;          // max-norm of the final closure residual
+  JointVector theta;             // all joint angles
   Eigen::VectorXd deformations;  // in the model's slot order
 };
 
@@ -65,9 +65,12 @@ inline ReferenceEquilibrium reference_equilibrium(const LoopModel& model, double
     for (int j = 0; j < n - 1; ++j) theta[passive[j]] = x[j];
     for (int k = 0; k < ndef; ++k) {
       const double v = x[n - 1 + k];
-      if (k < n) g.a[k] += v;
-      else if (k < 2 * n) g.alpha[k - n] += v;
-      else g.d[k - 2 * n] += v;
+      if (k < n)
+        g.a[k] += v;
+      else if (k < 2 * n)
+        g.alpha[k - n] += v;
+      else
+        g.d[k - 2 * n] += v;
     }
     return Eigen::VectorXd(closure_residual(g, theta));
   };

@@ -228,11 +228,15 @@ TEST_P(BadInputTest, ExitsWithCode2AndOneLineNamingTheFlag) {
 INSTANTIATE_TEST_SUITE_P(
     Energy, BadInputTest,
     ::testing::Values(
-        BadInput{"three_joints", {"energy", "--a", "1,2,3", "--alpha-deg", "10,20,30"}, {"loopfarm energy: --a:", "3 values"}},
+        BadInput{"three_joints",
+                 {"energy", "--a", "1,2,3", "--alpha-deg", "10,20,30"},
+                 {"loopfarm energy: --a:", "3 values"}},
         BadInput{"nine_joints",
                  {"energy", "--a", "1,1,1,1,1,1,1,1,1", "--alpha-deg", "10,10,10,10,10,10,10,10,10"},
                  {"loopfarm energy: --a:", "9 values"}},
-        BadInput{"alpha_count_differs", {"energy", "--a", "2,4,2,4", "--alpha-deg", "30,90,30"}, {"--alpha-deg:", "3 values"}},
+        BadInput{"alpha_count_differs",
+                 {"energy", "--a", "2,4,2,4", "--alpha-deg", "30,90,30"},
+                 {"--alpha-deg:", "3 values"}},
         BadInput{"d_count_differs", with(kBennett, {"--d", "0,0,0"}), {"--d:", "3 values"}},
         BadInput{"theta_count_differs", with(kBennett, {"--theta-deg", "120,90,-120"}), {"--theta-deg:", "3 values"}},
         BadInput{"nan_length", {"energy", "--a", "2,nan,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "\"nan\""}},
@@ -240,7 +244,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"infinity_offset", with(kBennett, {"--d", "0,Infinity,0,0"}), {"--d:", "\"Infinity\""}},
         BadInput{"negative_length", {"energy", "--a=-2,4,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "-2", ">= 0"}},
         BadInput{"empty_list", {"energy", "--a", "", "--alpha-deg", "30,90,30,90"}, {"--a:", "empty"}},
-        BadInput{"empty_element", {"energy", "--a", "2,,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "element 2", "empty"}},
+        BadInput{
+            "empty_element", {"energy", "--a", "2,,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "element 2", "empty"}},
         BadInput{"trailing_comma", {"energy", "--a", "2,4,2,4,", "--alpha-deg", "30,90,30,90"}, {"--a:", "element 5"}},
         BadInput{"junk_in_number", {"energy", "--a", "2,4x,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "\"4x\""}},
         BadInput{"letters", {"energy", "--a", "2,x,2,4", "--alpha-deg", "30,90,30,90"}, {"--a:", "\"x\""}},
@@ -275,14 +280,18 @@ INSTANTIATE_TEST_SUITE_P(
                  {"energy", "--geometry", "{dir}/geom.toml"},
                  {"geom.toml:2 key \"alpha_deg\"", "3 values"},
                  "a = [2, 4, 2, 4]\nalpha_deg = [30, 90, 30]\n"},
-        BadInput{"toml_missing_key", {"energy", "--geometry", "{dir}/geom.toml"}, {"geom.toml", "alpha_deg"}, "a = [2, 4, 2, 4]\n"},
+        BadInput{"toml_missing_key",
+                 {"energy", "--geometry", "{dir}/geom.toml"},
+                 {"geom.toml", "alpha_deg"},
+                 "a = [2, 4, 2, 4]\n"},
         BadInput{"toml_syntax_error",
                  {"energy", "--geometry", "{dir}/geom.toml"},
                  {"geom.toml:", "invalid TOML"},
                  "a = [2, 4, 2, 4\nalpha_deg = [30, 90, 30, 90]\n"},
         BadInput{"toml_missing_file", {"energy", "--geometry", "{dir}/absent.toml"}, {"--geometry:", "absent.toml"}},
         BadInput{"geometry_and_flags", with(kBennett, {"--geometry", "{dir}/absent.toml"}), {"--geometry"}},
-        BadInput{"csv_directory_missing", with(kBennett, {"--csv", "{dir}/no/such/dir/out.csv"}), {"--csv:", "out.csv"}},
+        BadInput{
+            "csv_directory_missing", with(kBennett, {"--csv", "{dir}/no/such/dir/out.csv"}), {"--csv:", "out.csv"}},
         BadInput{"csv_is_a_directory", with(kBennett, {"--csv", "{dir}"}), {"--csv:", "directory"}},
         BadInput{"log_without_plot", with(kBennett, {"--log"}), {"--log"}},
         BadInput{"unknown_option", with(kBennett, {"--frobnicate"}), {"--frobnicate"}}),
@@ -293,7 +302,9 @@ const std::string kTable1 = std::string(LOOPFARM_SOURCE_DIR) + "/jobs/paper-tabl
 INSTANTIATE_TEST_SUITE_P(
     StartAndVerify, BadInputTest,
     ::testing::Values(
-        BadInput{"start_missing_job", {"start", "{dir}/absent.toml"}, {"loopfarm start: job file:", "absent.toml:0:", "cannot read"}},
+        BadInput{"start_missing_job",
+                 {"start", "{dir}/absent.toml"},
+                 {"loopfarm start: job file:", "absent.toml:0:", "cannot read"}},
         BadInput{"start_bad_job_key",
                  {"start", "{dir}/geom.toml"},
                  {"loopfarm start: job file:", "geom.toml:2: loop.joint:", "unknown key"},
@@ -306,12 +317,19 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"start_index_text", {"start", kTable1, "--index", "two"}, {"loopfarm start: --index:", "\"two\""}},
         BadInput{"start_count_zero", {"start", kTable1, "--count", "0", "--json"}, {"--count:", "got 0"}},
         BadInput{"start_count_without_json", {"start", kTable1, "--count", "3"}, {"--count:", "--json"}},
-        BadInput{"start_count_beyond", {"start", kTable1, "--index", "198", "--count", "5", "--json"}, {"--count:", "202"}},
+        BadInput{
+            "start_count_beyond", {"start", kTable1, "--index", "198", "--count", "5", "--json"}, {"--count:", "202"}},
         BadInput{"start_algorithm", {"start", kTable1, "--algorithm", "LD_NOPE"}, {"--algorithm:", "LD_NOPE"}},
         BadInput{"start_no_job", {"start"}, {"JOB"}},
-        BadInput{"verify_three_joints", {"verify", "--a", "1,2,3", "--alpha-deg", "10,20,30"}, {"loopfarm verify: --a:", "3 values"}},
-        BadInput{"verify_steps", {"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--steps", "100"}, {"--steps:", "100"}},
-        BadInput{"verify_samples", {"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--samples", "2"}, {"--samples:", "2"}},
+        BadInput{"verify_three_joints",
+                 {"verify", "--a", "1,2,3", "--alpha-deg", "10,20,30"},
+                 {"loopfarm verify: --a:", "3 values"}},
+        BadInput{"verify_steps",
+                 {"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--steps", "100"},
+                 {"--steps:", "100"}},
+        BadInput{"verify_samples",
+                 {"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--samples", "2"},
+                 {"--samples:", "2"}},
         BadInput{"verify_theta_count",
                  {"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--theta-deg", "1,2"},
                  {"--theta-deg:", "2 values"}}),
@@ -331,10 +349,11 @@ TEST_F(CliTest, JsonForThePaperBennettLoopHasZeroEnergy) {
   EXPECT_EQ(json.back(), '}');
 
   // Keys present, in the documented order.
-  const std::vector<std::string> keys = {"E_mean",     "E_max",      "samples",    "failed_samples",
-                                         "branch_jumps", "refinements", "iterations", "max_closure_residual",
-                                         "theta0_deg", "theta_deg",  "range_deg",  "on_motion",
-                                         "full_turn",  "input_range_deg", "length_scale", "compliance", "seconds"};
+  const std::vector<std::string> keys = {"E_mean",       "E_max",           "samples",      "failed_samples",
+                                         "branch_jumps", "refinements",     "iterations",   "max_closure_residual",
+                                         "theta0_deg",   "theta_deg",       "range_deg",    "on_motion",
+                                         "full_turn",    "input_range_deg", "length_scale", "compliance",
+                                         "seconds"};
   size_t previous = 0;
   for (const std::string& key : keys) {
     const size_t at = json.find("\"" + key + "\":");
@@ -381,8 +400,8 @@ TEST_F(CliTest, NegativeListsWorkAsSeparateArguments) {
 }
 
 TEST_F(CliTest, GenericLoopHasPositiveEnergy) {
-  const Result result = run({"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0",
-                             "--samples", "16", "--json"});
+  const Result result = run(
+      {"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0", "--samples", "16", "--json"});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const double e_mean = json_number(result.out, "E_mean");
   EXPECT_GT(e_mean, 1e-6) << result.out;
@@ -474,8 +493,8 @@ TEST_F(CliTest, EnergyPrintsWhatTheLibraryComputes) {
 TEST_F(CliTest, TomlGeometryGivesTheSameResultAsFlags) {
   write_file(dir_ / "loop.toml",
              "# a generic loop\na = [1, 2, 3, 2.5]\nalpha_deg = [20, 70, 40, 110]\nd = [0.1, -0.3, 0.2, 0]\n");
-  const Result from_flags = run({"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0",
-                                 "--samples", "8", "--json"});
+  const Result from_flags = run(
+      {"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0", "--samples", "8", "--json"});
   const Result from_file = run({"energy", "--geometry", "{dir}/loop.toml", "--samples", "8", "--json"});
   ASSERT_EQ(from_flags.exit_code, 0) << from_flags.err;
   ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
@@ -494,8 +513,8 @@ TEST_F(CliTest, SummaryNamesEveryQuantity) {
 
 TEST_F(CliTest, CsvHasAHeaderAndOneRowPerSample) {
   write_file(dir_ / "curve.csv", "old contents\n");
-  const Result result = run(with(kBennett, {"--theta-deg", "120,90,-120,-90", "--samples", "12", "--csv",
-                                            "{dir}/curve.csv"}));
+  const Result result =
+      run(with(kBennett, {"--theta-deg", "120,90,-120,-90", "--samples", "12", "--csv", "{dir}/curve.csv"}));
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_NE(result.out.find("E_mean"), std::string::npos);
   const auto lines = lines_of(read_file(dir_ / "curve.csv"));
@@ -517,9 +536,9 @@ TEST_F(CliTest, CsvHasAHeaderAndOneRowPerSample) {
 }
 
 TEST_F(CliTest, CsvWithFullComplianceHasOffsetColumns) {
-  const Result result = run({"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--samples", "4",
-                             "--compliance", "full", "--range-deg", "90", "--theta0-deg", "10", "--csv",
-                             "{dir}/curve.csv", "--json"});
+  const Result result =
+      run({"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--samples", "4", "--compliance", "full",
+           "--range-deg", "90", "--theta0-deg", "10", "--csv", "{dir}/curve.csv", "--json"});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_EQ(json_raw(result.out, "compliance"), "\"full\"");
   const auto lines = lines_of(read_file(dir_ / "curve.csv"));
@@ -535,8 +554,8 @@ TEST_F(CliTest, PlotWritesAPng) {
   if (!have_gnuplot()) GTEST_SKIP() << "gnuplot is not installed";
   for (const bool log : {false, true}) {
     const fs::path png = dir_ / (log ? "log.png" : "linear.png");
-    std::vector<std::string> args = {"energy", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110",
-                                     "--samples", "16", "--plot", png.string()};
+    std::vector<std::string> args = {"energy",    "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110",
+                                     "--samples", "16",  "--plot",    png.string()};
     if (log) args.push_back("--log");
     const Result result = run(args);
     ASSERT_EQ(result.exit_code, 0) << result.err;
@@ -585,8 +604,8 @@ TEST_F(CliTest, VersionHelpAndMissingSubcommand) {
 
 namespace {
 
-const char* const kCandidateKeys[] = {"family", "setup", "verified", "rigid_residual", "family_residuals",
-                                      "local_dimension", "E_mean", "status"};
+const char* const kCandidateKeys[] = {"family",           "setup",           "verified", "rigid_residual",
+                                      "family_residuals", "local_dimension", "E_mean",   "status"};
 
 TEST_F(CliTest, StartReachesABennettLoopAndSaysEverythingInJson) {
   const Result result = run({"start", kTable1, "--index", "2", "--json"});
@@ -638,7 +657,8 @@ TEST_F(CliTest, StartStoryAndTrace) {
 }
 
 TEST_F(CliTest, VerifyClassifiesMovableAndRigidLoops) {
-  const Result bennett = run({"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--theta-deg", "120,90,-120,-90", "--json"});
+  const Result bennett =
+      run({"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--theta-deg", "120,90,-120,-90", "--json"});
   ASSERT_EQ(bennett.exit_code, 0) << bennett.err;
   const std::string& b = bennett.out;
   for (const char* key : kCandidateKeys) EXPECT_NE(json_raw(b, key), "") << key;
@@ -650,7 +670,8 @@ TEST_F(CliTest, VerifyClassifiesMovableAndRigidLoops) {
   EXPECT_EQ(json_raw(planar.out, "family"), "\"planar\"");
   EXPECT_EQ(json_number(planar.out, "local_dimension"), 7);
   // Rigid: exit code 4, and nothing that means something only at a zero.
-  const Result rigid = run({"verify", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0", "--json"});
+  const Result rigid =
+      run({"verify", "--a", "1,2,3,2.5", "--alpha-deg", "20,70,40,110", "--d=0.1,-0.3,0.2,0", "--json"});
   ASSERT_EQ(rigid.exit_code, 4) << rigid.err;
   EXPECT_EQ(json_raw(rigid.out, "verified"), "false");
   EXPECT_EQ(json_raw(rigid.out, "family"), "\"unclassified\"");
@@ -694,8 +715,8 @@ TEST_F(CliTest, VerifyFindsARockerWhateverTheta0) {
 // loop cannot be assembled: the family's conditions hold, no motion exists,
 // and no family is claimed.
 TEST_F(CliTest, VerifyNamesNoFamilyWithoutAMotion) {
-  const std::vector<std::string> geometry = {"--a", "2.636,1.143,0.558,1.408,2.969,3.575738804778671",
-                                             "--alpha-deg", "90,90,90,90,90,90"};
+  const std::vector<std::string> geometry = {"--a", "2.636,1.143,0.558,1.408,2.969,3.575738804778671", "--alpha-deg",
+                                             "90,90,90,90,90,90"};
   std::vector<std::string> args = {"verify", "--json"};
   args.insert(args.end(), geometry.begin(), geometry.end());
   const Result r = run(args);
@@ -715,12 +736,13 @@ TEST_F(CliTest, VerifyNamesNoFamilyWithoutAMotion) {
 
 TEST_F(CliTest, MotionPrintsCircuitsWritesCsvAndPlot) {
   // The parallelogram: two circuits crossing at two change points.
-  const Result r = run({"motion", "--a", "1,2,1,2", "--alpha-deg", "0,0,0,0", "--csv", "{dir}/curves.csv",
-                        "--plot", "{dir}/curves.png"});
+  const Result r = run({"motion", "--a", "1,2,1,2", "--alpha-deg", "0,0,0,0", "--csv", "{dir}/curves.csv", "--plot",
+                        "{dir}/curves.png"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("circuits                2 found"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("singular pose       the closure Jacobian loses rank; 4 branch directions leave it"),
-            std::string::npos) << r.out;
+            std::string::npos)
+      << r.out;
   const std::vector<std::string> rows = lines_of(read_file(dir_ / "curves.csv"));
   ASSERT_GT(rows.size(), 100u);
   EXPECT_EQ(rows[0], "circuit,point,arclength_rad,theta1_deg,theta2_deg,theta3_deg,theta4_deg");

@@ -64,8 +64,8 @@ GroundTruthOptions options_of_the_runs() {
   options.relative_perturbations = {1e-3, 1e-6};
   return options;
 }
-const std::vector<std::string> kRunArguments = {"--seed", "5", "--per-family", "2", "--generic", "3",
-                                                "--perturbations", "1e-3,1e-6"};
+const std::vector<std::string> kRunArguments = {"--seed",    "5", "--per-family",    "2",
+                                                "--generic", "3", "--perturbations", "1e-3,1e-6"};
 
 TEST_F(GroundTruthCli, CsvHasOneRowPerCaseWithTheLibrarysValues) {
   const Result result = run(kRunArguments);

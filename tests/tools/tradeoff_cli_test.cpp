@@ -31,15 +31,39 @@ class TradeoffCli : public testing::CommandTest {
     std::ofstream(dir_ / "job.toml") << "[loop]\nsamples = 8\n[optimizer]\nmax_evaluations = 20\n"
                                         "[search]\nstarts = 5\nzero_threshold = 1e-20\n";
   }
-  testing::CommandResult run(const std::vector<std::string>& args) { return run_command(kExecutable, "tradeoff", args); }
+  testing::CommandResult run(const std::vector<std::string>& args) {
+    return run_command(kExecutable, "tradeoff", args);
+  }
 };
 
 // The smallest sweep that has every axis: two starts, one loop per family.
-const std::vector<std::string> kSmallSweep = {
-    "{dir}/job.toml",   "--starts", "2", "--per-family", "1", "--generic", "1", "--perturbations", "1e-2",
-    "--samples",        "8,16",     "--ranges-deg", "360,90", "--closure-tolerances", "1e-8", "--compliances", "paper", "--objectives", "mean,max", "--algorithms",
-    "gauss-newton,LD_LBFGS", "--zero-thresholds", "1e-20", "--ftol-rels", "0,1e-3",
-    "--reuse-nearby-cycles", "true,false"};
+const std::vector<std::string> kSmallSweep = {"{dir}/job.toml",
+                                              "--starts",
+                                              "2",
+                                              "--per-family",
+                                              "1",
+                                              "--generic",
+                                              "1",
+                                              "--perturbations",
+                                              "1e-2",
+                                              "--samples",
+                                              "8,16",
+                                              "--ranges-deg",
+                                              "360,90",
+                                              "--closure-tolerances",
+                                              "1e-8",
+                                              "--compliances",
+                                              "paper",
+                                              "--objectives",
+                                              "mean,max",
+                                              "--algorithms",
+                                              "gauss-newton,LD_LBFGS",
+                                              "--zero-thresholds",
+                                              "1e-20",
+                                              "--ftol-rels",
+                                              "0,1e-3",
+                                              "--reuse-nearby-cycles",
+                                              "true,false"};
 
 TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   std::vector<std::string> args = kSmallSweep;

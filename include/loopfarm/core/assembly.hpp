@@ -17,8 +17,8 @@ struct AssemblyOptions {
 
 // Least-energy equilibrium at theta0 over the deterministic guesses. The
 // summary's status is `converged` if any guess converged.
-EquilibriumSummary assemble(const LoopModel& model, EquilibriumWorkspace& workspace,
-                            double theta0, const AssemblyOptions& options = {});
+EquilibriumSummary assemble(const LoopModel& model, EquilibriumWorkspace& workspace, double theta0,
+                            const AssemblyOptions& options = {});
 
 // Equilibrium at theta[input_joint] started from the given joint angles.
 EquilibriumSummary assemble_from_angles(const LoopModel& model, EquilibriumWorkspace& workspace,

@@ -17,7 +17,7 @@
 namespace loopfarm {
 
 struct CycleOptions {
-  int samples = 32;              // N, at least 2
+  int samples = 32;  // N, at least 2
   // Input range covered: a full turn (2 pi, the default) samples
   // theta0 + 2 pi j / N; a smaller range samples [theta0 - range/2,
   // theta0 + range/2] at N evenly spaced points, walked outward from theta0.
@@ -27,7 +27,7 @@ struct CycleOptions {
   // foretells such a move, or the prediction bends away from the tangent
   // line, the step is bisected before it is tried.
   double max_passive_step = 0.5;
-  int max_refinements = 5;       // bisection depth per step (finest step h / 32)
+  int max_refinements = 5;  // bisection depth per step (finest step h / 32)
   // Iteration cap of a continuation solve; a step that needs more is bisected.
   int max_iterations_per_step = 20;
   // Start each solve from a prediction along the path: the cubic through the
@@ -62,14 +62,14 @@ enum class SampleStatus {
 const char* to_string(SampleStatus status);
 
 struct CycleSample {
-  double theta_in = 0.0;          // input angle [rad]
-  double energy = 0.0;            // E / (k_a L^2)
+  double theta_in = 0.0;  // input angle [rad]
+  double energy = 0.0;    // E / (k_a L^2)
   SampleStatus status = SampleStatus::failed;
   SolveStatus solve_status = SolveStatus::max_iterations;
-  int iterations = 0;             // Newton iterations, refinement steps included
-  int refinements = 0;            // bisections spent reaching this sample
+  int iterations = 0;   // Newton iterations, refinement steps included
+  int refinements = 0;  // bisections spent reaching this sample
   double closure_residual = 0.0;
-  EquilibriumState state;         // angles, deformations, multipliers
+  EquilibriumState state;  // angles, deformations, multipliers
 };
 
 struct CycleSummary {
@@ -94,9 +94,8 @@ struct CycleSummary {
 // Drives the loop from `start` (an assembled state at theta0, e.g. from
 // assemble()) through the cycle. `summary` is reused: with the same N it does
 // not allocate. The workspace must belong to `model`.
-void cycle_energy(const LoopModel& model, EquilibriumWorkspace& workspace, double theta0,
-                  const EquilibriumState& start, const CycleOptions& options,
-                  CycleSummary& summary);
+void cycle_energy(const LoopModel& model, EquilibriumWorkspace& workspace, double theta0, const EquilibriumState& start,
+                  const CycleOptions& options, CycleSummary& summary);
 
 // The cycle of a geometry near the one `nearby` was computed for (same
 // theta0, options and model layout), from nearby's samples: each sample is
@@ -134,12 +133,10 @@ void cycle_weighted_deformations(const LoopModel& model, const CycleSummary& sum
 // Into `jacobian` (and `*angle_jacobian`), resized as needed: with the same
 // N and model size a repeated call reuses their storage and does not allocate
 // (every per-sample buffer has a fixed size).
-void cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& workspace,
-                                const CycleSummary& summary, Eigen::MatrixXd& jacobian,
-                                Eigen::MatrixXd* angle_jacobian = nullptr);
+void cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& workspace, const CycleSummary& summary,
+                                Eigen::MatrixXd& jacobian, Eigen::MatrixXd* angle_jacobian = nullptr);
 // The same, returning a new matrix.
 Eigen::MatrixXd cycle_deformation_jacobian(const LoopModel& model, EquilibriumWorkspace& workspace,
-                                           const CycleSummary& summary,
-                                           Eigen::MatrixXd* angle_jacobian = nullptr);
+                                           const CycleSummary& summary, Eigen::MatrixXd* angle_jacobian = nullptr);
 
 }  // namespace loopfarm

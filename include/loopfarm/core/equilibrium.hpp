@@ -152,16 +152,16 @@ struct EquilibriumState {
 
 struct EquilibriumSummary {
   SolveStatus status = SolveStatus::max_iterations;
-  int iterations = 0;            // Newton iterations
-  int residual_evaluations = 0;  // evaluations of the loop product
-  double energy = 0.0;           // E / (k_a L^2)
-  double closure_residual = 0.0;  // max-norm of (rotation, translation / L)
-  double stationarity = 0.0;      // max-norm of the Lagrangian gradient
+  int iterations = 0;               // Newton iterations
+  int residual_evaluations = 0;     // evaluations of the loop product
+  double energy = 0.0;              // E / (k_a L^2)
+  double closure_residual = 0.0;    // max-norm of (rotation, translation / L)
+  double stationarity = 0.0;        // max-norm of the Lagrangian gradient
   int gauss_newton_steps = 0;       // iterations that fell back to the Gauss-Newton model
   int structured_steps = 0;         // iterations that took the structured step (options.structured_step)
   int simplified_steps = 0;         // iterations that reused the last factorisation (simplified Newton)
   double max_regularization = 0.0;  // largest primal regularisation used
-  EquilibriumState state;            // the solution (deformations, angles, multipliers)
+  EquilibriumState state;           // the solution (deformations, angles, multipliers)
   // d state / d theta_in along the equilibrium path (theta: 1 for the input
   // joint), from the KKT factorisation of the last Newton step, so accurate
   // to about that step's length: a predictor for the continuation, at no
@@ -176,18 +176,18 @@ struct EquilibriumWorkspace {
 
   ChainKinematics chain;
   ChainMatrix chain_hessian;
-  UnknownMatrix hessian;      // H = W + sigma AᵀA + rho I, then its Cholesky factor L (diagonal inverted)
-  UnknownMatrix normal;       // AᵀA (lower triangle)
-  Matrix6U jacobian;          // closure Jacobian A with respect to the unknowns
+  UnknownMatrix hessian;  // H = W + sigma AᵀA + rho I, then its Cholesky factor L (diagonal inverted)
+  UnknownMatrix normal;   // AᵀA (lower triangle)
+  Matrix6U jacobian;      // closure Jacobian A with respect to the unknowns
   // [L^-1 Aᵀ | L^-1 g | 0] with H = L Lᵀ: row-major, 8 wide, so that the
   // triangular solve updates whole rows (SIMD-friendly, no short loops).
   Eigen::Matrix<double, Eigen::Dynamic, 8, Eigen::RowMajor, kMaxUnknowns, 8> solved;
-  UnknownVector gradient;     // gradient of the Lagrangian
+  UnknownVector gradient;  // gradient of the Lagrangian
   UnknownVector step;
   UnknownVector scratch;
   Matrix6 schur;
   EquilibriumState trial;
-  JointVector theta;          // deformed-geometry buffers
+  JointVector theta;  // deformed-geometry buffers
   LoopGeometry deformed;
 };
 
@@ -214,9 +214,8 @@ struct SolveLimits {
 // Solves the stiff-limit equilibrium at input angle theta_in from `guess`
 // (whose input-joint angle is ignored). Never throws for a failed solve: the
 // status says what happened. No heap allocation.
-EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& workspace,
-                                     double theta_in, const EquilibriumState& guess,
-                                     const SolveLimits& limits = {});
+EquilibriumSummary solve_equilibrium(const LoopModel& model, EquilibriumWorkspace& workspace, double theta_in,
+                                     const EquilibriumState& guess, const SolveLimits& limits = {});
 
 // d state / d theta_in at a solved equilibrium `solution` (as
 // EquilibriumSummary::tangent, but from a factorisation at `solution` itself).
@@ -226,8 +225,7 @@ bool equilibrium_tangent(const LoopModel& model, EquilibriumWorkspace& workspace
                          EquilibriumState& tangent);
 
 // The normalised geometry deformed by `deformations`, in `out` (same size).
-void deformed_geometry(const LoopModel& model, const DeformationVector& deformations,
-                       LoopGeometry& out);
+void deformed_geometry(const LoopModel& model, const DeformationVector& deformations, LoopGeometry& out);
 
 // Physical deformation of slot k: length deformations times L, twists in radians.
 double physical_deformation(const LoopModel& model, const DeformationVector& deformations, int k);

@@ -79,8 +79,7 @@ Eigen::Isometry3d joint_transform(double theta, double d, double a, double alpha
 
 // T_1 * ... * T_count (count defaults to all joints): the pose of frame `count`
 // in the base frame.
-Eigen::Isometry3d forward_transform(const LoopGeometry& geometry, const JointVector& theta,
-                                    int count = -1);
+Eigen::Isometry3d forward_transform(const LoopGeometry& geometry, const JointVector& theta, int count = -1);
 
 // Closure residual (log R, p) of the loop product; zero when the loop closes.
 Vector6 closure_residual(const LoopGeometry& geometry, const JointVector& theta);
@@ -96,8 +95,7 @@ struct ClosureJacobians {
   Matrix6J alpha;
   Matrix6J d;
 };
-void closure_jacobians(const LoopGeometry& geometry, const JointVector& theta,
-                       ClosureJacobians& out);
+void closure_jacobians(const LoopGeometry& geometry, const JointVector& theta, ClosureJacobians& out);
 
 // ---------------------------------------------------------------------------
 // The chain of elementary motions, the machinery under the functions above and
@@ -138,8 +136,8 @@ void residual_jacobian(const ChainKinematics& chain, std::span<const int> elemen
 // listed in `elements` (ascending chain order), written to out(i, j) for
 // elements[i], elements[j]. This is the constraint curvature that an exact
 // Newton step on the closure-constrained problem needs.
-void residual_hessian(const ChainKinematics& chain, const Vector6& lambda,
-                      std::span<const int> elements, ChainMatrix& out);
+void residual_hessian(const ChainKinematics& chain, const Vector6& lambda, std::span<const int> elements,
+                      ChainMatrix& out);
 
 // SO(3) logarithm as a rotation vector, valid for every rotation (angle in [0, pi]).
 Vector3 so3_log(const Matrix3& rotation);

@@ -88,7 +88,7 @@ struct JointExtreme {
 struct Bifurcation {
   double arclength = 0.0;
   JointVector theta;
-  int branches = 0;  // branch directions found leaving the point (2 per branch through it)
+  int branches = 0;                      // branch directions found leaving the point (2 per branch through it)
   double smallest_singular_value = 0.0;  // of the closure Jacobian at the located point
 };
 
@@ -103,10 +103,10 @@ struct JointRange {
 };
 
 enum class CircuitEnd {
-  closed,         // returned to its first point: a whole circuit
-  lost,           // the closure could not be followed further (steps halved to nothing)
-  too_long,       // MotionOptions::max_points reached
-  rigid,          // the pose closes but the closure Jacobian has full rank: an isolated pose
+  closed,    // returned to its first point: a whole circuit
+  lost,      // the closure could not be followed further (steps halved to nothing)
+  too_long,  // MotionOptions::max_points reached
+  rigid,     // the pose closes but the closure Jacobian has full rank: an isolated pose
 };
 const char* to_string(CircuitEnd end);
 
@@ -114,13 +114,13 @@ struct Circuit {
   std::vector<JointVector> points;  // unwrapped poses along the circuit, in order
   std::vector<double> arclength;    // from the first point, one per point
   CircuitEnd end = CircuitEnd::lost;
-  int freedoms = 0;                 // null-space dimension of the closure Jacobian at regular points
-  std::vector<int> held_joints;     // joints held at their start values (freedoms > 1)
-  std::vector<JointRange> ranges;   // one per joint
+  int freedoms = 0;                    // null-space dimension of the closure Jacobian at regular points
+  std::vector<int> held_joints;        // joints held at their start values (freedoms > 1)
+  std::vector<JointRange> ranges;      // one per joint
   std::vector<JointExtreme> extremes;  // in order of arclength
   std::vector<Bifurcation> bifurcations;
-  double worst_residual = 0.0;      // over every point (and located extreme)
-  double length = 0.0;              // total arclength
+  double worst_residual = 0.0;  // over every point (and located extreme)
+  double length = 0.0;          // total arclength
 
   bool closed() const { return end == CircuitEnd::closed; }
   // The input's range [rad] and whether it turns fully.
@@ -164,9 +164,9 @@ double cycle_window(const JointRange& input_range, double theta0);
 // with the input at theta0 whose circuit moves (Circuit::moves with
 // `min_travel`), and the window a cycle from it covers (cycle_window).
 struct MotionStart {
-  JointVector pose;     // closed, with pose[input_joint] = theta0
-  Circuit circuit;      // the circuit through it
-  double range = 0.0;   // cycle_window(circuit's input range, theta0) > 0
+  JointVector pose;    // closed, with pose[input_joint] = theta0
+  Circuit circuit;     // the circuit through it
+  double range = 0.0;  // cycle_window(circuit's input range, theta0) > 0
 };
 
 // The assembly at theta0 that lies on a motion: `near` (may be null) when,
@@ -179,19 +179,18 @@ std::optional<MotionStart> motion_start(const LoopGeometry& geometry, double the
                                         double min_travel, const MotionOptions& options = {});
 
 struct MotionAnalysis {
-  int input_joint = 0;                  // as in the options
-  std::vector<Circuit> circuits;        // the circuit through the given pose first, then in order found
-  int given_circuit = -1;               // index of the circuit through the given pose; -1 if none
-  bool given_pose_closes = false;       // the given pose closes (after polishing)
-  JointVector given_pose;               // the given pose, polished; empty if none was given
+  int input_joint = 0;                      // as in the options
+  std::vector<Circuit> circuits;            // the circuit through the given pose first, then in order found
+  int given_circuit = -1;                   // index of the circuit through the given pose; -1 if none
+  bool given_pose_closes = false;           // the given pose closes (after polishing)
+  JointVector given_pose;                   // the given pose, polished; empty if none was given
   std::vector<JointVector> isolated_poses;  // closed poses that do not move (rigid assemblies)
-  double least_residual = 0.0;          // the smallest residual any assembly reached (when none closes)
-  int seeds = 0;                        // closed poses found by the assembly search
+  double least_residual = 0.0;              // the smallest residual any assembly reached (when none closes)
+  int seeds = 0;                            // closed poses found by the assembly search
 };
 
 // Every circuit found from `pose` (may be null), from assemblies at
 // options.scan_inputs input angles and from assemblies with every joint free.
-MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* pose,
-                              const MotionOptions& options = {});
+MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* pose, const MotionOptions& options = {});
 
 }  // namespace loopfarm

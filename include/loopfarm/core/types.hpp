@@ -34,10 +34,8 @@ using GeometryVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3 * kMaxJoint
 using Matrix6J = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxJoints>;
 
 using UnknownVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxUnknowns, 1>;
-using UnknownMatrix =
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxUnknowns, kMaxUnknowns>;
+using UnknownMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxUnknowns, kMaxUnknowns>;
 using Matrix6U = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxUnknowns>;
-using ChainMatrix =
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxChain, kMaxChain>;
+using ChainMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxChain, kMaxChain>;
 
 }  // namespace loopfarm

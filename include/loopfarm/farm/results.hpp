@@ -22,38 +22,38 @@ struct StartSummary;
 // not apply (a family check that has no value, e.g. Bennett for n != 4, or
 // trivial without a frozen joint) are +infinity, stored as NULL.
 struct CandidateRecord {
-  std::string family;              // "bennett", "planar", "spherical", "trivial", "unclassified"
-  std::string setup;               // Bennett: "asymmetric" / "line_symmetric"; otherwise "none"
-  std::string detail;              // e.g. "axes 1 and 3 coincide; joints 2, 4 frozen"
-  double family_residual = 0.0;    // of the family found (of the nearest family when unclassified)
-  double bennett_residual = 0.0;   // every family's residual (classify.hpp's checks)
+  std::string family;             // "bennett", "planar", "spherical", "trivial", "unclassified"
+  std::string setup;              // Bennett: "asymmetric" / "line_symmetric"; otherwise "none"
+  std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2, 4 frozen"
+  double family_residual = 0.0;   // of the family found (of the nearest family when unclassified)
+  double bennett_residual = 0.0;  // every family's residual (classify.hpp's checks)
   double planar_residual = 0.0;
   double spherical_residual = 0.0;
   double trivial_residual = 0.0;
-  double rigid_residual = 0.0;     // worst rigid-closure residual of the verification
-  bool full_turn = false;          // the input turns fully
-  double range_lo_deg = 0.0;       // input range covered, unwrapped, degrees
+  double rigid_residual = 0.0;  // worst rigid-closure residual of the verification
+  bool full_turn = false;       // the input turns fully
+  double range_lo_deg = 0.0;    // input range covered, unwrapped, degrees
   double range_hi_deg = 0.0;
-  int local_dimension = 0;         // dimension of the zero set among the free parameters
+  int local_dimension = 0;  // dimension of the zero set among the free parameters
   int free_parameters = 0;
   std::vector<double> singular_values;  // of the deformation Jacobian, descending
-  std::string canonical_key;       // canonical.hpp's key (quantised to 1e-6)
-  LoopGeometry canonical_geometry; // the canonical representation, length scale 1 (unquantised)
+  std::string canonical_key;            // canonical.hpp's key (quantised to 1e-6)
+  LoopGeometry canonical_geometry;      // the canonical representation, length scale 1 (unquantised)
 };
 
 struct StartRecord {
   std::uint64_t index = 0;
-  std::string status;              // to_string(SearchStatus)
-  double E_mean = 0.0;             // unsteered, at the final geometry (NaN when it could not be evaluated)
+  std::string status;   // to_string(SearchStatus)
+  double E_mean = 0.0;  // unsteered, at the final geometry (NaN when it could not be evaluated)
   double E_max = 0.0;
-  double objective = 0.0;          // the minimised (steered) value
+  double objective = 0.0;  // the minimised (steered) value
   int evaluations = 0;
-  double seconds = 0.0;            // wall time of the start (the only timing-dependent field)
-  bool zero = false;               // E_mean <= the job's zero threshold
-  bool verified = false;           // zero and rigidly verified: it has a candidate
-  LoopGeometry final_geometry;     // in the job's units
-  JointVector final_angles;        // assembled pose at theta0 [rad]
-  CandidateRecord candidate;       // meaningful when `verified`
+  double seconds = 0.0;         // wall time of the start (the only timing-dependent field)
+  bool zero = false;            // E_mean <= the job's zero threshold
+  bool verified = false;        // zero and rigidly verified: it has a candidate
+  LoopGeometry final_geometry;  // in the job's units
+  JointVector final_angles;     // assembled pose at theta0 [rad]
+  CandidateRecord candidate;    // meaningful when `verified`
 };
 
 StartRecord make_start_record(const StartSummary& summary);

@@ -27,11 +27,11 @@
 namespace loopfarm {
 
 struct CanonicalForm {
-  LoopGeometry geometry;      // the chosen representation, scaled to length scale 1 (unquantised)
-  double scale = 1.0;         // length_scale of the input
-  int shift = 0;              // the transformation applied: relabelled by shift,
-  bool reversed = false;      // then reversed,
-  std::uint32_t flips = 0;    // then these axes flipped
+  LoopGeometry geometry;    // the chosen representation, scaled to length scale 1 (unquantised)
+  double scale = 1.0;       // length_scale of the input
+  int shift = 0;            // the transformation applied: relabelled by shift,
+  bool reversed = false;    // then reversed,
+  std::uint32_t flips = 0;  // then these axes flipped
   std::string key;
 };
 

@@ -76,13 +76,20 @@ const char* to_string(Family family);
 // and lists of their names (a --family option and its message). A family
 // added to the enum is added here (classify_test fails until it is).
 inline constexpr Family kAllFamilies[] = {
-    Family::bennett,          Family::planar,
-    Family::spherical,        Family::trivial,
-    Family::unclassified,     Family::goldberg,
-    Family::myard,            Family::bricard_line_symmetric,
-    Family::bricard_plane_symmetric, Family::bricard_trihedral,
-    Family::degenerate,       Family::goldberg_bent,
-    Family::bennett_pair,     Family::bennett_dyads,
+    Family::bennett,
+    Family::planar,
+    Family::spherical,
+    Family::trivial,
+    Family::unclassified,
+    Family::goldberg,
+    Family::myard,
+    Family::bricard_line_symmetric,
+    Family::bricard_plane_symmetric,
+    Family::bricard_trihedral,
+    Family::degenerate,
+    Family::goldberg_bent,
+    Family::bennett_pair,
+    Family::bennett_dyads,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -101,7 +108,7 @@ enum class BennettSetup { none, asymmetric, line_symmetric };
 const char* to_string(BennettSetup setup);
 
 struct ConditionResidual {
-  std::string name;   // e.g. "a1 - a3", in the best representation's labels
+  std::string name;  // e.g. "a1 - a3", in the best representation's labels
   double residual = 0.0;
 };
 
@@ -113,8 +120,8 @@ struct FamilyCheck {
 };
 
 struct ClassifyOptions {
-  double tolerance = 1e-8;        // a family fits when its residual is at most this
-  double frozen_travel = 1e-6;    // [rad] a joint turning less than this over the motion is frozen
+  double tolerance = 1e-8;      // a family fits when its residual is at most this
+  double frozen_travel = 1e-6;  // [rad] a joint turning less than this over the motion is frozen
   // [rad] 5R only: a joint that rocks by more than frozen_travel but at most
   // this may still be locked for the locked-joint rule (degenerate), where the
   // 4R left must then fit to `tolerance` as for a frozen joint: a loop a
@@ -127,8 +134,8 @@ struct ClassifyOptions {
 struct Classification {
   Family family = Family::unclassified;
   BennettSetup setup = BennettSetup::none;
-  double residual = 0.0;          // of the family found (of the nearest family when unclassified)
-  std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
+  double residual = 0.0;  // of the family found (of the nearest family when unclassified)
+  std::string detail;     // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads (the order they

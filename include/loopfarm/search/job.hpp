@@ -53,11 +53,11 @@ inline constexpr int kParameterKinds = 4;
 struct ParameterSpec {
   enum class Mode { fixed, range, tied };
   Mode mode = Mode::fixed;
-  double value = 0.0;          // fixed: the value [length or rad]
-  double lo = 0.0, hi = 0.0;   // range: closed interval, lo <= hi
-  int source = -1;             // tied: value = sign * value of parameter `source`
-  double sign = 1.0;           //       (an index into ParameterSpace::specs)
-  int line = 0;                // job-file line it was given on; 0 for a default
+  double value = 0.0;         // fixed: the value [length or rad]
+  double lo = 0.0, hi = 0.0;  // range: closed interval, lo <= hi
+  int source = -1;            // tied: value = sign * value of parameter `source`
+  double sign = 1.0;          //       (an index into ParameterSpace::specs)
+  int line = 0;               // job-file line it was given on; 0 for a default
 };
 
 // Every parameter of the loop's geometry and initial pose as fixed, a range or
@@ -100,8 +100,8 @@ struct ParameterSpace {
 struct LoopSection {
   int joints = 4;
   Compliance compliance = Compliance::paper;
-  double stiffness_ratio = 1.0;        // k_t / (k_a L^2)
-  int samples = 32;                    // N
+  double stiffness_ratio = 1.0;                 // k_t / (k_a L^2)
+  int samples = 32;                             // N
   double range = 2.0 * 3.14159265358979323846;  // [rad]; 2 pi is a full turn
   // The equilibrium solve's tolerances (EquilibriumOptions): closure residual
   // (rotation [rad], translation / L) and stationarity, max-norms.
@@ -116,13 +116,13 @@ struct LoopSection {
 struct OptimizerSection {
   std::string algorithm = "gauss-newton";  // or an NLopt name: "LD_LBFGS", "LN_BOBYQA", ...
   double xtol_rel = 1e-10;
-  double ftol_rel = 0.0;               // 0: not used
-  double ftol_abs = 0.0;               // 0: not used
+  double ftol_rel = 0.0;  // 0: not used
+  double ftol_abs = 0.0;  // 0: not used
   // Stop once the objective is below this: 1e-26 is deformations of about
   // 1e-13, near round-off (a zero polished further gains nothing).
   double stopval = 1e-26;
-  int max_evaluations = 500;           // cycle evaluations per start
-  double time_limit = 30.0;            // seconds per start; 0: none
+  int max_evaluations = 500;  // cycle evaluations per start
+  double time_limit = 30.0;   // seconds per start; 0: none
   // Start each evaluation's cycle from the last one's samples instead of
   // walking it from the assembly (ObjectiveOptions::reuse_nearby_cycle).
   bool reuse_nearby_cycle = true;
@@ -131,7 +131,7 @@ struct OptimizerSection {
 struct SearchSection {
   long starts = 100;
   std::uint64_t seed = 1;
-  double zero_threshold = 1e-12;       // E_mean below this is a zero
+  double zero_threshold = 1e-12;  // E_mean below this is a zero
 };
 
 // Steering away from the known families (docs/design.md, "Steering away from
@@ -140,10 +140,10 @@ struct SearchSection {
 // "bricard_line_symmetric", "bricard_plane_symmetric", "bricard_trihedral",
 // "bennett_pair", "bennett_dyads" (n = 6): those family_distance measures.
 struct SteeringSection {
-  bool nontrivial = false;             // every joint must move over the cycle
+  bool nontrivial = false;                    // every joint must move over the cycle
   double min_travel = 0.0872664625997164788;  // [rad] (5 deg): what "moves" means
-  std::vector<std::string> deflate;    // families whose neighbourhood is penalised
-  double deflation_power = 2.0;        // objective * prod (1 / dist^p + shift)
+  std::vector<std::string> deflate;           // families whose neighbourhood is penalised
+  double deflation_power = 2.0;               // objective * prod (1 / dist^p + shift)
   double deflation_shift = 1.0;
 };
 
@@ -155,8 +155,8 @@ struct OutputSection {
 };
 
 struct Job {
-  std::string path;                    // the file it was read from
-  std::string text;                    // its text as read (the farm stores and hashes it)
+  std::string path;  // the file it was read from
+  std::string text;  // its text as read (the farm stores and hashes it)
   LoopSection loop;
   ParameterSpace space;
   OptimizerSection optimizer;

@@ -24,10 +24,10 @@
 namespace loopfarm {
 
 struct LocalDimension {
-  int parameters = 0;            // free parameters (columns of J)
-  int rank = 0;                  // numerical rank of J
-  int dimension = 0;             // parameters - rank
-  double threshold = 0.0;        // absolute singular-value threshold used
+  int parameters = 0;               // free parameters (columns of J)
+  int rank = 0;                     // numerical rank of J
+  int dimension = 0;                // parameters - rank
+  double threshold = 0.0;           // absolute singular-value threshold used
   Eigen::VectorXd singular_values;  // of J, descending
 };
 

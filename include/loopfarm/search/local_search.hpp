@@ -19,16 +19,16 @@
 namespace loopfarm {
 
 enum class SearchStatus {
-  stopval_reached,    // the objective fell below stopval (a zero, for a zero threshold above it)
-  ftol_reached,       // the objective stopped changing (ftol_rel / ftol_abs)
-  xtol_reached,       // the step became negligible (xtol_rel), or the projected gradient vanished
-  maxeval_reached,    // max_evaluations spent
-  maxtime_reached,    // time_limit spent
-  roundoff_limited,   // NLopt: no further progress possible in floating point (x kept)
-  stalled,            // Gauss-Newton: no damped step decreased the objective
-  forced_stop,        // NLopt stopped by a forced stop
-  failure,            // NLopt reported a generic failure
-  invalid_args,       // NLopt rejected the arguments (e.g. an algorithm not built in)
+  stopval_reached,   // the objective fell below stopval (a zero, for a zero threshold above it)
+  ftol_reached,      // the objective stopped changing (ftol_rel / ftol_abs)
+  xtol_reached,      // the step became negligible (xtol_rel), or the projected gradient vanished
+  maxeval_reached,   // max_evaluations spent
+  maxtime_reached,   // time_limit spent
+  roundoff_limited,  // NLopt: no further progress possible in floating point (x kept)
+  stalled,           // Gauss-Newton: no damped step decreased the objective
+  forced_stop,       // NLopt stopped by a forced stop
+  failure,           // NLopt reported a generic failure
+  invalid_args,      // NLopt rejected the arguments (e.g. an algorithm not built in)
   out_of_memory,
   evaluation_failed,  // the objective could not be evaluated at the start (no assembly)
 };
@@ -38,7 +38,7 @@ const char* to_string(SearchStatus status);
 struct SearchTraceRow {
   int iteration = 0;
   int evaluations = 0;
-  double value = 0.0;          // the objective (steered E_mean)
+  double value = 0.0;  // the objective (steered E_mean)
   double E_mean = 0.0;
   double gradient_norm = 0.0;  // max-norm of the (projected) gradient; NaN where not computed
   double step_norm = 0.0;      // max-norm of the step taken; NaN where not known
@@ -48,19 +48,19 @@ struct SearchTraceRow {
 
 struct LocalSearchOptions {
   OptimizerSection optimizer;
-  std::uint64_t random_seed = 0;  // for NLopt's stochastic algorithms (nlopt::srand)
+  std::uint64_t random_seed = 0;                     // for NLopt's stochastic algorithms (nlopt::srand)
   std::function<void(const SearchTraceRow&)> trace;  // called per row when set
 };
 
 struct LocalSearchSummary {
-  Eigen::VectorXd x;           // best point found (free parameters)
-  double value = 0.0;          // objective there
-  double E_mean = 0.0;         // unsteered cycle energy there; NaN for evaluation_failed
+  Eigen::VectorXd x;    // best point found (free parameters)
+  double value = 0.0;   // objective there
+  double E_mean = 0.0;  // unsteered cycle energy there; NaN for evaluation_failed
   double E_max = 0.0;
   SearchStatus status = SearchStatus::failure;
-  std::string message;         // what the algorithm said, for people
-  int evaluations = 0;         // cycle evaluations
-  int iterations = 0;          // Gauss-Newton steps tried; NLopt: evaluations
+  std::string message;  // what the algorithm said, for people
+  int evaluations = 0;  // cycle evaluations
+  int iterations = 0;   // Gauss-Newton steps tried; NLopt: evaluations
   double seconds = 0.0;
 };
 

@@ -71,8 +71,8 @@ struct ObjectiveOptions {
 };
 
 struct ObjectiveValue {
-  bool ok = false;               // assembled and the cycle evaluated
-  double value = 0.0;            // M * E_mean (or M * E_max): what the optimiser sees
+  bool ok = false;     // assembled and the cycle evaluated
+  double value = 0.0;  // M * E_mean (or M * E_max): what the optimiser sees
   double E_mean = 0.0;
   double E_max = 0.0;
   double steering_factor = 1.0;  // M

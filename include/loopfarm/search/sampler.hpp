@@ -16,8 +16,8 @@ namespace loopfarm {
 
 struct StartPoint {
   std::uint64_t index = 0;
-  Eigen::VectorXd x;   // free geometric values
-  JointVector theta;   // initial joint angles (fixed and tied filled in)
+  Eigen::VectorXd x;  // free geometric values
+  JointVector theta;  // initial joint angles (fixed and tied filled in)
 };
 
 StartPoint draw_start(const ParameterSpace& space, std::uint64_t seed, std::uint64_t index);

@@ -51,22 +51,22 @@ struct StartSummary {
   std::uint64_t index = 0;
   std::string algorithm;
   LoopGeometry initial_geometry;
-  JointVector initial_angles;      // drawn (fixed and tied filled in)
-  double initial_E_mean = 0.0;     // unsteered, at the initial geometry (NaN if it cannot be assembled)
+  JointVector initial_angles;   // drawn (fixed and tied filled in)
+  double initial_E_mean = 0.0;  // unsteered, at the initial geometry (NaN if it cannot be assembled)
   LoopGeometry final_geometry;
-  JointVector final_angles;        // assembled pose at theta0 of the final geometry
-  double E_mean = 0.0;             // unsteered, at the final geometry
+  JointVector final_angles;  // assembled pose at theta0 of the final geometry
+  double E_mean = 0.0;       // unsteered, at the final geometry
   double E_max = 0.0;
-  double objective = 0.0;          // what the optimiser minimised (steered E_mean)
+  double objective = 0.0;  // what the optimiser minimised (steered E_mean)
   int evaluations = 0;
   double seconds = 0.0;
   SearchStatus status = SearchStatus::failure;
   std::string message;
-  int failed_samples = 0;          // of the final cycle
+  int failed_samples = 0;  // of the final cycle
   int branch_jumps = 0;
-  bool zero = false;               // E_mean <= the job's zero threshold
+  bool zero = false;  // E_mean <= the job's zero threshold
 
-  CandidateAnalysis candidate;     // for zeros only (`zero`); otherwise default
+  CandidateAnalysis candidate;  // for zeros only (`zero`); otherwise default
 };
 
 // The steering of a job as objective options (deflation terms from the

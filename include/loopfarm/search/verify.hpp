@@ -48,11 +48,11 @@ struct VerificationOptions {
 };
 
 struct VerificationSummary {
-  bool assembled = false;     // the given pose closes the rigid loop (after polishing)
-  bool on_motion = false;     // the given pose lies on the reported, moving circuit
-  bool verified = false;      // a circuit moves (the reported one)
-  bool full_turn = false;     // on the reported circuit the input turns fully
-  double range_lo = 0.0;      // the reported circuit's input range [rad], unwrapped
+  bool assembled = false;  // the given pose closes the rigid loop (after polishing)
+  bool on_motion = false;  // the given pose lies on the reported, moving circuit
+  bool verified = false;   // a circuit moves (the reported one)
+  bool full_turn = false;  // on the reported circuit the input turns fully
+  double range_lo = 0.0;   // the reported circuit's input range [rad], unwrapped
   double range_hi = 0.0;
   // Largest residual over the reported circuit's poses (dimensionless); when
   // nothing closes, the least residual any assembly reached.
@@ -63,9 +63,9 @@ struct VerificationSummary {
   // Per joint: max - min over the reported circuit [rad]; a joint held to
   // trace a loop with several freedoms counts 2 pi (other motions turn it).
   JointVector joint_travel;
-  int circuit = -1;                       // the reported circuit in motion.circuits; -1 if none
-  MotionAnalysis motion;                  // every circuit found
-  std::string limit;                      // what the verdict rests on, in words (empty for a full turn)
+  int circuit = -1;       // the reported circuit in motion.circuits; -1 if none
+  MotionAnalysis motion;  // every circuit found
+  std::string limit;      // what the verdict rests on, in words (empty for a full turn)
 
   // A closed pose on the reported circuit (its first point); empty if none.
   JointVector pose() const;

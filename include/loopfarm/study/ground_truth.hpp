@@ -34,8 +34,8 @@
 #include <string>
 #include <vector>
 
-#include "loopfarm/search/classify.hpp"
 #include "loopfarm/core/loop.hpp"
+#include "loopfarm/search/classify.hpp"
 
 namespace loopfarm {
 

@@ -26,8 +26,8 @@
 #include <string>
 #include <vector>
 
-#include "loopfarm/study/ground_truth.hpp"
 #include "loopfarm/search/job.hpp"
+#include "loopfarm/study/ground_truth.hpp"
 
 namespace loopfarm {
 
@@ -76,7 +76,7 @@ struct TradeoffRow {
   // Speed: seconds of local minimisation per start.
   double median_seconds = 0.0;
   double p90_seconds = 0.0;
-  double search_seconds = 0.0; // the sum over the starts: core-seconds of local minimisation
+  double search_seconds = 0.0;  // the sum over the starts: core-seconds of local minimisation
   // The configuration's whole measurement: its starts, and the ground truth's
   // cycles where they were evaluated for it (run_tradeoff evaluates them once
   // per distinct loop settings).
@@ -85,18 +85,18 @@ struct TradeoffRow {
   long starts = 0;
   long zeros = 0;
   long verified = 0;
-  long false_zeros = 0;               // zero, but the rigid verification fails
-  double worst_family_residual = 0.0; // over the verified zeros; 0 when none
+  long false_zeros = 0;                // zero, but the rigid verification fails
+  double worst_family_residual = 0.0;  // over the verified zeros; 0 when none
   // Ground truth.
   long movable_cases = 0;
-  long missed_zeros = 0;              // movable, not read as zero
+  long missed_zeros = 0;  // movable, not read as zero
   long rigid_cases = 0;
-  long rigid_read_as_zero = 0;        // rigid, read as zero
+  long rigid_read_as_zero = 0;  // rigid, read as zero
   // Smallest relative perturbation at which every perturbed case (of that
   // size) reads non-zero, and the sizes above it too; +inf when even the
   // largest is missed.
   double smallest_told_apart = 0.0;
-  bool pareto = false;                // on the front of (median_seconds, error_rate)
+  bool pareto = false;  // on the front of (median_seconds, error_rate)
 
   double zero_fraction() const { return starts > 0 ? static_cast<double>(zeros) / starts : 0.0; }
   // Core-seconds of search per verified zero: what a discovery costs (+inf when none).
@@ -107,8 +107,7 @@ struct TradeoffRow {
 // Each ground-truth loop's cycle energy with these loop settings, assembled
 // at its pose (what a start on it reads): NaN where it cannot be assembled
 // there, +inf where a sample fails (not an energy).
-std::vector<double> ground_truth_energies(const std::vector<GroundTruthCase>& ground_truth,
-                                          const LoopSection& loop);
+std::vector<double> ground_truth_energies(const std::vector<GroundTruthCase>& ground_truth, const LoopSection& loop);
 
 // Measures one configuration on the job's first `starts` starts and on the
 // ground-truth set, whose energies under the configuration's loop settings
@@ -117,8 +116,8 @@ std::vector<double> ground_truth_energies(const std::vector<GroundTruthCase>& gr
 TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
                                   const std::vector<GroundTruthCase>& ground_truth, const TradeoffOptions& options);
 TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
-                                  const std::vector<GroundTruthCase>& ground_truth,
-                                  const std::vector<double>& energies, const TradeoffOptions& options);
+                                  const std::vector<GroundTruthCase>& ground_truth, const std::vector<double>& energies,
+                                  const TradeoffOptions& options);
 
 // Sets `pareto` on the rows no other row beats in both median seconds and
 // error rate (ties in both count as not beaten).
