@@ -22,6 +22,7 @@ packages=(
   gnuplot-nox          # plots (loopfarm energy --plot, reports)
   clang                # libFuzzer targets (scripts/fuzz.sh)
   libclang-rt-14-dev   # libFuzzer's and the sanitizers' runtimes for clang
+  clang-format         # the house style (.clang-format), checked by the test format_check
 )
 
 missing=()
