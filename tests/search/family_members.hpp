@@ -1,0 +1,338 @@
+// What the 5R and 6R family tests share (families_test.cpp, families_6r_test.cpp):
+// loops posed by each family's construction, random representations,
+// closed poses found by the rigid closure, and the checks that a member moves
+// and is classified and that its near-misses are rigid.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+
+#include "allocation_counter.hpp"
+#include "loopfarm/core/constructions.hpp"
+#include "loopfarm/core/loop.hpp"
+#include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/classify.hpp"
+#include "loopfarm/search/verify.hpp"
+#include "test_support.hpp"
+
+namespace loopfarm::family_tests {
+
+inline constexpr double kPi = 3.14159265358979323846;
+
+// ---------------------------------------------------------------------------
+// Fixtures
+
+// Posed loops, axes and dh_from_axes are constructions.hpp's.
+using Posed = PosedLoop;
+
+inline LoopGeometry make_loop(std::vector<double> a, std::vector<double> alpha, std::vector<double> d) {
+  LoopGeometry g;
+  const int n = static_cast<int>(a.size());
+  g.a = Eigen::Map<JointVector>(a.data(), n);
+  g.alpha = Eigen::Map<JointVector>(alpha.data(), n);
+  g.d = Eigen::Map<JointVector>(d.data(), n);
+  return g;
+}
+
+// Bennett loop (a, alpha), (b, beta), (a, alpha), (b, beta), d = 0; the
+// caller makes sin(alpha)/a = +-sin(beta)/b.
+inline LoopGeometry bennett(double a, double alpha, double b, double beta) {
+  return make_loop({a, b, a, b}, {alpha, beta, alpha, beta}, {0, 0, 0, 0});
+}
+
+// A closed pose of a Bennett loop at input t, by its setup.
+inline JointVector bennett_pose(const LoopGeometry& g, double t) {
+  const bool asymmetric = std::sin(g.alpha[0]) * g.a[1] * std::sin(g.alpha[1]) * g.a[0] > 0.0;
+  return asymmetric ? bennett_angles(g, t) : bennett_angles_line_symmetric(g, t);
+}
+
+// A representation of the same loop by loop.hpp's operations (shift, reversal,
+// flips), with its angles.
+inline Posed rewritten(const Posed& p, int shift, bool reverse, unsigned flips) {
+  Posed out{relabelled(p.geometry, shift), relabelled_angles(p.theta, shift)};
+  if (reverse) out = {reversed(out.geometry), reversed_angles(out.theta)};
+  for (int j = 0; j < p.geometry.joints(); ++j) {
+    if (flips >> j & 1u) out = {axis_flipped(out.geometry, j), axis_flipped_angles(out.theta, j)};
+  }
+  return out;
+}
+
+// A random representation, one in which no joint of `locked` (which the motion does
+// not turn) is joint 1, the input that verify_motion drives.
+inline Posed random_representation(const Posed& p, std::mt19937_64& rng, const std::vector<int>& locked = {}) {
+  const int n = p.geometry.joints();
+  std::uniform_int_distribution<int> shift(0, n - 1), flips(0, (1 << n) - 1), coin(0, 1);
+  for (;;) {
+    const int s = shift(rng);
+    const bool reverse = coin(rng) == 1;
+    const unsigned f = static_cast<unsigned>(flips(rng));
+    // Relabelled, new joint j is old joint j + s; reversed, new joint j is old n - 1 - j.
+    const int input = reverse ? (n - 1 + s) % n : s;
+    if (std::find(locked.begin(), locked.end(), input) != locked.end()) continue;
+    return rewritten(p, s, reverse, f);
+  }
+}
+
+inline double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return std::uniform_real_distribution<double>(lo, hi)(rng);
+}
+
+// A twist away from 0 and pi (and its sign random).
+inline double twist(std::mt19937_64& rng) {
+  const double t = uniform(rng, 0.3, kPi - 0.3);
+  return uniform(rng, 0.0, 1.0) < 0.5 ? t : -t;
+}
+
+// Goldberg 5R from two random Bennett loops sharing the link (b, beta):
+// loop 1 is (A B C D) = (a, alpha, b, beta), loop 2 (A F E D) = (c, gamma,
+// b, beta), each in a random setup; they share axes A and D. At A the links
+// A->B and A->F are fused collinear (phi = 0: same side, pi: opposite
+// sides), link DA removed: the 5R B C D E F (constructions.hpp's
+// goldberg_5r, built in space). `phi` other than 0 and pi fuses them at an
+// angle: the bent-link variant (docs/guide/families.md).
+inline Posed goldberg_member(std::mt19937_64& rng, double phi) {
+  for (;;) {
+    const double alpha = twist(rng), beta = twist(rng), gamma = twist(rng);
+    const double a = uniform(rng, 0.5, 2.0);
+    // |sin alpha| / a = |sin beta| / b = |sin gamma| / c, the setups from the signs.
+    const double b = a * std::abs(std::sin(beta) / std::sin(alpha));
+    const double c = a * std::abs(std::sin(gamma) / std::sin(alpha));
+    if (b < 0.3 || b > 4.0 || c < 0.3 || c > 4.0 || std::abs(a - c) < 0.2) continue;
+    return goldberg_5r({{b, beta, alpha, gamma}, phi}, uniform(rng, 0.3, kPi - 0.3));
+  }
+}
+
+// Two Bennett loops sharing a link, the shared link removed and nothing
+// fused: loop 1 (A B C D) = (a, alpha, b, beta) and loop 2 (A F E D) =
+// (c, gamma, b, beta) in random setups, sharing the link DA (both with frame
+// 0 on axis A), each at its own input (t1, t2): the 6R A B C D E F, read off
+// its six axes. Each loop turns about DA on its own, so the 6R has two
+// degrees of freedom (docs/guide/families.md, "Two Bennett loops sharing a link").
+inline Posed bennett_pair_member(std::mt19937_64& rng) {
+  for (;;) {
+    const double alpha = twist(rng), beta = twist(rng), gamma = twist(rng);
+    const double b = uniform(rng, 0.5, 2.0);
+    // |sin alpha| / a = |sin beta| / b = |sin gamma| / c, the setups from the signs.
+    const double a = b * std::abs(std::sin(alpha) / std::sin(beta));
+    const double c = b * std::abs(std::sin(gamma) / std::sin(beta));
+    if (a < 0.3 || a > 4.0 || c < 0.3 || c > 4.0) continue;
+    const double t1 = uniform(rng, 0.3, kPi - 0.3), t2 = uniform(rng, 0.3, kPi - 0.3);
+    return bennett_pair_6r({b, beta, alpha, gamma}, t1, -t2);
+  }
+}
+
+// Myard 5R: Goldberg from two mirror-image Bennett loops, the shared link a
+// right-angle twist: (a, alpha, b, pi/2) and (a, -alpha, b, pi/2).
+inline Posed myard_member(std::mt19937_64& rng, double phi) {
+  const double alpha = twist(rng), a = uniform(rng, 0.5, 2.0);
+  const double b = a / std::abs(std::sin(alpha));
+  return goldberg_5r({{b, kPi / 2, alpha, -alpha}, phi}, uniform(rng, 0.3, kPi - 0.3));
+}
+
+// A closed pose of a 6R: inputs tried over the turn until one assembles.
+inline bool closed_pose(const LoopGeometry& g, std::mt19937_64& rng, JointVector& theta) {
+  for (int i = 0; i < 12; ++i) {
+    if (testing::assemble_by_levenberg_marquardt(g, -kPi + (i + 0.5) * kPi / 6, rng, theta, 30)) return true;
+  }
+  return false;
+}
+
+// Bricard line-symmetric 6R: a_i = a_{i+3}, alpha_i = alpha_{i+3}, d_i = d_{i+3}.
+inline LoopGeometry bricard_line_geometry(std::mt19937_64& rng) {
+  std::array<double, 3> a, t, d;
+  for (int i = 0; i < 3; ++i) {
+    a[i] = uniform(rng, 0.5, 2.0);
+    t[i] = twist(rng);
+    d[i] = uniform(rng, -0.5, 0.5);
+  }
+  return make_loop({a[0], a[1], a[2], a[0], a[1], a[2]}, {t[0], t[1], t[2], t[0], t[1], t[2]},
+                   {d[0], d[1], d[2], d[0], d[1], d[2]});
+}
+
+// Bricard plane-symmetric 6R (plane through joints 1 and 4).
+inline LoopGeometry bricard_plane_geometry(std::mt19937_64& rng) {
+  std::array<double, 3> a, t;
+  for (int i = 0; i < 3; ++i) {
+    a[i] = uniform(rng, 0.5, 2.0);
+    t[i] = twist(rng);
+  }
+  const double d2 = uniform(rng, -0.5, 0.5), d3 = uniform(rng, -0.5, 0.5);
+  return make_loop({a[0], a[1], a[2], a[2], a[1], a[0]}, {t[0], t[1], t[2], -t[2], -t[1], -t[0]},
+                   {0, d2, d3, 0, -d3, -d2});
+}
+
+// Bricard trihedral 6R: right-angle twists of random signs, no offsets,
+// a6 from a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2.
+inline LoopGeometry bricard_trihedral_geometry(std::mt19937_64& rng) {
+  for (;;) {
+    std::vector<double> a(6), alpha(6);
+    for (int i = 0; i < 5; ++i) a[i] = uniform(rng, 0.5, 2.0);
+    const double a6_squared = a[0] * a[0] + a[2] * a[2] + a[4] * a[4] - a[1] * a[1] - a[3] * a[3];
+    if (a6_squared < 0.25) continue;
+    a[5] = std::sqrt(a6_squared);
+    for (int i = 0; i < 6; ++i) alpha[i] = uniform(rng, 0.0, 1.0) < 0.5 ? kPi / 2 : -kPi / 2;
+    return make_loop(a, alpha, std::vector<double>(6, 0.0));
+  }
+}
+
+// Two Bennett dyads joined by two equal links: links 1, 2 with Bennett's
+// ratio kappa1 and d2 = 0, links 4, 5 with kappa2 and d5 = 0, the same
+// (cos alpha + cos beta) / kappa (alpha5 solved from it), links 3 and 6
+// equal and free, d1 = d3 and d4 = d6 free. Twists negative (the searches'
+// canonical representation; other representations are the test's random ones).
+inline LoopGeometry bennett_dyads_geometry(std::mt19937_64& rng) {
+  for (;;) {
+    const double k1 = -uniform(rng, 0.4, 1.5), k2 = -uniform(rng, 0.4, 1.5);
+    const double t1 = -uniform(rng, 0.3, kPi - 0.3), t2 = -uniform(rng, 0.3, kPi - 0.3);
+    const double t4 = -uniform(rng, 0.3, kPi - 0.3);
+    const double cos5 = (std::cos(t1) + std::cos(t2)) / k1 * k2 - std::cos(t4);
+    if (std::abs(cos5) > 0.95) continue;
+    const double t5 = -std::acos(cos5);
+    const double c = uniform(rng, 0.5, 1.5), gamma = -uniform(rng, 0.3, kPi - 0.3);
+    const std::vector<double> a = {std::sin(t1) / k1, std::sin(t2) / k1, c, std::sin(t4) / k2, std::sin(t5) / k2, c};
+    if (*std::min_element(a.begin(), a.end()) < 0.2 || *std::max_element(a.begin(), a.end()) > 3.0) continue;
+    const double e = uniform(rng, -0.3, 0.3), f = uniform(rng, -0.3, 0.3);
+    return make_loop(a, {t1, t2, gamma, t4, t5, gamma}, {e, 0.0, e, f, 0.0, f});
+  }
+}
+
+// A loop plus an idle joint: joint 1 of `p` split into two coaxial joints
+// (a link of length 0 and twist 0 or pi between them, the offset shared
+// between them), the angle split too.
+inline Posed with_idle_joint(const Posed& p, std::mt19937_64& rng) {
+  const int n = p.geometry.joints();
+  const bool flipped = uniform(rng, 0.0, 1.0) < 0.5;
+  const double sigma = flipped ? kPi : 0.0, c = flipped ? -1.0 : 1.0;
+  const double t = uniform(rng, -0.5, 0.5), spin = uniform(rng, -kPi, kPi);
+  Posed out;
+  out.geometry.a.resize(n + 1);
+  out.geometry.alpha.resize(n + 1);
+  out.geometry.d.resize(n + 1);
+  out.theta.resize(n + 1);
+  out.geometry.a << 0.0, p.geometry.a;
+  out.geometry.alpha << sigma, p.geometry.alpha;
+  out.geometry.alpha[1] = wrap_angle(p.geometry.alpha[0] - sigma);
+  out.geometry.d << t, p.geometry.d;
+  out.geometry.d[1] = c * (p.geometry.d[0] - t);  // d_1 + c d_2 = the merged offset
+  out.theta << spin, p.theta;
+  out.theta[1] = c * (p.theta[0] - spin);
+  return out;
+}
+
+inline double closure_error(const Posed& p) { return closure_residual(p.geometry, p.theta).cwiseAbs().maxCoeff(); }
+
+// The rigid verification from the given pose only, as the farm verifies a
+// zero: whether the loop moves there. Finding motions from anywhere else is
+// motion_test's.
+inline VerificationSummary verify_from(const LoopGeometry& g, const JointVector& pose) {
+  VerificationOptions o;
+  o.all_circuits = false;
+  return verify_motion(g, pose, o);
+}
+
+inline Classification classified(const Posed& p, const VerificationSummary& v) {
+  const std::span<const double> travel(v.joint_travel.data(), static_cast<size_t>(v.joint_travel.size()));
+  return classify(p.geometry, p.theta, v.verified ? travel : std::span<const double>());
+}
+
+// The member is movable (rigid closure followed along at least 10 degrees of
+// input, closing to round-off) and, in a random representation, classified as its
+// family with a residual at round-off.
+inline void expect_movable_member(const Posed& member, Family family, std::mt19937_64& rng, const std::string& tag,
+                                  const std::vector<int>& locked = {}) {
+  ASSERT_LT(closure_error(member), 1e-12) << tag;
+  const Posed w = random_representation(member, rng, locked);
+  ASSERT_LT(closure_error(w), 1e-12) << tag;
+  const VerificationSummary v = verify_from(w.geometry, w.theta);
+  EXPECT_TRUE(v.verified) << tag << ": " << v.limit;
+  EXPECT_GT(v.range_hi - v.range_lo, 10.0 * kPi / 180.0) << tag;
+  const Classification c = classified(w, v);
+  EXPECT_EQ(c.family, family) << tag << ": " << to_string(c.family) << ", " << c.detail;
+  EXPECT_LT(c.residual, 1e-10) << tag;
+  // The family's own check says so too, whatever family won.
+  for (const FamilyCheck& check : c.checks) {
+    if (check.family == family) {
+      EXPECT_LT(check.residual, 1e-10) << tag;
+    }
+  }
+}
+
+// Parameter p (GeometryVector order: a, alpha, d) moved by eps (times L for
+// lengths and offsets, radians for twists).
+inline LoopGeometry perturbed(const LoopGeometry& g, int p, double eps) {
+  const int n = g.joints();
+  LoopGeometry out = g;
+  const double L = length_scale(g);
+  if (p < n)
+    out.a[p] += eps * L;
+  else if (p < 2 * n)
+    out.alpha[p - n] += eps;
+  else
+    out.d[p - 2 * n] += eps * L;
+  return out;
+}
+
+// Parameter p moved by h in its own units (for central differences).
+inline LoopGeometry perturbed_raw(const LoopGeometry& g, int p, double h) {
+  const int n = g.joints();
+  LoopGeometry out = g;
+  if (p < n)
+    out.a[p] += h;
+  else if (p < 2 * n)
+    out.alpha[p - n] += h;
+  else
+    out.d[p - 2 * n] += h;
+  return out;
+}
+
+inline const std::array<double, 4> kNearMisses = {1e-3, 1e-4, 1e-5, 1e-6};
+
+// The member with parameter p moved by each near-miss size: the rigid
+// closure cannot follow it from the member's pose (not verified), and it is
+// not classified as the family, its residual there at least eps / 10.
+inline void expect_near_misses_rigid(const Posed& member, Family family, int p, const std::string& tag) {
+  for (double eps : kNearMisses) {
+    const LoopGeometry g = perturbed(member.geometry, p, eps);
+    const VerificationSummary v = verify_from(g, member.theta);
+    EXPECT_FALSE(v.verified) << tag << " parameter " << p << " + " << eps << ": worst residual " << v.worst_residual;
+    const Classification c = classified({g, member.theta}, v);
+    EXPECT_NE(c.family, family) << tag << " parameter " << p << " + " << eps;
+    for (const FamilyCheck& check : c.checks) {
+      if (check.family == family) {
+        EXPECT_GT(check.residual, eps / 10) << tag << " " << eps;
+      }
+    }
+  }
+}
+
+// A random Bennett loop (either setup, from the twists' signs) in a pose.
+inline Posed random_bennett_member(std::mt19937_64& rng) {
+  const double a = uniform(rng, 0.5, 2.0), alpha = twist(rng), beta = twist(rng);
+  const double b = a * std::abs(std::sin(beta) / std::sin(alpha));
+  const LoopGeometry g = bennett(a, alpha, b, beta);
+  return {g, bennett_pose(g, uniform(rng, 0.3, kPi - 0.3))};
+}
+
+// A loop in a pose with one more joint axis put on link k (between axes k
+// and k+1): a random line fixed to that link. Locked, the new joint leaves
+// the loop as it was; free, it adds a joint that the motion need not turn.
+inline Posed with_locked_joint(const Posed& p, int k, std::mt19937_64& rng) {
+  std::vector<Axis> axes = joint_axes(p.geometry, p.theta);
+  const double L = length_scale(p.geometry);
+  const Vector3 point =
+      axes[static_cast<size_t>(k)].point + L * Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+  const Vector3 direction = Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
+  axes.insert(axes.begin() + k + 1, Axis{point, direction});
+  return dh_from_axes(axes);
+}
+
+}  // namespace loopfarm::family_tests
