@@ -165,14 +165,15 @@ int run_run_command(const RunArguments& args) {
   if (mpi.rank() != 0) return code;
   const std::string& database = s.job.output.database;
   std::fprintf(stderr, "loopfarm run: %ld of %ld starts committed to %s, %ld zero minima, %ld candidates\n",
-               summary.done, summary.total, database.c_str(), summary.zeros, summary.candidates);
-  const double wall = summary.wall_s;
+               summary.run.done, summary.run.total, database.c_str(), summary.run.zeros, summary.run.candidates);
+  const double wall = summary.run.wall_s;
   std::fprintf(stderr,
                "loopfarm run: this session %ld starts in %.1f s on %d ranks (%.3g starts/s); rank 0 coordination "
                "%.3f s (%.2f%% of the wall time, %ld messages); peak memory per rank %.1f MB (rank 0) .. %.1f MB\n",
-               summary.done_here, wall, summary.ranks, wall > 0 ? static_cast<double>(summary.done_here) / wall : 0.0,
-               summary.coordination_s, wall > 0 ? 100.0 * summary.coordination_s / wall : 0.0, summary.messages,
-               summary.peak_mb_rank0, summary.peak_mb_max);
+               summary.run.done_here, wall, summary.ranks,
+               wall > 0 ? static_cast<double>(summary.run.done_here) / wall : 0.0, summary.run.coordination_s,
+               wall > 0 ? 100.0 * summary.run.coordination_s / wall : 0.0, summary.run.messages, summary.peak_mb_rank0,
+               summary.peak_mb_max);
   if (summary.status == FarmStatus::stopped) {
     std::fprintf(stderr, "loopfarm run: stopped by %s; resume with: %s\n", signal_name(summary.stop_signal).c_str(),
                  resume_command(args, s).c_str());

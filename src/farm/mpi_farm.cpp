@@ -173,20 +173,12 @@ FarmSummary run_farm(const Job& job, MPI_Comm comm, StopFlag& stop, const FarmOp
   try {
     MpiTransport transport(comm, ranks);
     Progress progress(options.progress);
-    const CoordinatorSummary c = coordinate(
+    summary.run = coordinate(
         *db, *plan, transport, [&job](std::uint64_t index) { return run_start_record(job, index); }, options.chunk,
         stop, progress);
     summary.run_id = plan->run_id;
-    summary.total = c.total;
-    summary.done = c.done;
-    summary.done_here = c.done_here;
-    summary.zeros = c.zeros;
-    summary.candidates = c.candidates;
-    summary.wall_s = c.wall_s;
-    summary.coordination_s = c.coordination_s;
-    summary.messages = c.messages;
     summary.stop_signal = stop.signal();
-    summary.status = c.complete ? FarmStatus::complete : FarmStatus::stopped;
+    summary.status = summary.run.complete ? FarmStatus::complete : FarmStatus::stopped;
     // Every rank's peak memory, gathered for the record.
     const long own_kb = peak_memory_kb();
     std::vector<long> peak_kb(static_cast<size_t>(ranks));

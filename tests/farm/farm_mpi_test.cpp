@@ -119,10 +119,10 @@ TEST_F(FarmMpiTest, TwoRanksWriteWhatOneProcessWrites) {
   EXPECT_EQ(s.status, FarmStatus::complete);
   EXPECT_EQ(s.ranks, 2);
   if (rank() != 0) return;
-  EXPECT_EQ(s.done, 24);
-  EXPECT_EQ(s.done_here, 24);
-  EXPECT_EQ(s.total, 24);
-  EXPECT_GT(s.messages, 0);  // rank 1 asked for work
+  EXPECT_EQ(s.run.done, 24);
+  EXPECT_EQ(s.run.done_here, 24);
+  EXPECT_EQ(s.run.total, 24);
+  EXPECT_GT(s.run.messages, 0);  // rank 1 asked for work
   EXPECT_GT(s.peak_mb_max, 0.0);
   EXPECT_EQ(contents(job.output.database), reference(job));
 }
@@ -135,15 +135,15 @@ TEST_F(FarmMpiTest, AStopOnAWorkerRankStopsEveryRankAndAResumeCompletes) {
   EXPECT_EQ(first.status, FarmStatus::stopped);
   if (rank() == 0) {
     EXPECT_EQ(first.stop_signal, SIGUSR1);
-    EXPECT_LT(first.done, 24);
+    EXPECT_LT(first.run.done, 24);
     EXPECT_EQ(ResultsDatabase::open(job.output.database, DatabaseMode::read).runs().at(0).status, "stopped");
   }
   StopFlag go;
   const FarmSummary second = run_farm(job, MPI_COMM_WORLD, go, {});
   EXPECT_EQ(second.status, FarmStatus::complete);
   if (rank() != 0) return;
-  EXPECT_EQ(second.done, 24);
-  EXPECT_EQ(second.done_here, 24 - first.done);
+  EXPECT_EQ(second.run.done, 24);
+  EXPECT_EQ(second.run.done_here, 24 - first.run.done);
   // The same starts, zeros and verified; the same linkages (ids follow the
   // commit order, which the stop changed).
   std::vector<std::string> got = contents(job.output.database), want = reference(job);
@@ -162,7 +162,7 @@ TEST_F(FarmMpiTest, ALargerTargetResumesAFinishedRun) {
   const FarmSummary s = run_farm(job, MPI_COMM_WORLD, stop, {});
   EXPECT_EQ(s.status, FarmStatus::complete);
   if (rank() != 0) return;
-  EXPECT_EQ(s.done_here, 12);
+  EXPECT_EQ(s.run.done_here, 12);
   EXPECT_EQ(contents(job.output.database), reference(job));
 }
 

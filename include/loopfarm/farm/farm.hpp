@@ -19,6 +19,7 @@
 
 #include <cstdint>
 
+#include "loopfarm/farm/coordinator.hpp"
 #include "loopfarm/farm/progress.hpp"
 #include "loopfarm/farm/stop_flag.hpp"
 #include "loopfarm/search/job.hpp"
@@ -63,17 +64,10 @@ struct FarmSummary {
   FarmStatus status = FarmStatus::failed;
   int ranks = 1;
   std::int64_t run_id = 0;
-  long total = 0;               // the run's target
-  long done = 0;                // committed, earlier sessions included
-  long done_here = 0;           // committed by this call
-  long zeros = 0;               // zero minima of the run
-  long candidates = 0;          // candidates in the database
-  double wall_s = 0.0;          // this call, rank 0
-  double coordination_s = 0.0;  // rank 0's coordinating thread
-  long messages = 0;            // requests rank 0 answered
-  double peak_mb_rank0 = 0.0;   // peak resident memory (VmHWM)
-  double peak_mb_max = 0.0;     // of every rank
-  int stop_signal = 0;          // what stopped it (-1: an error), 0 if nothing
+  CoordinatorSummary run;      // counts and timings of this call (coordinator.hpp)
+  double peak_mb_rank0 = 0.0;  // peak resident memory (VmHWM)
+  double peak_mb_max = 0.0;    // of every rank
+  int stop_signal = 0;         // what stopped it (-1: an error), 0 if nothing
 };
 
 // Collective over `comm`. On rank 0: throws DatabaseError when the database
