@@ -34,8 +34,8 @@ int run_motion(const MotionArguments& args) {
   std::optional<double> theta0_deg = request.theta0_deg;
   if (!args.theta0_deg.empty()) theta0_deg = parse_number(args.theta0_deg, "--theta0-deg");
   const long long steps = parse_integer(args.steps, "--steps");
-  if (steps < 360 || steps > 1000000) {
-    throw UsageError("--steps", "got " + std::to_string(steps) + "; must be in [360, 1000000]");
+  if (steps < 64 || steps > 1000000) {
+    throw UsageError("--steps", "got " + std::to_string(steps) + "; must be in [64, 1000000]");
   }
   const bool csv_to_stdout = given(args.csv_option) && args.csv == "-";
   if (csv_to_stdout && args.json) throw UsageError("--csv", "'-' (standard output) cannot go with --json; give a file");
@@ -128,7 +128,7 @@ Subcommand add_motion_command(CLI::App& parent) {
                                         "input angle theta0 [deg]: report the circuit whose input reaches it")
                             ->type_name("DEG");
   args->geometry.theta_option->excludes(theta0);
-  app->add_option("--steps", args->steps, "tracing: the largest step along a circuit is 360/S deg (>= 360)")
+  app->add_option("--steps", args->steps, "tracing: the largest step along a circuit is 360/S deg (>= 64)")
       ->type_name("S")
       ->capture_default_str();
   args->csv_option = app->add_option("--csv", args->csv,

@@ -97,6 +97,7 @@ std::string circuits_json(const MotionAnalysis& m, int input) {
     json += "],\"points\":" + std::to_string(c.points.size());
     json += ",\"arclength_rad\":" + json_number(c.length);
     json += ",\"worst_residual\":" + json_number(c.worst_residual);
+    json += ",\"least_singular_ratio\":" + json_number(c.least_singular_ratio);
     json += ",\"full_turn\":" + std::string(r.crank() ? "true" : "false");
     json += ",\"input_range_deg\":[" + json_number(r.lo * kDegreesPerRadian) + "," +
             json_number(r.hi * kDegreesPerRadian) + "]";

@@ -56,6 +56,7 @@ void print_story(const Job& job, const StartSummary& s) {
   std::printf("zero                    %s (threshold %s)\n", s.zero ? "yes" : "no",
               readable(job.search.zero_threshold).c_str());
   if (s.zero) {
+    std::printf("analysis                %s s\n", readable(s.analysis_seconds).c_str());
     print_candidate(s.candidate);
     if (s.candidate.verification.verified) print_local_dimension(s.candidate.local_dimension);
   }
@@ -74,6 +75,7 @@ void print_json(const StartSummary& s) {
   json += ",\"zero\":" + std::string(s.zero ? "true" : "false");
   json += ",\"evaluations\":" + std::to_string(s.evaluations);
   json += ",\"seconds\":" + json_number(s.seconds);
+  json += ",\"analysis_seconds\":" + json_number(s.analysis_seconds);
   json += ",\"failed_samples\":" + std::to_string(s.failed_samples);
   json += ",\"branch_jumps\":" + std::to_string(s.branch_jumps);
   json += ",\"initial_geometry\":" + geometry_json(s.initial_geometry);

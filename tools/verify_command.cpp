@@ -41,8 +41,8 @@ int run_verify(const VerifyArguments& args) {
     throw UsageError("--samples", "got " + std::to_string(samples) + "; must be in [4, 4096]");
   }
   const long long steps = parse_integer(args.steps, "--steps");
-  if (steps < 360 || steps > 1000000) {
-    throw UsageError("--steps", "got " + std::to_string(steps) + "; must be in [360, 1000000]");
+  if (steps < 64 || steps > 1000000) {
+    throw UsageError("--steps", "got " + std::to_string(steps) + "; must be in [64, 1000000]");
   }
   const LoopGeometry& geometry = request.geometry;
   const int n = geometry.joints();
@@ -150,7 +150,7 @@ Subcommand add_verify_command(CLI::App& parent) {
   app->add_option("--samples", args->samples, "cycle samples for E_mean and the local dimension")
       ->type_name("N")
       ->capture_default_str();
-  app->add_option("--steps", args->steps, "tracing: the largest step along a circuit is 360/S deg (>= 360)")
+  app->add_option("--steps", args->steps, "tracing: the largest step along a circuit is 360/S deg (>= 64)")
       ->type_name("S")
       ->capture_default_str();
   app->add_flag("--json", args->json, "print one JSON object instead of the summary");

@@ -245,7 +245,11 @@ struct Walk {
   std::vector<JointVector> branch_seeds;  // points on other branches at bifurcations
   CircuitEnd end = CircuitEnd::lost;
   double worst = 0.0;
+  double least_singular_ratio = 1.0;  // over the accepted points
 };
+
+// sigma / sigma_max at a point (0 where the Jacobian vanishes).
+double singular_ratio(const PointInfo& p) { return p.sigma_max > 0.0 ? p.sigma / p.sigma_max : 0.0; }
 
 // Locates the extreme of joint j between two accepted points (t_j changes sign).
 void locate_extreme(const ClosureSystem& system, const JointVector& x0, const PointInfo& i0, const JointVector& x1,
@@ -340,6 +344,7 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
     }
     halvings = 0;
     walk.worst = std::max(walk.worst, c.residual);
+    walk.least_singular_ratio = std::min(walk.least_singular_ratio, singular_ratio(next_info));
 
     // Back at the first point (some image of it, 2 pi apart per joint): the
     // segment x -> next passes through it in the direction the walk left it.
@@ -514,6 +519,8 @@ TracedCircuit trace(const LoopGeometry& g, JointVector x, const MotionOptions& o
     out.branch_seeds.insert(out.branch_seeds.end(), w->branch_seeds.begin(), w->branch_seeds.end());
   }
   c.worst_residual = std::max({polish.residual, forward.worst, backward.worst});
+  c.least_singular_ratio =
+      std::min({singular_ratio(start), forward.least_singular_ratio, backward.least_singular_ratio});
   fill_ranges(c);
   return out;
 }

@@ -1,6 +1,7 @@
 #include "loopfarm/search/start.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <span>
@@ -78,6 +79,43 @@ CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVec
   return out;
 }
 
+CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& pose, const Eigen::MatrixXd& jacobian,
+                               double theta0, const StartOptions& options) {
+  // A zero's pose is on its motion (the cycle went through it with no
+  // energy): only the circuit through it is traced, with every joint's
+  // extremes solved for (its ranges exact whatever the step), first in steps
+  // that grow with the curve's straightness up to analysis_steps_per_turn.
+  VerificationOptions through_pose = options.verification;
+  through_pose.all_circuits = false;
+  through_pose.all_extremes = true;
+  through_pose.steps_per_turn = options.analysis_steps_per_turn;
+  VerificationSummary verification = verify_motion(geometry, pose, through_pose);
+  const std::vector<Circuit>& circuits = verification.motion.circuits;
+  const bool regular = std::all_of(circuits.begin(), circuits.end(), [&](const Circuit& c) {
+    return c.least_singular_ratio >= options.regular_circuit_ratio;
+  });
+  if (!verification.verified || !regular) {
+    // Near a singular pose (branches crossing, a loop folding flat) a coarse
+    // step can cross to another branch, or over a point where the circuit
+    // ends: the circuit is traced again in steps of 1 deg.
+    through_pose.steps_per_turn = std::max(360, options.analysis_steps_per_turn);
+    verification = verify_motion(geometry, pose, through_pose);
+  }
+  if (!verification.verified) {
+    // The circuit through the search's pose cannot always be followed from
+    // it: a window's samples may step over a gap in the input's range that
+    // holds theta0 (the pose at theta0 is then elastic, not closed), the
+    // tracer may stall near a singular pose, or a loop with two freedoms may
+    // be traced with a joint held whose curve ends. A zero that is not
+    // verified so is analysed as `loopfarm verify` does it: every circuit,
+    // the one covering theta0 preferred.
+    VerificationOptions whole = options.verification;
+    whole.theta0 = theta0;
+    verification = verify_motion(geometry, pose, whole);
+  }
+  return analyse_candidate(geometry, pose, std::move(verification), jacobian, options);
+}
+
 StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& options) {
   StartSummary out;
   out.index = index;
@@ -139,6 +177,9 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   out.zero = out.E_mean <= job.search.zero_threshold && out.failed_samples == 0;
   if (!out.zero) return out;
 
+  // The analysis: the local dimension from the cycle's Jacobian, then the
+  // rigid verification, the family and the canonical form.
+  const auto analysis_begin = std::chrono::steady_clock::now();
   Eigen::MatrixXd jacobian;
   unsteered.residual_jacobian(jacobian);
   std::vector<bool> is_length;
@@ -146,28 +187,9 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
     const int kind = index / job.space.joints;
     is_length.push_back(kind == static_cast<int>(ParameterKind::a) || kind == static_cast<int>(ParameterKind::d));
   }
-  // A zero's pose is on its motion (the cycle went through it with no
-  // energy): only the circuit through it is traced, in steps of 1 deg of
-  // arclength, with the input's dead points solved for (the other joints'
-  // ranges from the traced points).
-  StartOptions analysis = options;
-  analysis.verification.all_circuits = false;
-  analysis.verification.all_extremes = false;
-  analysis.verification.steps_per_turn = std::min(analysis.verification.steps_per_turn, 360);
   const Eigen::MatrixXd columns = dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry));
-  out.candidate = analyse_candidate(out.final_geometry, out.final_angles, columns, analysis);
-  // The circuit through the search's pose cannot always be followed from it:
-  // a window's samples may step over a gap in the input's range that holds
-  // theta0 (the pose at theta0 is then elastic, not closed), the tracer may
-  // stall near a singular pose, or a loop with two freedoms may be traced
-  // with a joint held whose curve ends. A zero that is not verified so is
-  // analysed as `loopfarm verify` does it: every circuit, the one covering
-  // theta0 preferred.
-  if (!out.candidate.verification.verified) {
-    StartOptions whole = options;
-    whole.verification.theta0 = out.initial_angles[0];
-    out.candidate = analyse_candidate(out.final_geometry, out.final_angles, columns, whole);
-  }
+  out.candidate = analyse_zero(out.final_geometry, out.final_angles, columns, out.initial_angles[0], options);
+  out.analysis_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - analysis_begin).count();
   return out;
 }
 

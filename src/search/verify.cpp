@@ -69,7 +69,7 @@ MotionOptions VerificationOptions::motion() const {
 }
 
 void VerificationOptions::validate() const {
-  if (steps_per_turn < 360) throw std::invalid_argument("VerificationOptions: steps_per_turn must be >= 360");
+  if (steps_per_turn < 64) throw std::invalid_argument("VerificationOptions: steps_per_turn must be >= 64");
   if (!(residual_tolerance > 0.0 && residual_tolerance < 1e-3)) {
     throw std::invalid_argument("VerificationOptions: residual_tolerance must be in (0, 1e-3)");
   }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 
 #include "four_bar_cases.hpp"
 #include "loopfarm/core/assembly.hpp"
@@ -220,6 +221,51 @@ TEST(Motion, ParallelogramTracedFromItsChangePointFindsBothBranches) {
   EXPECT_TRUE(m.given_pose_closes);
   EXPECT_EQ(m.given_circuit, 0);
   EXPECT_EQ(m.circuits.size(), 2u);
+}
+
+// The least ratio of the closure Jacobian's smallest retained singular value
+// to its largest over a circuit's points, computed independently: central
+// differences of closure_residual and a full SVD at every point.
+double least_singular_ratio_by_differences(const LoopGeometry& g, const Circuit& c) {
+  const LoopGeometry unit = scaled(g, length_scale(g));
+  const int n = g.joints();
+  double least = 1.0;
+  for (const JointVector& p : c.points) {
+    Eigen::MatrixXd J(6, n);
+    for (int k = 0; k < n; ++k) {
+      const double h = 1e-6;
+      JointVector plus = p, minus = p;
+      plus[k] += h;
+      minus[k] -= h;
+      J.col(k) = (closure_residual(unit, plus) - closure_residual(unit, minus)) / (2.0 * h);
+    }
+    const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(J).singularValues();
+    least = std::min(least, s[n - 2] / s[0]);
+  }
+  return least;
+}
+
+TEST(Motion, LeastSingularRatioIsTheClosureJacobiansOverThePoints) {
+  // A Bennett loop and a crank-rocker stay far from any singular pose; a
+  // parallelogram passes through its change points, where the Jacobian
+  // loses rank (a located point, not one of the traced ones: the ratio there
+  // is small, not zero).
+  const LoopGeometry bennett = paper_bennett_loop();
+  const LoopGeometry crank_rocker = planar_four_bar(1.0, 3.0, 2.5, 3.5);
+  const LoopGeometry parallelogram = planar_four_bar(1.0, 2.0, 1.0, 2.0);
+  const Circuit regular[] = {trace_circuit(bennett, bennett_angles(bennett, rad(120))),
+                             analyse_motion(crank_rocker, nullptr).circuits.at(0)};
+  const LoopGeometry* regular_loops[] = {&bennett, &crank_rocker};
+  for (size_t i = 0; i < 2; ++i) {
+    const double expected = least_singular_ratio_by_differences(*regular_loops[i], regular[i]);
+    EXPECT_NEAR(regular[i].least_singular_ratio, expected, 1e-6 * expected) << i;
+    EXPECT_GT(regular[i].least_singular_ratio, 0.05) << i;
+  }
+  for (const Circuit& c : analyse_motion(parallelogram, nullptr).circuits) {
+    const double expected = least_singular_ratio_by_differences(parallelogram, c);
+    EXPECT_NEAR(c.least_singular_ratio, expected, 1e-6 * expected + 1e-9);
+    EXPECT_LT(c.least_singular_ratio, 1e-2);
+  }
 }
 
 TEST(Motion, RigidLoopsHaveNoCircuit) {

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "loopfarm/core/motion.hpp"
 #include "loopfarm/core/sample_loops.hpp"
 #include "loopfarm/search/classify.hpp"
 #include "loopfarm/search/job.hpp"
@@ -140,16 +141,81 @@ TEST(RunStart, TheRockerJobFindsTrihedralLoopsWhoseInputRocks) {
   EXPECT_GE(rockers, 3);
 }
 
+// A zero's analysis keeps a regular circuit traced in coarse steps (up to
+// about 5.6 deg): on the first zeros of the default job it is what a trace
+// in steps of 0.5 deg gives (verified, every joint's range and turns, the
+// family), from a fraction of the points.
+TEST(AnalyseZero, ARegularCircuitTracedInCoarseStepsIsTheFineTrace) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/default.toml");
+  VerificationOptions fine;
+  fine.all_circuits = false;
+  fine.steps_per_turn = 720;
+  int zeros = 0;
+  for (std::uint64_t index = 0; zeros < 12 && index < 100; ++index) {
+    const StartSummary s = run_start(job, index);
+    if (!s.zero) continue;
+    ++zeros;
+    const VerificationSummary& coarse = s.candidate.verification;
+    const VerificationSummary reference = verify_motion(s.final_geometry, s.final_angles, fine);
+    ASSERT_TRUE(reference.verified) << index;
+    ASSERT_TRUE(coarse.verified) << index;
+    EXPECT_LT(3 * coarse.poses, reference.poses) << index;  // the coarse trace was kept
+    const Circuit& a = coarse.motion.circuits.at(static_cast<size_t>(coarse.circuit));
+    const Circuit& b = reference.motion.circuits.at(static_cast<size_t>(reference.circuit));
+    EXPECT_GE(a.least_singular_ratio, StartOptions{}.regular_circuit_ratio) << index;
+    EXPECT_EQ(a.end, b.end) << index;
+    ASSERT_EQ(a.ranges.size(), b.ranges.size());
+    for (size_t j = 0; j < a.ranges.size(); ++j) {
+      EXPECT_NEAR(a.ranges[j].lo, b.ranges[j].lo, 1e-9) << index << " joint " << j;
+      EXPECT_NEAR(a.ranges[j].hi, b.ranges[j].hi, 1e-9) << index << " joint " << j;
+      EXPECT_EQ(a.ranges[j].turns, b.ranges[j].turns) << index << " joint " << j;
+    }
+    const CandidateAnalysis by_reference =
+        analyse_candidate(s.final_geometry, s.final_angles, reference, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
+    EXPECT_EQ(s.candidate.classification.family, by_reference.classification.family) << index;
+  }
+  EXPECT_EQ(zeros, 12);
+}
+
+// Near a singular pose a coarse step can cross to another branch: the
+// parallelogram's circuit passes its change points (least singular ratio
+// below the threshold), so its analysis is the trace in steps of 1 deg.
+TEST(AnalyseZero, ACircuitNearASingularPoseIsTracedAgainInStepsOfOneDegree) {
+  const LoopGeometry g = planar_four_bar(1.0, 2.0, 1.0, 2.0);
+  const std::vector<JointVector> poses = find_assemblies(g, rad(60));
+  ASSERT_FALSE(poses.empty());
+  const StartOptions options;
+  VerificationOptions through_pose;
+  through_pose.all_circuits = false;
+  through_pose.steps_per_turn = options.analysis_steps_per_turn;
+  for (const JointVector& pose : poses) {
+    const VerificationSummary coarse = verify_motion(g, pose, through_pose);
+    ASSERT_FALSE(coarse.motion.circuits.empty());
+    EXPECT_LT(coarse.motion.circuits.front().least_singular_ratio, options.regular_circuit_ratio);
+    VerificationOptions fine = through_pose;
+    fine.steps_per_turn = 360;
+    const VerificationSummary expected = verify_motion(g, pose, fine);
+    ASSERT_TRUE(expected.verified);
+    const CandidateAnalysis a = analyse_zero(g, pose, Eigen::MatrixXd::Zero(1, 1), 0.0, options);
+    ASSERT_TRUE(a.verification.verified);
+    EXPECT_EQ(a.verification.poses, expected.poses);
+    EXPECT_EQ(a.verification.range_lo, expected.range_lo);
+    EXPECT_EQ(a.verification.range_hi, expected.range_hi);
+    EXPECT_EQ(a.classification.family, Family::planar);
+  }
+}
+
 // Zeros of the rocker job whose circuit cannot be followed from the search's
 // pose (start 299: theta0 lies in a gap of the input's range that the
 // window's samples step over, so the pose at theta0 does not close; 3500: the
-// tracer stalls; 2089: two freedoms, the curve with the chosen joint held
-// ends) are verified from the whole motion, as `loopfarm verify` does it.
+// tracer in steps of 1 deg stalls (the coarse steps pass); 2089: two
+// freedoms, the curve with the chosen joint held ends) are verified, from the
+// coarse trace where it is regular, else from the whole motion, as
+// `loopfarm verify` does it.
 TEST(RunStart, AZeroWhoseCircuitCannotBeFollowedFromItsPoseIsVerifiedFromTheWholeMotion) {
   const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/trihedral-rocker-6r.toml");
-  VerificationOptions through_pose;  // what run_start tries first
+  VerificationOptions through_pose;  // the circuit through the pose in steps of 1 deg
   through_pose.all_circuits = false;
-  through_pose.all_extremes = false;
   through_pose.steps_per_turn = 360;
   for (std::uint64_t index : {299u, 3500u, 2089u}) {
     const StartSummary s = run_start(job, index);

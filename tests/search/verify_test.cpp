@@ -216,8 +216,10 @@ TEST(Verify, BadInputThrows) {
   nan_start[1] = std::nan("");
   EXPECT_THROW(verify_motion(g, nan_start), std::invalid_argument);
   VerificationOptions coarse;
-  coarse.steps_per_turn = 100;
+  coarse.steps_per_turn = 63;  // a step over 0.1 rad
   EXPECT_THROW(verify_motion(g, bennett_angles(g, rad(120)), coarse), std::invalid_argument);
+  coarse.steps_per_turn = 64;
+  EXPECT_TRUE(verify_motion(g, bennett_angles(g, rad(120)), coarse).verified);
 }
 
 }  // namespace

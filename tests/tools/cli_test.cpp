@@ -325,8 +325,8 @@ INSTANTIATE_TEST_SUITE_P(
                  {"verify", "--a", "1,2,3", "--alpha-deg", "10,20,30"},
                  {"loopfarm verify: --a:", "3 values"}},
         BadInput{"verify_steps",
-                 {"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--steps", "100"},
-                 {"--steps:", "100"}},
+                 {"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--steps", "63"},
+                 {"--steps:", "63"}},
         BadInput{"verify_samples",
                  {"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--samples", "2"},
                  {"--samples:", "2"}},
@@ -622,12 +622,16 @@ TEST_F(CliTest, StartReachesABennettLoopAndSaysEverythingInJson) {
   EXPECT_LT(json_number(json, "rigid_residual"), 1e-12);
   EXPECT_EQ(json_raw(json, "status"), "\"stopval_reached\"");
   EXPECT_NE(json_raw(json, "family_residuals").find("\"planar\":"), std::string::npos);
+  EXPECT_GT(json_number(json, "analysis_seconds"), 0.0);
 }
 
 TEST_F(CliTest, StartReplaysBitIdenticallyAndRunsRanges) {
   const auto without_time = [](std::string json) {
-    const std::string raw = json_raw(json, "seconds");
-    return json.replace(json.find(raw), raw.size(), "");
+    for (const std::string key : {"seconds", "analysis_seconds"}) {
+      const std::string field = "\"" + key + "\":" + json_raw(json, key);
+      json.replace(json.find(field), field.size(), "");
+    }
+    return json;
   };
   const Result one = run({"start", kTable1, "--index", "5", "--json"});
   const Result range = run({"start", kTable1, "--index", "4", "--count", "3", "--json"});
@@ -786,7 +790,7 @@ TEST_F(CliTest, MotionAndVerifyRefuseTheSameBadGeometry) {
     EXPECT_EQ(v.err.substr(17), m.err.substr(17));
     EXPECT_EQ(m.out, "");
   }
-  const Result steps = run({"motion", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--steps", "100"});
+  const Result steps = run({"motion", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--steps", "63"});
   EXPECT_EQ(steps.exit_code, 2);
   EXPECT_NE(steps.err.find("--steps"), std::string::npos) << steps.err;
   const Result both = run({"motion", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--csv", "-", "--json"});

@@ -121,6 +121,10 @@ struct Circuit {
   std::vector<Bifurcation> bifurcations;
   double worst_residual = 0.0;  // over every point (and located extreme)
   double length = 0.0;          // total arclength
+  // How near the circuit passes a singular pose: the least ratio, over its
+  // points, of the closure Jacobian's smallest retained singular value to its
+  // largest (1 for a well-conditioned curve, 0 at a singular pose).
+  double least_singular_ratio = 1.0;
 
   bool closed() const { return end == CircuitEnd::closed; }
   // The input's range [rad] and whether it turns fully.

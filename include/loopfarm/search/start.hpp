@@ -19,9 +19,20 @@
 namespace loopfarm {
 
 struct StartOptions {
+  // `loopfarm verify`'s options; also a zero's second analysis when the
+  // circuit through its pose cannot be followed (run_start).
   VerificationOptions verification;
   ClassifyOptions classification;
   double rank_tolerance = 1e-6;  // local_dimension's relative singular-value threshold
+  // A zero's analysis (analyse_zero) traces the circuit through its pose in
+  // steps of at most 360 / analysis_steps_per_turn degrees of arclength
+  // (>= 64), every joint's extremes solved for on the curve, and keeps that
+  // trace where every traced circuit is regular: its least singular ratio
+  // (Circuit::least_singular_ratio) at least regular_circuit_ratio. A circuit
+  // passing nearer a singular pose is traced again in steps of 1 deg, where
+  // branches crossing there are told apart (docs/guide/classification.md).
+  int analysis_steps_per_turn = 64;
+  double regular_circuit_ratio = 1e-2;
   std::function<void(const SearchTraceRow&)> trace;
 };
 
@@ -59,7 +70,8 @@ struct StartSummary {
   double E_max = 0.0;
   double objective = 0.0;  // what the optimiser minimised (steered E_mean)
   int evaluations = 0;
-  double seconds = 0.0;
+  double seconds = 0.0;           // of the local minimisation
+  double analysis_seconds = 0.0;  // of the zero's analysis (0 when not a zero)
   SearchStatus status = SearchStatus::failure;
   std::string message;
   int failed_samples = 0;  // of the final cycle
@@ -68,6 +80,14 @@ struct StartSummary {
 
   CandidateAnalysis candidate;  // for zeros only (`zero`); otherwise default
 };
+
+// A zero's analysis as run_start does it: the circuit through `pose` traced
+// in coarse steps, again in steps of 1 deg when it is not regular or cannot
+// be followed (StartOptions::analysis_steps_per_turn), and when neither
+// verifies, every circuit as `loopfarm verify` finds them, the one covering
+// `theta0` (the start's drawn input angle) preferred.
+CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& pose, const Eigen::MatrixXd& jacobian,
+                               double theta0, const StartOptions& options);
 
 // The steering of a job as objective options (deflation terms from the
 // families' distance functions).

@@ -26,7 +26,7 @@ namespace loopfarm {
 
 struct VerificationOptions {
   // Largest step along a circuit: 360 / steps_per_turn degrees of arclength
-  // in joint space (>= 360).
+  // in joint space (>= 64, a step of at most 0.1 rad).
   int steps_per_turn = 720;
   double residual_tolerance = 1e-9;  // max-norm of the residual (translation / L) for "closes"
   int input_joint = 0;
@@ -34,8 +34,8 @@ struct VerificationOptions {
   double min_input_travel = 3.14159265358979323846 / 180.0;
   bool all_circuits = true;
   // Solve for every joint's extremes on the circuit (their ranges exact), or
-  // only the input's dead points (the farm: the other ranges from the
-  // traced points, to within a step).
+  // only the input's dead points (the other ranges from the traced points,
+  // to within a step).
   bool all_extremes = true;
   // [rad] Prefer the circuit whose input range covers this angle (when no
   // pose on a moving circuit is given).
