@@ -32,6 +32,7 @@ struct TradeoffArguments {
   std::string zero_thresholds = "1e-8,1e-12,1e-16,1e-20,1e-24";
   std::string ftol_rels = "0,1e-4,1e-3,1e-2";
   std::string reuse_nearby_cycles = "true,false";
+  std::string analysis_steps = "64,128,360";
   std::string csv;
   std::string plot;
   bool quiet = false;
@@ -133,24 +134,31 @@ TradeoffOptions read_options(const TradeoffArguments& args) {
     }
     o.reuse_nearby_cycles.push_back(r == "true");
   }
+  o.analysis_steps.clear();
+  for (double n : checked_numbers(
+           args.analysis_steps, "--analysis-steps",
+           [](double v) { return v >= 64 && v <= 100000 && v == std::floor(v); }, "a whole number in [64, 100000]")) {
+    o.analysis_steps.push_back(static_cast<int>(n));
+  }
   o.validate();
   return o;
 }
 
 std::string csv_text(const std::vector<TradeoffRow>& rows) {
   std::string out =
-      "axis,value,median_seconds,p90_seconds,search_seconds,total_seconds,starts,zeros,zero_fraction,verified,"
-      "seconds_per_verified_zero,false_zeros,"
-      "worst_family_residual,movable_cases,missed_zeros,rigid_cases,rigid_read_as_zero,smallest_told_apart,"
-      "error_rate,pareto\n";
+      "axis,value,median_seconds,p90_seconds,search_seconds,analysis_seconds,total_seconds,starts,zeros,"
+      "zero_fraction,verified,seconds_per_verified_zero,false_zeros,"
+      "worst_family_residual,movable_cases,missed_zeros,misanalysed,rigid_cases,rigid_read_as_zero,"
+      "smallest_told_apart,error_rate,pareto\n";
   for (const TradeoffRow& r : rows) {
     out += r.axis + "," + r.value + "," + format_double(r.median_seconds) + "," + format_double(r.p90_seconds) + "," +
-           format_double(r.search_seconds) + "," + format_double(r.total_seconds) + "," + std::to_string(r.starts) +
-           "," + std::to_string(r.zeros) + "," + format_double(r.zero_fraction()) + "," + std::to_string(r.verified) +
-           "," + format_double(r.seconds_per_verified_zero()) + "," + std::to_string(r.false_zeros) + "," +
+           format_double(r.search_seconds) + "," + format_double(r.analysis_seconds) + "," +
+           format_double(r.total_seconds) + "," + std::to_string(r.starts) + "," + std::to_string(r.zeros) + "," +
+           format_double(r.zero_fraction()) + "," + std::to_string(r.verified) + "," +
+           format_double(r.seconds_per_verified_zero()) + "," + std::to_string(r.false_zeros) + "," +
            format_double(r.worst_family_residual) + "," + std::to_string(r.movable_cases) + "," +
-           std::to_string(r.missed_zeros) + "," + std::to_string(r.rigid_cases) + "," +
-           std::to_string(r.rigid_read_as_zero) + "," + format_double(r.smallest_told_apart) + "," +
+           std::to_string(r.missed_zeros) + "," + std::to_string(r.misanalysed) + "," + std::to_string(r.rigid_cases) +
+           "," + std::to_string(r.rigid_read_as_zero) + "," + format_double(r.smallest_told_apart) + "," +
            format_double(r.error_rate()) + "," + (r.pareto ? "1" : "0") + "\n";
   }
   return out;
@@ -159,16 +167,20 @@ std::string csv_text(const std::vector<TradeoffRow>& rows) {
 std::string name_of(const TradeoffRow& r) { return r.axis == "base" ? "base" : r.axis + "=" + r.value; }
 
 void print_table(const std::vector<TradeoffRow>& rows) {
-  std::printf("%-26s %10s %10s %9s %8s %6s %9s %8s %9s %10s %8s %s\n", "configuration", "median_ms", "p90_ms", "zeros",
-              "verified", "false", "fam_res", "missed", "rigid0", "told_apart", "error_%", "front");
+  std::printf("%-26s %10s %10s %11s %9s %8s %6s %9s %8s %9s %9s %10s %8s %s\n", "configuration", "median_ms", "p90_ms",
+              "analysis_ms", "zeros", "verified", "false", "fam_res", "missed", "misread", "rigid0", "told_apart",
+              "error_%", "front");
   for (const TradeoffRow& r : rows) {
     const std::string zeros = std::to_string(r.zeros) + "/" + std::to_string(r.starts);
     const std::string missed = std::to_string(r.missed_zeros) + "/" + std::to_string(r.movable_cases);
     const std::string rigid = std::to_string(r.rigid_read_as_zero) + "/" + std::to_string(r.rigid_cases);
-    std::printf("%-26s %10.3f %10.3f %9s %8ld %6ld %9.1e %8s %9s %10.0e %8.2f %s\n", name_of(r).c_str(),
-                1e3 * r.median_seconds, 1e3 * r.p90_seconds, zeros.c_str(), r.verified, r.false_zeros,
-                r.worst_family_residual, missed.c_str(), rigid.c_str(), r.smallest_told_apart, 100.0 * r.error_rate(),
-                r.pareto ? "*" : "");
+    const std::string misread = std::to_string(r.misanalysed) + "/" + std::to_string(r.movable_cases);
+    // Milliseconds of analysis per zero (0 when the search found none).
+    const double analysis_ms = r.zeros > 0 ? 1e3 * r.analysis_seconds / static_cast<double>(r.zeros) : 0.0;
+    std::printf("%-26s %10.3f %10.3f %11.3f %9s %8ld %6ld %9.1e %8s %9s %9s %10.0e %8.2f %s\n", name_of(r).c_str(),
+                1e3 * r.median_seconds, 1e3 * r.p90_seconds, analysis_ms, zeros.c_str(), r.verified, r.false_zeros,
+                r.worst_family_residual, missed.c_str(), misread.c_str(), rigid.c_str(), r.smallest_told_apart,
+                100.0 * r.error_rate(), r.pareto ? "*" : "");
   }
 }
 
@@ -228,16 +240,18 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
   std::fprintf(gp, "set output %s\n", gnuplot_string(png.string()).c_str());
   std::fprintf(gp, "set multiplot layout 1,2 title %s noenhanced\n",
                gnuplot_string("Speed against accuracy: " + job_name + ", one marker per configuration").c_str());
-  std::fprintf(gp,
-               "set ylabel 'error rate [%%] (false + missed zeros + rigid read as zero) / judged; 0 drawn at %g'\n"
-               "set logscale xy\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\n"
-               "set key outside bottom center horizontal maxrows 6 font ',9' samplen 1\n"
-               "set offsets graph 0.05, graph 0.05, 0, 0\n"
-               "set xlabel 'median seconds of local minimisation per start [ms]'\n",
-               kErrorFloor, kErrorFloor / 2.0, kErrorFloor);
+  std::fprintf(
+      gp,
+      "set ylabel 'error rate [%%] (false + missed zeros + rigid read as zero + misanalysed) / judged; 0 drawn at "
+      "%g'\n"
+      "set logscale xy\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\n"
+      "set key outside bottom center horizontal maxrows 6 font ',9' samplen 1\n"
+      "set offsets graph 0.05, graph 0.05, 0, 0\n"
+      "set xlabel 'median seconds of local minimisation per start [ms]'\n",
+      kErrorFloor, kErrorFloor / 2.0, kErrorFloor);
   std::fprintf(gp, "plot %s using 1:2 with lines lw 2 lc rgb '#c0392b' title 'Pareto front'%s\n",
                gnuplot_string(front.path().string()).c_str(), markers(1).c_str());
-  std::fputs("set xlabel 'core-seconds of search per verified zero [s]'\nset key off\n", gp);
+  std::fputs("set xlabel 'core-seconds of search and analysis per verified zero [s]'\nset key off\n", gp);
   std::fprintf(gp, "plot 1/0 notitle%s\n", markers(3).c_str());
   std::fputs("unset multiplot\nunset output\n", gp);
   script.close();
@@ -286,7 +300,8 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand(
       "tradeoff",
       "Measure a job under many configurations, one choice changed at a time (cycle samples, equilibrium tolerance, "
-      "compliance, objective, algorithm, its relative-decrease stop, reuse of the nearby cycle, zero threshold): "
+      "compliance, objective, algorithm, its relative-decrease stop, reuse of the nearby cycle, zero threshold, step "
+      "of a zero's analysis): "
       "seconds per start against accuracy on the job's starts and on the "
       "ground-truth set. docs/quality/tradeoff.md explains the measures and the chart.");
   app->footer(
@@ -332,6 +347,10 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
       ->capture_default_str();
   app->add_option("--reuse-nearby-cycles", args->reuse_nearby_cycles,
                   "whether each evaluation's cycle starts from the last one's samples, tried")
+      ->type_name("LIST")
+      ->capture_default_str();
+  app->add_option("--analysis-steps", args->analysis_steps,
+                  "steps per turn of a zero's analysis tried (its largest step is 360/S deg)")
       ->type_name("LIST")
       ->capture_default_str();
   app->add_option("--csv", args->csv, "write every measure of every configuration as CSV")->type_name("FILE");

@@ -99,16 +99,21 @@ void TradeoffOptions::validate() const {
   for (double f : ftol_rels) {
     if (!(f >= 0.0 && f < 1.0)) fail("ftol_rels: each must be in [0, 1), got " + format_number(f));
   }
+  for (int steps : analysis_steps) {
+    if (steps < 64 || steps > 100000)
+      fail("analysis_steps: each must be in [64, 100000], got " + std::to_string(steps));
+  }
 }
 
 double TradeoffRow::error_rate() const {
   const double judged = static_cast<double>(zeros + movable_cases + rigid_cases);
   if (judged == 0.0) return 0.0;
-  return static_cast<double>(false_zeros + missed_zeros + rigid_read_as_zero) / judged;
+  return static_cast<double>(false_zeros + missed_zeros + rigid_read_as_zero + misanalysed) / judged;
 }
 
 double TradeoffRow::seconds_per_verified_zero() const {
-  return verified > 0 ? search_seconds / static_cast<double>(verified) : std::numeric_limits<double>::infinity();
+  return verified > 0 ? (search_seconds + analysis_seconds) / static_cast<double>(verified)
+                      : std::numeric_limits<double>::infinity();
 }
 
 std::vector<TradeoffConfiguration> tradeoff_configurations(const Job& base, const TradeoffOptions& options) {
@@ -161,6 +166,12 @@ std::vector<TradeoffConfiguration> tradeoff_configurations(const Job& base, cons
     if (z == base.search.zero_threshold) continue;
     add("zero_threshold", format_number(z), [z](Job& job) { job.search.zero_threshold = z; });
   }
+  for (int steps : options.analysis_steps) {
+    if (steps == out.front().analysis_steps_per_turn) continue;
+    TradeoffConfiguration c{"analysis_steps", std::to_string(steps), base};
+    c.analysis_steps_per_turn = steps;
+    out.push_back(std::move(c));
+  }
   return out;
 }
 
@@ -187,12 +198,15 @@ TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
   row.value = configuration.value;
 
   // The search: the same start indices under every configuration.
+  StartOptions start_options;
+  start_options.analysis_steps_per_turn = configuration.analysis_steps_per_turn;
   std::vector<double> seconds;
   seconds.reserve(static_cast<size_t>(options.starts));
   for (long i = 0; i < options.starts; ++i) {
-    const StartSummary s = run_start(job, static_cast<std::uint64_t>(i));
+    const StartSummary s = run_start(job, static_cast<std::uint64_t>(i), start_options);
     seconds.push_back(s.seconds);
     row.search_seconds += s.seconds;
+    row.analysis_seconds += s.analysis_seconds;
     ++row.starts;
     if (!s.zero) continue;
     ++row.zeros;
@@ -216,6 +230,11 @@ TradeoffRow measure_configuration(const TradeoffConfiguration& configuration,
     if (c.movable) {
       ++row.movable_cases;
       row.missed_zeros += !reads_zero;
+      // Analysed as a zero found there would be (the search's Jacobian
+      // serves only the local dimension, which is not judged here).
+      const CandidateAnalysis a =
+          analyse_zero(c.geometry, c.pose, Eigen::MatrixXd::Zero(1, 1), c.pose[0], start_options);
+      row.misanalysed += !a.verification.verified || a.classification.family != expected_classification(c);
     } else {
       ++row.rigid_cases;
       row.rigid_read_as_zero += reads_zero;

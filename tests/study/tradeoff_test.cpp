@@ -49,9 +49,10 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
   o.ftol_rels = {0.0, 1e-3};              // 0 is the base's
   o.reuse_nearby_cycles = {true, false};  // true is the base's
   o.ranges_deg = {360, 90};               // 360 is the base's
+  o.analysis_steps = {64, 360};           // 64 is the default's
   const auto configurations = tradeoff_configurations(base, o);
-  // base, samples 8 and 32, range 90, tolerance, full, LBFGS, ftol 1e-3, no reuse, 1e-20
-  ASSERT_EQ(configurations.size(), 10u);
+  // base, samples 8 and 32, range 90, tolerance, full, LBFGS, ftol 1e-3, no reuse, 1e-20, analysis steps 360
+  ASSERT_EQ(configurations.size(), 11u);
   EXPECT_EQ(configurations[0].name(), "base");
   int changed_samples = 0;
   for (const TradeoffConfiguration& c : configurations) {
@@ -66,6 +67,8 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
         << c.name();
     EXPECT_EQ(c.job.loop.objective, "mean") << c.name();
     EXPECT_EQ(c.job.loop.closure_tolerance != base.loop.closure_tolerance, c.axis == "closure_tolerance") << c.name();
+    EXPECT_EQ(c.analysis_steps_per_turn != StartOptions{}.analysis_steps_per_turn, c.axis == "analysis_steps")
+        << c.name();
     if (samples_axis) {
       ++changed_samples;
       EXPECT_EQ(std::to_string(c.job.loop.samples), c.value);
@@ -111,6 +114,28 @@ TEST(Tradeoff, TheBaseReadsEveryMovableLoopAsZeroAndTellsThePerturbedOnesApart) 
   EXPECT_EQ(row.rigid_cases, 6);  // the five perturbed and one generic
   EXPECT_EQ(row.rigid_read_as_zero, 0);
   EXPECT_EQ(row.smallest_told_apart, 1e-2);
+  EXPECT_EQ(row.misanalysed, 0);  // every movable loop verified, in its family
+  EXPECT_GT(row.analysis_seconds, 0.0);
+}
+
+// The analysis of the movable ground-truth loops is judged against the
+// family they were built in: a Bennett loop labelled planar is misanalysed,
+// at every step of the analysis.
+TEST(Tradeoff, AMovableLoopAnalysedIntoAnotherFamilyIsMisanalysed) {
+  const Job base = parse_job(kJob, "job.toml");
+  TradeoffOptions o = small_options();
+  o.starts = 1;
+  std::vector<GroundTruthCase> truth = generate_ground_truth(o.ground_truth);
+  ASSERT_EQ(truth.front().family, GroundTruthFamily::bennett);
+  ASSERT_TRUE(truth.front().movable);
+  truth.front().family = GroundTruthFamily::planar;
+  for (int steps : {64, 360}) {
+    TradeoffConfiguration c{"analysis_steps", std::to_string(steps), base};
+    c.analysis_steps_per_turn = steps;
+    const TradeoffRow row = measure_configuration(c, truth, o);
+    EXPECT_EQ(row.misanalysed, 1) << steps;
+    EXPECT_GT(row.error_rate(), 0.0) << steps;
+  }
 }
 
 TEST(Tradeoff, ALooseZeroThresholdReadsPerturbedLoopsAsZero) {

@@ -63,7 +63,9 @@ const std::vector<std::string> kSmallSweep = {"{dir}/job.toml",
                                               "--ftol-rels",
                                               "0,1e-3",
                                               "--reuse-nearby-cycles",
-                                              "true,false"};
+                                              "true,false",
+                                              "--analysis-steps",
+                                              "64,360"};
 
 TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   std::vector<std::string> args = kSmallSweep;
@@ -72,8 +74,8 @@ TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> rows = split(read_file(dir_ / "t.csv"), '\n');
   // Header, base, samples=16, range_deg=90, closure_tolerance=1e-08, objective=max, algorithm=LD_LBFGS,
-  // ftol_rel=0.001, reuse_nearby_cycle=false, then "" after the last newline.
-  ASSERT_EQ(rows.size(), 10u) << read_file(dir_ / "t.csv");
+  // ftol_rel=0.001, reuse_nearby_cycle=false, analysis_steps=360, then "" after the last newline.
+  ASSERT_EQ(rows.size(), 11u) << read_file(dir_ / "t.csv");
   const std::vector<std::string> header = split(rows[0], ',');
   EXPECT_EQ(header.front(), "axis");
   EXPECT_EQ(header.back(), "pareto");
@@ -91,14 +93,14 @@ TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
   EXPECT_EQ(split(rows[1], ',')[0], "base");
   EXPECT_GE(on_front, 1);  // the fastest configuration is always on the front
   // The table on stdout names every configuration; the PNG exists.
-  for (const char* name :
-       {"base", "samples=16", "closure_tolerance=1e-08", "objective=max", "algorithm=LD_LBFGS", "ftol_rel=0.001"}) {
+  for (const char* name : {"base", "samples=16", "closure_tolerance=1e-08", "objective=max", "algorithm=LD_LBFGS",
+                           "ftol_rel=0.001", "analysis_steps=360"}) {
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
   }
   EXPECT_GT(fs::file_size(dir_ / "t.png"), 1000u);
   // A progress line on stderr per configuration, none with --quiet; the same table either way.
-  EXPECT_NE(r.err.find("loopfarm tradeoff: 1/8 configurations measured (base)\n"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("loopfarm tradeoff: 8/8 configurations measured"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("loopfarm tradeoff: 1/9 configurations measured (base)\n"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("loopfarm tradeoff: 9/9 configurations measured"), std::string::npos) << r.err;
   std::vector<std::string> quiet_args = kSmallSweep;
   quiet_args.emplace_back("--quiet");
   const testing::CommandResult quiet = run(quiet_args);
@@ -124,6 +126,7 @@ TEST_F(TradeoffCli, BadOptionsExitWithCode2NamingTheFlagAndLeaveFilesAlone) {
       {{"{dir}/job.toml", "--reuse-nearby-cycles", "false,false"}, "--reuse-nearby-cycles"},
       {{"{dir}/job.toml", "--closure-tolerances", "0.1"}, "--closure-tolerances"},
       {{"{dir}/job.toml", "--perturbations", "2"}, "--perturbations"},
+      {{"{dir}/job.toml", "--analysis-steps", "63"}, "--analysis-steps"},
       {{"{dir}/missing.toml"}, "missing.toml"},
       {{"{dir}/job.toml", "--csv", "{dir}/no/such/dir/t.csv"}, "--csv"},
   };

@@ -3,12 +3,13 @@
 //
 // A configuration is the base job with one choice changed (cycle samples N,
 // equilibrium tolerance, compliance set, objective (mean or max), local
-// algorithm, its relative-decrease
-// stop, zero threshold):
+// algorithm, its relative-decrease stop, zero threshold, the step of a
+// zero's analysis):
 // one axis at a time, so that each point of the chart says what that one
 // choice costs and buys. For each configuration:
 //   speed     median and p90 seconds of the local minimisation of the job's
-//             starts 0 .. starts-1 (run_start, one core);
+//             starts 0 .. starts-1 (run_start, one core), and the seconds
+//             of their zeros' analysis;
 //   search    the fraction of those starts reaching zero, the false zeros
 //             (zero energy, rigid verification fails) and the worst family
 //             residual of the verified zeros;
@@ -16,10 +17,12 @@
 //             evaluated at their pose with the configuration's settings,
 //             does not read as zero; rigid ones (perturbed, generic) that
 //             read as zero; and the smallest relative perturbation at which
-//             every perturbed loop is told apart from zero.
-// The error rate, (false zeros + missed zeros + rigid loops read as zero) /
-// (zeros + ground-truth loops), is the accuracy axis of the chart; the Pareto
-// front is over (median seconds, error rate).
+//             every perturbed loop is told apart from zero; and the movable
+//             ones a zero's analysis (analyse_zero, from their pose) does
+//             not verify or puts in another family: misanalysed.
+// The error rate, (false zeros + missed zeros + rigid loops read as zero +
+// misanalysed) / (zeros + ground-truth loops), is the accuracy axis of the
+// chart; the Pareto front is over (median seconds, error rate).
 #pragma once
 
 #include <functional>
@@ -27,6 +30,7 @@
 #include <vector>
 
 #include "loopfarm/search/job.hpp"
+#include "loopfarm/search/start.hpp"
 #include "loopfarm/study/ground_truth.hpp"
 
 namespace loopfarm {
@@ -50,6 +54,9 @@ struct TradeoffOptions {
   // Whether each evaluation's cycle starts from the last one's samples
   // ([optimizer] reuse_nearby_cycle).
   std::vector<bool> reuse_nearby_cycles = {true, false};
+  // A zero's analysis: the largest step of its coarse trace, 360 / this
+  // degrees (StartOptions::analysis_steps_per_turn, >= 64).
+  std::vector<int> analysis_steps = {64, 128, 360};
   // Called after each configuration with its index and the total, for progress.
   std::function<void(int done, int total, const std::string& name)> progress;
 
@@ -60,10 +67,11 @@ struct TradeoffOptions {
 // One configuration: the base job with at most one choice changed.
 struct TradeoffConfiguration {
   // "base", "samples", "range_deg", "closure_tolerance", "compliance", "objective", "algorithm", "ftol_rel",
-  // "reuse_nearby_cycle", "zero_threshold"
+  // "reuse_nearby_cycle", "zero_threshold", "analysis_steps"
   std::string axis;
   std::string value;  // the value on that axis, as text ("16", "1e-08", "LD_LBFGS")
   Job job;
+  int analysis_steps_per_turn = StartOptions{}.analysis_steps_per_turn;
   std::string name() const { return axis == "base" ? "base" : axis + "=" + value; }
 };
 
@@ -76,7 +84,8 @@ struct TradeoffRow {
   // Speed: seconds of local minimisation per start.
   double median_seconds = 0.0;
   double p90_seconds = 0.0;
-  double search_seconds = 0.0;  // the sum over the starts: core-seconds of local minimisation
+  double search_seconds = 0.0;    // the sum over the starts: core-seconds of local minimisation
+  double analysis_seconds = 0.0;  // the sum over the zeros: core-seconds of their analysis
   // The configuration's whole measurement: its starts, and the ground truth's
   // cycles where they were evaluated for it (run_tradeoff evaluates them once
   // per distinct loop settings).
@@ -92,6 +101,7 @@ struct TradeoffRow {
   long missed_zeros = 0;  // movable, not read as zero
   long rigid_cases = 0;
   long rigid_read_as_zero = 0;  // rigid, read as zero
+  long misanalysed = 0;         // movable, and its analysis does not verify it or names another family
   // Smallest relative perturbation at which every perturbed case (of that
   // size) reads non-zero, and the sizes above it too; +inf when even the
   // largest is missed.
@@ -99,7 +109,8 @@ struct TradeoffRow {
   bool pareto = false;  // on the front of (median_seconds, error_rate)
 
   double zero_fraction() const { return starts > 0 ? static_cast<double>(zeros) / starts : 0.0; }
-  // Core-seconds of search per verified zero: what a discovery costs (+inf when none).
+  // Core-seconds of search and analysis per verified zero: what a discovery
+  // costs (+inf when none).
   double seconds_per_verified_zero() const;
   double error_rate() const;
 };
