@@ -5,7 +5,10 @@
 //
 // Stop: SIGINT, SIGTERM and SIGUSR1 only set a flag. No more work is handed
 // out, the starts in hand finish, everything is committed, and the command
-// exits with kExitStopped and a line saying how to resume.
+// exits with kExitStopped and a line saying how to resume. SIGXFSZ (a file
+// size limit reached) is ignored, so that the write fails as on a full disk:
+// the run stops with exit 1 and a message naming the database, which keeps
+// its last commit and can be resumed.
 #include "run_command.hpp"
 
 #include <algorithm>
@@ -51,6 +54,7 @@ void install_stop_handlers() {
   action.sa_handler = on_stop_signal;
   sigemptyset(&action.sa_mask);
   for (int signal : {SIGINT, SIGTERM, SIGUSR1}) sigaction(signal, &action, nullptr);
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 struct RunArguments {
@@ -148,6 +152,9 @@ int run_run_command(const RunArguments& args) {
     summary = run_farm(s.job, mpi.world(), g_stop, s.farm);
   } catch (const DatabaseError& error) {
     // A database that is not loopfarm's, or holds another job: bad input.
+    // The system's failure (a full disk, an I/O error): exit 1, the
+    // database as its last commit left it, to be resumed.
+    if (error.cause() == DatabaseError::Cause::failed) throw EnvironmentError(std::string("database: ") + error.what());
     throw UsageError("database", error.what());
   }
   switch (summary.status) {

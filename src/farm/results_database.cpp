@@ -574,7 +574,11 @@ CommitSummary ResultsDatabase::commit(std::int64_t run_id, const std::vector<Sta
       fail(m.path, "start " + std::to_string(r.index) + " of run " + std::to_string(run_id) +
                        " is already committed (nothing of this commit was written)");
     }
-    if (rc != SQLITE_DONE) fail(m.path, "cannot insert start " + std::to_string(r.index) + ": " + message);
+    if (rc != SQLITE_DONE) {
+      throw DatabaseError(
+          "results database " + m.path + ": cannot insert start " + std::to_string(r.index) + ": " + message,
+          cause_of(rc));
+    }
     ++summary.starts;
     if (r.zero) ++summary.zeros;
   }

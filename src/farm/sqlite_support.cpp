@@ -2,6 +2,7 @@
 #include "sqlite_support.hpp"
 
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 namespace loopfarm::store {
@@ -10,8 +11,35 @@ namespace loopfarm::store {
   throw DatabaseError("results database " + path + ": " + what);
 }
 
+std::string error_text(sqlite3* db) {
+  if (db == nullptr) return "out of memory";
+  std::string text = sqlite3_errmsg(db);
+  const int system_errno = sqlite3_system_errno(db);
+  if (system_errno != 0) text += std::string(" (") + std::strerror(system_errno) + ")";
+  return text;
+}
+
+DatabaseError::Cause cause_of(int rc) {
+  switch (rc & 0xff) {
+    case SQLITE_IOERR:
+    case SQLITE_FULL:
+    case SQLITE_NOMEM:
+    case SQLITE_BUSY:
+    case SQLITE_LOCKED:
+      return DatabaseError::Cause::failed;
+    default:
+      return DatabaseError::Cause::refused;
+  }
+}
+
+[[noreturn]] void fail_code(const std::string& path, sqlite3* db, int rc, const std::string& what) {
+  throw DatabaseError("results database " + path + ": " + what + ": " + error_text(db), cause_of(rc));
+}
+
 [[noreturn]] void fail_sqlite(const std::string& path, sqlite3* db, const std::string& what) {
-  fail(path, what + ": " + (db ? sqlite3_errmsg(db) : "out of memory"));
+  if (db == nullptr)
+    throw DatabaseError("results database " + path + ": " + what + ": out of memory", DatabaseError::Cause::failed);
+  fail_code(path, db, sqlite3_extended_errcode(db), what);
 }
 
 // SQLite's own words for a damaged file ("database disk image is
@@ -71,10 +99,10 @@ bool has_commits_in_wal(const std::string& path) {
 
 void exec(const std::string& path, sqlite3* db, const std::string& sql, const char* what) {
   char* message = nullptr;
-  if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
-    const std::string text = message ? message : sqlite3_errmsg(db);
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
+  if (rc != SQLITE_OK) {
     sqlite3_free(message);
-    fail(path, std::string(what) + ": " + text);
+    fail_code(path, db, rc, what);
   }
 }
 

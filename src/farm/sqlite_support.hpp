@@ -15,7 +15,17 @@ namespace loopfarm::store {
 
 // Throws DatabaseError "results database PATH: WHAT" (the file's fault: refused).
 [[noreturn]] void fail(const std::string& path, const std::string& what);
-// The same with SQLite's message for `db` appended.
+// SQLite's message for `db`, with the system's error where one was the cause:
+// "disk I/O error (No space left on device)".
+std::string error_text(sqlite3* db);
+// The system's failure (I/O, a full disk, memory, a lock never released) or
+// the file's fault (anything else, a path that cannot be opened included:
+// refused), from an SQLite result code.
+DatabaseError::Cause cause_of(int rc);
+// Throws DatabaseError "results database PATH: WHAT: error_text(db)" with the
+// cause of `rc`.
+[[noreturn]] void fail_code(const std::string& path, sqlite3* db, int rc, const std::string& what);
+// The same for the last error on `db`.
 [[noreturn]] void fail_sqlite(const std::string& path, sqlite3* db, const std::string& what);
 // The result code `rc` of a read, said in words that name the file: "not an
 // SQLite database", "damaged (...)" (both refused), else a failure of the
@@ -93,9 +103,9 @@ class Statement {
     const int rc = sqlite3_step(stmt_);
     if (rc == SQLITE_ROW) return true;
     if (rc == SQLITE_DONE) return false;
-    const std::string message = sqlite3_errmsg(db_);
+    const std::string message = error_text(db_);
     sqlite3_reset(stmt_);
-    fail(*path_, std::string(what) + ": " + message);
+    throw DatabaseError("results database " + *path_ + ": " + what + ": " + message, cause_of(rc));
   }
   void run(const char* what) {
     step(what);
@@ -105,7 +115,7 @@ class Statement {
   // that explain particular errors themselves.
   int step_code(std::string& message) {
     const int rc = sqlite3_step(stmt_);
-    if (rc != SQLITE_ROW && rc != SQLITE_DONE) message = sqlite3_errmsg(db_);
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) message = error_text(db_);
     sqlite3_reset(stmt_);
     return rc;
   }

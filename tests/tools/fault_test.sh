@@ -24,6 +24,13 @@
 #               middle overwritten, with a garbage header: `run` (1 and 2
 #               ranks) and `report` (table, --summary, csv) exit 2 with one
 #               line naming the file, and the file stays byte-identical.
+#   full        The disk fills: once the first starts are committed, rank 0
+#               (the writer) gets a file-size limit a little above its
+#               database's files (prlimit; `loopfarm run` ignores SIGXFSZ,
+#               so a write beyond it fails as on a full disk). The run must
+#               exit 1 with a line naming the database, the database must be
+#               whole (the invariants) and keep its commits, and the same
+#               command must resume it to the end of an uninterrupted run.
 #   concurrent  While a 2-rank run writes, `loopfarm report` and plain
 #               `sqlite3` read in a loop: no error, no "database is locked",
 #               counts that never decrease, invariants that hold in every
@@ -415,10 +422,11 @@ damage)
       got=$?
       set -e
       [[ $got -eq 2 ]] || fail "$name: $how exited with $got, not 2: $(head -2 "$tmp/err")"
-      # mpirun adds its own banner about the non-zero exit; loopfarm's
-      # message is one line.
+      # mpirun adds its own banner about the non-zero exit, which it may
+      # write in the middle of a line it forwards; loopfarm's message is one
+      # line.
       if [[ "$how" == run2 ]]; then
-        grep -a "^loopfarm run: " "$tmp/err" >"$tmp/msg" || true
+        grep -ao "loopfarm run: .*" "$tmp/err" >"$tmp/msg" || true
       else
         cp "$tmp/err" "$tmp/msg"
       fi
@@ -443,6 +451,41 @@ damage)
   run1 --db "$tmp/good.sqlite" --starts 130 2>/dev/null || fail "resuming the undamaged database exited with $?"
   check_invariants "$tmp/good.sqlite" 130
   say "$refusals refusals checked"
+  ;;
+full)
+  command -v prlimit >/dev/null || fail "prlimit not found (util-linux)"
+  run2 --db "$tmp/straight.sqlite" 2>"$tmp/straight.err" || fail "the uninterrupted run exited with $?"
+  db="$tmp/full.sqlite"
+  launch "$db" "$tmp/full.err"
+  deadline=$((SECONDS + 120))
+  until (($(count "$db") > 0)); do
+    alive "$mp" || fail "the run ended before its first commit"
+    ((SECONDS < deadline)) || fail "no start committed after 120 s"
+    sleep 0.02
+  done
+  writer="$(rank_pid "$mp" 0)"
+  [[ -n "$writer" ]] || fail "no rank 0 under mpirun $mp"
+  held=$(stat -c %s "$db")
+  [[ ! -e "$db-wal" ]] || held=$(( $(stat -c %s "$db-wal") > held ? $(stat -c %s "$db-wal") : held ))
+  # The database cannot hold all the job's starts under this limit: its
+  # files must grow by far more than 32 KiB before the run ends.
+  prlimit --pid "$writer" --fsize=$((held + 32768)) || fail "prlimit on rank 0 ($writer) failed"
+  at_limit="$(count "$db")"
+  finish "$mp" 120
+  ranks="$(rank_pids "$mp")"
+  ((code == 1)) || fail "the run whose disk filled exited with $code, not 1: $(grep -m1 'loopfarm run' "$tmp/full.err" || true)"
+  grep -q "loopfarm run: .*results database $db: .*disk I/O error" "$tmp/full.err" ||
+    fail "no line naming the database and the failed write: $(head -2 "$tmp/full.err")"
+  kept="$(count "$db")"
+  ((kept >= at_limit && kept < total)) || fail "$kept starts kept ($at_limit when the limit was set, $total in all)"
+  check_invariants "$db"
+  say "stopped at $kept of $total starts, limit $((held + 32768)) bytes"
+  # Room again: the same command resumes to the end of an uninterrupted run.
+  run2 --db "$db" 2>"$tmp/resume.err" || fail "resuming exited with $?: $(tail -1 "$tmp/resume.err")"
+  check_invariants "$db" "$total"
+  dump_mapped "$tmp/straight.sqlite" "$tmp/straight.txt"
+  dump_mapped "$db" "$tmp/full.txt"
+  same "$tmp/straight.txt" "$tmp/full.txt" "the resumed run differs from an uninterrupted one"
   ;;
 concurrent)
   db="$tmp/live.sqlite"
