@@ -78,6 +78,14 @@ ranks)
   [[ "$(sqlite3 "$tmp/one.sqlite" 'SELECT COUNT(*) FROM candidates')" -ge 2 ]] || fail "fewer than 2 candidates"
   [[ "$(sqlite3 "$tmp/two.sqlite" 'SELECT ranks FROM runs')" == 2 ]] || fail "runs.ranks is not 2"
   same "$tmp/one.txt" "$tmp/two.txt" "the databases of 1 and 2 ranks differ"
+  # 8 ranks on this machine's cores (oversubscribed), chunks of 2: 7 workers
+  # and rank 0 hand out, compute and commit in an order of their own, and
+  # every start and candidate row is the same as 1 rank's.
+  "$mpiexec" --oversubscribe -np 8 "$loopfarm" run "$job" --progress none --db "$tmp/eight.sqlite" --chunk 2 ||
+    fail "8 ranks exited with $?"
+  [[ "$(sqlite3 "$tmp/eight.sqlite" 'SELECT ranks FROM runs')" == 8 ]] || fail "runs.ranks is not 8"
+  dump "$tmp/eight.sqlite" "$tmp/eight.txt"
+  same "$tmp/one.txt" "$tmp/eight.txt" "the databases of 1 and 8 ranks differ"
   ;;
 resume)
   # 15 starts, then the same job to 40: the same database as 40 at once.
