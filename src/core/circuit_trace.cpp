@@ -345,6 +345,10 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
     halvings = 0;
     walk.worst = std::max(walk.worst, c.residual);
     walk.least_singular_ratio = std::min(walk.least_singular_ratio, singular_ratio(next_info));
+    if (walk.least_singular_ratio < o.stop_below_singular_ratio) {
+      walk.end = CircuitEnd::singular;
+      return walk;
+    }
 
     // Back at the first point (some image of it, 2 pi apart per joint): the
     // segment x -> next passes through it in the direction the walk left it.
@@ -510,9 +514,11 @@ TracedCircuit trace(const LoopGeometry& g, JointVector x, const MotionOptions& o
     c.arclength.push_back(back_length + forward.arclength[i]);
   }
   c.length = c.arclength.back();
-  c.end = forward.end == CircuitEnd::closed                                               ? CircuitEnd::closed
-          : (forward.end == CircuitEnd::too_long || backward.end == CircuitEnd::too_long) ? CircuitEnd::too_long
-                                                                                          : CircuitEnd::lost;
+  const auto either = [&](CircuitEnd end) { return forward.end == end || backward.end == end; };
+  c.end = forward.end == CircuitEnd::closed ? CircuitEnd::closed
+          : either(CircuitEnd::singular)    ? CircuitEnd::singular
+          : either(CircuitEnd::too_long)    ? CircuitEnd::too_long
+                                            : CircuitEnd::lost;
   append_events(backward.extremes, forward.extremes, back_length, c.extremes);
   append_events(backward.bifurcations, forward.bifurcations, back_length, c.bifurcations);
   for (const Walk* w : std::array<const Walk*, 2>{&backward, &forward}) {

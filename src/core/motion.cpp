@@ -68,6 +68,8 @@ const char* to_string(CircuitEnd end) {
       return "lost";
     case CircuitEnd::too_long:
       return "too_long";
+    case CircuitEnd::singular:
+      return "singular";
     case CircuitEnd::rigid:
       return "rigid";
   }
@@ -82,6 +84,9 @@ void MotionOptions::validate() const {
   if (max_halvings < 1 || max_halvings > 60) fail("max_halvings must be in [1, 60]");
   if (max_points < 16) fail("max_points must be >= 16");
   if (!(rank_tolerance > 0.0 && rank_tolerance < 1e-2)) fail("rank_tolerance must be in (0, 1e-2)");
+  if (!(stop_below_singular_ratio >= 0.0 && stop_below_singular_ratio < 1.0)) {
+    fail("stop_below_singular_ratio must be in [0, 1)");
+  }
   if (scan_inputs < 0) fail("scan_inputs must be >= 0");
   if (assembly_guesses < 1) fail("assembly_guesses must be >= 1");
   if (free_guesses < 0) fail("free_guesses must be >= 0");

@@ -85,10 +85,13 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
   // energy): only the circuit through it is traced, with every joint's
   // extremes solved for (its ranges exact whatever the step), first in steps
   // that grow with the curve's straightness up to analysis_steps_per_turn.
+  // The coarse walk gives up where it nears a singular pose: the circuit is
+  // traced finely there anyway.
   VerificationOptions through_pose = options.verification;
   through_pose.all_circuits = false;
   through_pose.all_extremes = true;
   through_pose.steps_per_turn = options.analysis_steps_per_turn;
+  through_pose.stop_below_singular_ratio = options.regular_circuit_ratio;
   VerificationSummary verification = verify_motion(geometry, pose, through_pose);
   const std::vector<Circuit>& circuits = verification.motion.circuits;
   const bool regular = std::all_of(circuits.begin(), circuits.end(), [&](const Circuit& c) {
@@ -97,8 +100,12 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
   if (!verification.verified || !regular) {
     // Near a singular pose (branches crossing, a loop folding flat) a coarse
     // step can cross to another branch, or over a point where the circuit
-    // ends: the circuit is traced again in steps of 1 deg.
+    // ends: the circuit is traced again in steps of 1 deg, the other joints'
+    // ranges read off its points (extremes solved for near a singular pose
+    // cost many corrector calls each).
     through_pose.steps_per_turn = std::max(360, options.analysis_steps_per_turn);
+    through_pose.all_extremes = false;
+    through_pose.stop_below_singular_ratio = 0.0;
     verification = verify_motion(geometry, pose, through_pose);
   }
   if (!verification.verified) {

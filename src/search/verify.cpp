@@ -65,6 +65,7 @@ MotionOptions VerificationOptions::motion() const {
   m.residual_tolerance = residual_tolerance;
   m.max_step = 2.0 * kPi / steps_per_turn;
   m.all_extremes = all_extremes;
+  m.stop_below_singular_ratio = stop_below_singular_ratio;
   return m;
 }
 

@@ -266,6 +266,21 @@ TEST(Motion, LeastSingularRatioIsTheClosureJacobiansOverThePoints) {
     EXPECT_NEAR(c.least_singular_ratio, expected, 1e-6 * expected + 1e-9);
     EXPECT_LT(c.least_singular_ratio, 1e-2);
   }
+  // Told to stop there, the walk ends `singular` at the first point that
+  // near (in both directions); the regular circuits are not touched.
+  MotionOptions stopping;
+  stopping.stop_below_singular_ratio = 1e-2;
+  const std::vector<JointVector> poses = find_assemblies(parallelogram, rad(60));
+  ASSERT_FALSE(poses.empty());
+  const Circuit stopped = trace_circuit(parallelogram, poses.front(), stopping);
+  EXPECT_EQ(stopped.end, CircuitEnd::singular);
+  EXPECT_LT(stopped.least_singular_ratio, 1e-2);
+  EXPECT_EQ(std::string(to_string(stopped.end)), "singular");
+  const Circuit whole = trace_circuit(parallelogram, poses.front());
+  EXPECT_LT(stopped.points.size(), whole.points.size());
+  const Circuit bennett_stopping = trace_circuit(bennett, bennett_angles(bennett, rad(120)), stopping);
+  EXPECT_TRUE(bennett_stopping.closed());
+  EXPECT_EQ(bennett_stopping.points.size(), regular[0].points.size());
 }
 
 TEST(Motion, RigidLoopsHaveNoCircuit) {

@@ -58,6 +58,10 @@ struct MotionOptions {
   int max_halvings = 30;
   // Points per circuit at most (a circuit longer than this ends, said so).
   int max_points = 50000;
+  // A walk that reaches a point whose singular ratio (Circuit::
+  // least_singular_ratio) is below this ends there, `singular` (0: never):
+  // for a coarse trace that is redone finely near singular poses anyway.
+  double stop_below_singular_ratio = 0.0;
   // A singular value of the closure Jacobian below this fraction of the
   // largest counts as zero (its numerical rank, hence the freedoms).
   double rank_tolerance = 1e-7;
@@ -106,6 +110,7 @@ enum class CircuitEnd {
   closed,    // returned to its first point: a whole circuit
   lost,      // the closure could not be followed further (steps halved to nothing)
   too_long,  // MotionOptions::max_points reached
+  singular,  // a point nearer a singular pose than MotionOptions::stop_below_singular_ratio allows
   rigid,     // the pose closes but the closure Jacobian has full rank: an isolated pose
 };
 const char* to_string(CircuitEnd end);

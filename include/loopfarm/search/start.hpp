@@ -28,9 +28,10 @@ struct StartOptions {
   // steps of at most 360 / analysis_steps_per_turn degrees of arclength
   // (>= 64), every joint's extremes solved for on the curve, and keeps that
   // trace where every traced circuit is regular: its least singular ratio
-  // (Circuit::least_singular_ratio) at least regular_circuit_ratio. A circuit
-  // passing nearer a singular pose is traced again in steps of 1 deg, where
-  // branches crossing there are told apart (docs/guide/classification.md).
+  // (Circuit::least_singular_ratio) at least regular_circuit_ratio (the
+  // coarse walk stops where it comes nearer). A circuit passing nearer a
+  // singular pose is traced again in steps of 1 deg, the other joints'
+  // ranges read off its points (docs/guide/motion.md).
   int analysis_steps_per_turn = 64;
   double regular_circuit_ratio = 1e-2;
   std::function<void(const SearchTraceRow&)> trace;

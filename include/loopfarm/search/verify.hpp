@@ -37,6 +37,9 @@ struct VerificationOptions {
   // only the input's dead points (the other ranges from the traced points,
   // to within a step).
   bool all_extremes = true;
+  // A circuit's walk ends where it nears a singular pose this closely
+  // (MotionOptions::stop_below_singular_ratio; 0: never).
+  double stop_below_singular_ratio = 0.0;
   // [rad] Prefer the circuit whose input range covers this angle (when no
   // pose on a moving circuit is given).
   std::optional<double> theta0;
