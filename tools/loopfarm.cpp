@@ -14,6 +14,7 @@
 #include "cli_support.hpp"
 #include "energy_command.hpp"
 #include "groundtruth_command.hpp"
+#include "merge_command.hpp"
 #include "motion_command.hpp"
 #include "report_command.hpp"
 #include "run_command.hpp"
@@ -66,10 +67,11 @@ int main(int argc, char** argv) {
 
   // Every subcommand, in the order --help lists them.
   const std::vector<loopfarm::cli::Subcommand> commands{
-      loopfarm::cli::add_energy_command(app),      loopfarm::cli::add_verify_command(app),
-      loopfarm::cli::add_motion_command(app),      loopfarm::cli::add_start_command(app),
-      loopfarm::cli::add_run_command(app),         loopfarm::cli::add_report_command(app),
-      loopfarm::cli::add_groundtruth_command(app), loopfarm::cli::add_tradeoff_command(app),
+      loopfarm::cli::add_energy_command(app),   loopfarm::cli::add_verify_command(app),
+      loopfarm::cli::add_motion_command(app),   loopfarm::cli::add_start_command(app),
+      loopfarm::cli::add_run_command(app),      loopfarm::cli::add_merge_command(app),
+      loopfarm::cli::add_report_command(app),   loopfarm::cli::add_groundtruth_command(app),
+      loopfarm::cli::add_tradeoff_command(app),
   };
 
   // CLI11 would call a mistyped subcommand "missing"; name it instead.

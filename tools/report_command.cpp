@@ -195,10 +195,14 @@ void print_summary(const ResultsDatabase& db, const ReportArguments& args) {
   std::printf("database %s\n", db.path().c_str());
   std::printf("runs\n");
   for (const RunRow& r : db.runs()) {
-    std::printf("  run %lld  %s  seed %llu  %lld/%lld starts  %s  %lld ranks  %s .. %s\n",
-                static_cast<long long>(r.run_id), r.job_path.c_str(), static_cast<unsigned long long>(r.seed),
+    // Where its starts were computed: ranks of the last session, or the databases it was merged from.
+    const std::string where = r.merged_inputs > 0 ? "merged from " + std::to_string(r.merged_inputs) + " databases"
+                                                  : std::to_string(r.ranks) + " ranks";
+    const std::string slice = r.slice ? "  slice " + to_string(*r.slice) : "";
+    std::printf("  run %lld  %s  seed %llu%s  %lld/%lld starts  %s  %s  %s .. %s\n", static_cast<long long>(r.run_id),
+                r.job_path.c_str(), static_cast<unsigned long long>(r.seed), slice.c_str(),
                 static_cast<long long>(r.starts_done), static_cast<long long>(r.starts), r.status.c_str(),
-                static_cast<long long>(r.ranks), r.started_at.c_str(), r.updated_at.c_str());
+                where.c_str(), r.started_at.c_str(), r.updated_at.c_str());
   }
   const std::optional<std::int64_t> run = run_filter(args);
   const StartCounts c = db.start_counts(run);
@@ -278,8 +282,9 @@ std::string atlas_header(const ResultsDatabase& db, const ReportArguments& args)
   out += ". Runs:\n\n";
   for (const RunRow& r : db.runs()) {
     out += "- run " + std::to_string(r.run_id) + ": `" + r.job_path + "`, " + std::to_string(r.joints) + "R, seed " +
-           std::to_string(r.seed) + ", " + std::to_string(r.starts_done) + " of " + std::to_string(r.starts) +
-           " starts, " + r.status + "\n";
+           std::to_string(r.seed) + (r.slice ? ", slice " + to_string(*r.slice) : "") + ", " +
+           std::to_string(r.starts_done) + " of " + std::to_string(r.starts) + " starts, " + r.status +
+           (r.merged_inputs > 0 ? ", merged from " + std::to_string(r.merged_inputs) + " databases" : "") + "\n";
   }
   return out;
 }

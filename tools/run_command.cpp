@@ -62,6 +62,7 @@ struct RunArguments {
   std::string starts;
   std::string seed;
   std::string db;
+  std::string slice;
   // 16 starts per request: a worker waits for its next chunk up to one
   // 2 ms polling period of rank 0, which at 4 starts of the default job
   // (about 6 ms each) cost 5 % of its time (parallel efficiency 0.947 from
@@ -76,6 +77,21 @@ struct RunRequest {
   Job job;
   FarmOptions farm;
 };
+
+// --slice I/K: 0 <= I < K.
+StartSlice parse_slice(const std::string& text) {
+  const size_t slash = text.find('/');
+  if (slash == std::string::npos) {
+    throw UsageError("--slice", "got " + quote_text(text) + "; expected I/K, slice I (from 0) of K, e.g. 2/8");
+  }
+  const long long index = parse_integer(std::string_view(text).substr(0, slash), "--slice I");
+  const long long count = parse_integer(std::string_view(text).substr(slash + 1), "--slice K");
+  if (count < 1 || count > (1LL << 53)) throw UsageError("--slice", "got " + text + "; K must be >= 1");
+  if (index < 0 || index >= count) {
+    throw UsageError("--slice", "got " + text + "; I must be in [0, " + std::to_string(count - 1) + "]");
+  }
+  return StartSlice{static_cast<std::uint64_t>(index), static_cast<std::uint64_t>(count)};
+}
 
 RunRequest read_settings(const RunArguments& args) {
   RunRequest s;
@@ -95,6 +111,7 @@ RunRequest read_settings(const RunArguments& args) {
     s.job.search.seed = static_cast<std::uint64_t>(seed);
   }
   if (!args.db.empty()) s.job.output.database = args.db;
+  if (!args.slice.empty()) s.farm.slice = parse_slice(args.slice);
   const long long chunk = parse_integer(args.chunk, "--chunk");
   if (chunk < 1 || chunk > 100000) throw UsageError("--chunk", "got " + args.chunk + "; must be in [1, 100000]");
   s.farm.chunk = static_cast<int>(chunk);
@@ -130,6 +147,7 @@ std::string resume_command(const RunArguments& args, const RunRequest& s) {
   std::string command = "loopfarm run " + args.job;
   if (!args.starts.empty()) command += " --starts " + args.starts;
   if (!args.seed.empty()) command += " --seed " + args.seed;
+  if (s.farm.slice) command += " --slice " + to_string(*s.farm.slice);
   command += " --db " + s.job.output.database;
   return command;
 }
@@ -171,8 +189,15 @@ int run_run_command(const RunArguments& args) {
   const int code = summary.status == FarmStatus::complete ? kExitSuccess : kExitStopped;
   if (mpi.rank() != 0) return code;
   const std::string& database = s.job.output.database;
-  std::fprintf(stderr, "loopfarm run: %ld of %ld starts committed to %s, %ld zero minima, %ld candidates\n",
-               summary.run.done, summary.run.total, database.c_str(), summary.run.zeros, summary.run.candidates);
+  std::string slice;
+  if (s.farm.slice) {
+    const IndexRange range = slice_range(s.farm.slice, static_cast<std::uint64_t>(s.job.search.starts));
+    slice = " of slice " + to_string(*s.farm.slice) + " (start indices [" + std::to_string(range.first) + ", " +
+            std::to_string(range.last) + ") of " + std::to_string(s.job.search.starts) + ")";
+  }
+  std::fprintf(stderr, "loopfarm run: %ld of %ld starts%s committed to %s, %ld zero minima, %ld candidates\n",
+               summary.run.done, summary.run.total, slice.c_str(), database.c_str(), summary.run.zeros,
+               summary.run.candidates);
   const double wall = summary.run.wall_s;
   std::fprintf(stderr,
                "loopfarm run: this session %ld starts in %.1f s on %d ranks (%.3g starts/s); rank 0 coordination "
@@ -198,14 +223,19 @@ Subcommand add_run_command(CLI::App& parent) {
       "Examples:\n"
       "  loopfarm run jobs/default.toml\n"
       "  mpirun -np 8 loopfarm run jobs/default.toml --db /scratch/default.sqlite\n"
+      "  loopfarm run jobs/default.toml --slice 2/8 --db /tmp/slice-2.sqlite   # then: loopfarm merge\n"
       "Stop with SIGINT, SIGTERM or SIGUSR1 (under mpirun: SIGUSR1): the starts in hand finish and are committed;\n"
       "running the same command again resumes.\n"
       "Exit codes: 0 all starts committed, 1 failure, 2 bad input (job file, options, a database holding another\n"
-      "job, not a loopfarm database or damaged: left untouched), 3 stopped by a signal (resumable).\n");
+      "job or slice, not a loopfarm database or damaged: left untouched), 3 stopped by a signal (resumable).\n");
   app->add_option("JOB", args->job, "job file (TOML, see docs/guide/job-file.md)")->required()->type_name("JOB.toml");
   app->add_option("--starts", args->starts, "override [search] starts")->type_name("N");
   app->add_option("--seed", args->seed, "override [search] seed")->type_name("S");
   app->add_option("--db", args->db, "override [output] database")->type_name("PATH");
+  app->add_option("--slice", args->slice,
+                  "run only slice I (from 0) of K equal, contiguous slices of the starts, as a run of its own "
+                  "(for a Slurm array; loopfarm merge joins the slices' databases)")
+      ->type_name("I/K");
   app->add_flag("--new-run", args->new_run, "add a new run to a database that holds another job");
   app->add_option("--chunk", args->chunk, "start indices handed out per request")
       ->type_name("K")

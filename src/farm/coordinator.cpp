@@ -78,7 +78,8 @@ StartRecord run_start_record(const Job& job, std::uint64_t index) {
   }
 }
 
-ResumePlan plan_run(ResultsDatabase& db, const Job& job, bool new_run, int ranks) {
+ResumePlan plan_run(ResultsDatabase& db, const Job& job, bool new_run, int ranks,
+                    const std::optional<StartSlice>& slice) {
   RunIdentity identity;
   identity.job_path = job.path;
   identity.job_text = job.text;
@@ -87,12 +88,14 @@ ResumePlan plan_run(ResultsDatabase& db, const Job& job, bool new_run, int ranks
   identity.joints = job.loop.joints;
   identity.zero_threshold = job.search.zero_threshold;
   identity.report_threshold = job.output.report_threshold;
+  identity.slice = slice;
   const RunInfo run = db.open_run(identity, new_run);
+  const IndexRange range = slice_range(slice, identity.starts);
   ResumePlan plan;
   plan.run_id = run.run_id;
-  plan.pending = PendingCursor(run.committed, identity.starts);
-  plan.starts = static_cast<long>(identity.starts);
-  plan.committed = static_cast<long>(identity.starts - plan.pending.count());
+  plan.pending = PendingCursor(run.committed, range);
+  plan.starts = static_cast<long>(range.last - range.first);
+  plan.committed = static_cast<long>(range.last - range.first - plan.pending.count());
   plan.zeros = static_cast<long>(db.start_counts(run.run_id).zeros);
   plan.candidates = static_cast<long>(db.candidate_count());
   db.begin_session(run.run_id, ranks);

@@ -143,7 +143,7 @@ FarmSummary run_farm(const Job& job, MPI_Comm comm, StopFlag& stop, const FarmOp
             "this MPI provides no MPI_THREAD_FUNNELED; rank 0 cannot compute while it coordinates");
       }
       db.emplace(ResultsDatabase::open(job.output.database, DatabaseMode::write));
-      plan = plan_run(*db, job, options.new_run, ranks);
+      plan = plan_run(*db, job, options.new_run, ranks, options.slice);
     } catch (const DatabaseError&) {
       failure = std::current_exception();
       verdict = kVerdictRefused;

@@ -83,6 +83,21 @@ std::string job_hash(std::string_view text) {
   return buffer;
 }
 
+IndexRange slice_range(const std::optional<StartSlice>& slice, std::uint64_t starts) {
+  if (!slice) return {0, starts};
+  if (slice->count == 0 || slice->index >= slice->count) {
+    throw std::invalid_argument("slice_range: slice " + to_string(*slice) + " is not 0 <= I < K");
+  }
+  // 128 bits: index * starts may exceed 64 (GCC's and Clang's extension).
+  __extension__ using Wide = unsigned __int128;
+  const auto bound = [&](std::uint64_t i) { return static_cast<std::uint64_t>(Wide{i} * starts / slice->count); };
+  return {bound(slice->index), bound(slice->index + 1)};
+}
+
+std::string to_string(const StartSlice& slice) {
+  return std::to_string(slice.index) + "/" + std::to_string(slice.count);
+}
+
 std::uint64_t RunInfo::committed_count() const {
   std::uint64_t count = 0;
   for (const IndexRange& r : committed) count += r.last - r.first;
@@ -300,7 +315,7 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
     const bool alone = !has_companions(path) && ::access(path.c_str(), W_OK) == 0;
     open_connection(impl->connection, path, alone ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY);
     exec(path, impl->db(), "PRAGMA query_only = ON", "cannot set query_only");
-    check_identity(path, impl->db(), false);
+    impl->schema_version = check_identity(path, impl->db(), false);
     // A reader checks the whole file too, so that a report never lists what
     // a damaged file happens to yield: about 2 s per million starts.
     check_integrity(path, impl->db());
@@ -324,31 +339,54 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
   exec(path, db, "PRAGMA synchronous = NORMAL; PRAGMA foreign_keys = ON", "cannot set pragmas");
   Transaction transaction(path, db);
   // Again under the write lock: another process may have created it meanwhile.
-  if (check_identity(path, db, true) == 0) {
+  // An older schema is upgraded by the first write that needs it (open_run),
+  // so that a database refused after this (another job) is left as it was.
+  impl->schema_version = check_identity(path, db, true);
+  if (impl->schema_version == 0) {
     exec(path, db, schema_sql(), "cannot create the schema");
     exec(path, db,
          "PRAGMA application_id = " + std::to_string(kDatabaseApplicationId) +
              "; PRAGMA user_version = " + std::to_string(kDatabaseSchemaVersion),
          "cannot set the schema version");
+    impl->schema_version = kDatabaseSchemaVersion;
   }
   transaction.commit();
   impl->checkpoint_on_close = true;
   return ResultsDatabase(std::move(impl));
 }
 
+void ResultsDatabase::Impl::upgrade_schema() {
+  for (int version = schema_version; version < kDatabaseSchemaVersion; ++version) {
+    exec(path, db(), schema_upgrade_sql(version), "cannot upgrade the schema");
+  }
+  exec(path, db(), "PRAGMA user_version = " + std::to_string(kDatabaseSchemaVersion), "cannot set the schema version");
+}
+
+namespace {
+
+// "slice 1/3 of 300 starts" or "every start".
+std::string describe_slice(const std::optional<StartSlice>& slice, std::uint64_t starts) {
+  if (!slice) return "every start";
+  return "slice " + to_string(*slice) + " of " + std::to_string(starts) + " starts";
+}
+
+}  // namespace
+
 RunInfo ResultsDatabase::open_run(const RunIdentity& identity, bool new_run) {
   Impl& m = impl();
   m.require_write("open_run");
   sqlite3* db = m.db();
   const std::string hash = job_hash(identity.job_text);
-  const auto seed = static_cast<std::int64_t>(identity.seed);  // seeds >= 2^63 read as negative, same bits
+  const auto seed = static_cast<std::int64_t>(identity.seed);        // seeds >= 2^63 read as negative, same bits
+  if (identity.slice) slice_range(identity.slice, identity.starts);  // throws on a slice not 0 <= I < K
   Transaction transaction(m.path, db);
+  if (m.schema_version < kDatabaseSchemaVersion) m.upgrade_schema();
   RunInfo info;
 
   Statement latest;
   latest.prepare(m.path, db,
-                 "SELECT run_id, job_path, job_hash, seed, joints, zero_threshold, report_threshold "
-                 "FROM runs ORDER BY run_id DESC LIMIT 1");
+                 "SELECT run_id, job_path, job_hash, seed, joints, zero_threshold, report_threshold, starts, "
+                 "slice_index, slice_count FROM runs ORDER BY run_id DESC LIMIT 1");
   if (!new_run && latest.step("cannot read the runs")) {
     const std::int64_t run_id = latest.integer(0);
     const std::string path = latest.text(1), held_hash = latest.text(2);
@@ -365,6 +403,30 @@ RunInfo ResultsDatabase::open_run(const RunIdentity& identity, bool new_run) {
       fail(m.path, "run " + std::to_string(run_id) + " has the same job and seed but other joints or thresholds (" +
                        std::to_string(latest.integer(4)) + ", " + format_double(latest.real(5)) + ", " +
                        format_double(latest.real(6)) + "): pass --new-run to add a new run to this database");
+    }
+    // A slice is its own run: resuming another slice (or the whole job) into
+    // it would mix two ranges of starts under one run.
+    std::optional<StartSlice> held_slice;
+    if (!latest.is_null(9)) {
+      held_slice =
+          StartSlice{static_cast<std::uint64_t>(latest.integer(8)), static_cast<std::uint64_t>(latest.integer(9))};
+    }
+    const auto held_starts = static_cast<std::uint64_t>(latest.integer(7));
+    const bool same_slice =
+        held_slice.has_value() == identity.slice.has_value() &&
+        (!held_slice || (held_slice->index == identity.slice->index && held_slice->count == identity.slice->count));
+    if (!same_slice) {
+      fail(m.path, "holds run " + std::to_string(run_id) + " of job " + path + ", " +
+                       describe_slice(held_slice, held_starts) + ", and this invocation asks for " +
+                       describe_slice(identity.slice, identity.starts) +
+                       ": give each slice a database of its own (--db), or pass --new-run");
+    }
+    // The slices of a job tile its starts only when all are taken of one target.
+    if (held_slice && held_starts != identity.starts) {
+      fail(m.path, "holds run " + std::to_string(run_id) + ", " + describe_slice(held_slice, held_starts) +
+                       ", and this invocation asks for " + std::to_string(identity.starts) +
+                       " starts: a slice keeps the starts it was begun with (run it with --starts " +
+                       std::to_string(held_starts) + ", or pass --new-run)");
     }
     latest.reset();
     Statement update;
@@ -389,6 +451,7 @@ RunInfo ResultsDatabase::open_run(const RunIdentity& identity, bool new_run) {
     }
     info.run_id = run_id;
     transaction.commit();
+    m.upgraded_schema();
     return info;
   }
   latest.reset();
@@ -396,8 +459,8 @@ RunInfo ResultsDatabase::open_run(const RunIdentity& identity, bool new_run) {
   Statement insert;
   insert.prepare(m.path, db,
                  std::string("INSERT INTO runs (job_path, job_text, job_hash, seed, starts, joints, zero_threshold, "
-                             "report_threshold, loopfarm_version, started_at, updated_at, status, starts_done) "
-                             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ") +
+                             "report_threshold, loopfarm_version, slice_index, slice_count, started_at, updated_at, "
+                             "status, starts_done) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ") +
                      kNow + ", " + kNow + ", 'stopped', 0)");
   insert.bind(1, identity.job_path);
   insert.bind(2, identity.job_text);
@@ -408,10 +471,18 @@ RunInfo ResultsDatabase::open_run(const RunIdentity& identity, bool new_run) {
   insert.bind(7, identity.zero_threshold);
   insert.bind(8, identity.report_threshold);
   insert.bind(9, LOOPFARM_VERSION);
+  if (identity.slice) {
+    insert.bind(10, static_cast<std::int64_t>(identity.slice->index));
+    insert.bind(11, static_cast<std::int64_t>(identity.slice->count));
+  } else {
+    insert.bind_null(10);
+    insert.bind_null(11);
+  }
   insert.run("cannot insert the run");
   info.run_id = sqlite3_last_insert_rowid(db);
   info.created = true;
   transaction.commit();
+  m.upgraded_schema();
   return info;
 }
 

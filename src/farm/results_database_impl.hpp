@@ -26,6 +26,10 @@ struct ResultsDatabase::Impl {
   store::Statement select_by_cell;
   store::Statement select_all;
 
+  // PRAGMA user_version of the file: older ones are read as they are, and
+  // upgraded by the first write that needs the newer schema (open_run).
+  int schema_version = kDatabaseSchemaVersion;
+
   std::int64_t session_id = 0;  // 0: no open session
   std::int64_t session_run = 0;
   bool checkpoint_on_close = false;  // a writer whose open succeeded
@@ -55,6 +59,11 @@ struct ResultsDatabase::Impl {
     if (!s.prepared()) s.prepare(path, db(), sql);
     return s.reset();
   }
+
+  // Upgrades the file to kDatabaseSchemaVersion inside the caller's
+  // transaction; schema_version follows once it commits (upgraded_schema).
+  void upgrade_schema();
+  void upgraded_schema() { schema_version = kDatabaseSchemaVersion; }
 
   std::optional<store::CanonicalEntry> find_candidate(const store::CanonicalEntry& incoming, double tolerance);
   std::int64_t place_candidate(std::int64_t run_id, const StartRecord& r, double tolerance, CommitSummary& summary);

@@ -84,9 +84,14 @@ ConnectionPragmas ResultsDatabase::connection_settings() const {
 
 std::vector<RunRow> ResultsDatabase::runs() const {
   const Impl& m = impl();
+  // A version 1 file (read as it is) has neither slices nor merges.
+  const std::string slices =
+      m.schema_version >= 2
+          ? "slice_index, slice_count, (SELECT COUNT(*) FROM merge_inputs AS i WHERE i.run_id = runs.run_id) "
+          : "NULL, NULL, 0 ";
   Query q(m.path, m.db(),
-          "SELECT run_id, job_path, seed, starts, starts_done, status, ranks, joints, started_at, updated_at "
-          "FROM runs ORDER BY run_id");
+          "SELECT run_id, job_path, seed, starts, starts_done, status, ranks, joints, started_at, updated_at, " +
+              slices + "FROM runs ORDER BY run_id");
   std::vector<RunRow> rows;
   while (q.step()) {
     RunRow r;
@@ -100,6 +105,10 @@ std::vector<RunRow> ResultsDatabase::runs() const {
     r.joints = static_cast<int>(q.integer(7));
     r.started_at = q.text(8);
     r.updated_at = q.text(9);
+    if (!q.null(10)) {
+      r.slice = StartSlice{static_cast<std::uint64_t>(q.integer(10)), static_cast<std::uint64_t>(q.integer(11))};
+    }
+    r.merged_inputs = q.integer(12);
     rows.push_back(std::move(r));
   }
   return rows;

@@ -2,6 +2,7 @@
 #include "results_schema.hpp"
 
 #include <cstdio>
+#include <stdexcept>
 
 #include "loopfarm/core/loop.hpp"
 #include "loopfarm/farm/results_database.hpp"
@@ -53,7 +54,10 @@ std::vector<std::string> candidate_columns() {
   return out;
 }
 
-std::string schema_sql() {
+namespace {
+
+// Schema version 1: the runs, their sessions, the starts and candidates, the views.
+std::string schema_sql_version_1() {
   const std::string geometry = geometry_columns("", " REAL", ",\n  ");
   const std::string start_geometry = geometry_columns("s.", "", ",\n         ");
   return "CREATE TABLE runs (\n"
@@ -171,6 +175,54 @@ std::string schema_sql() {
          "  FROM runs AS r ORDER BY r.run_id;\n";
 }
 
+// Version 1 to 2: slices and merging. A run may be one slice of its job's
+// starts (NULL: the whole job); a merged database records each input it was
+// made of (merge_inputs) and which input each session, and so each start,
+// came from. Only columns and a table are added: every version 1 row stays
+// valid as it is (a run of the whole job, sessions run in this database).
+const char* const kUpgradeToVersion2 =
+    "ALTER TABLE runs ADD COLUMN slice_index INTEGER CHECK (slice_index >= 0);\n"
+    "ALTER TABLE runs ADD COLUMN slice_count INTEGER CHECK (slice_count >= 1 AND slice_index < slice_count);\n"
+    "CREATE TABLE merge_inputs (\n"
+    "  input_id INTEGER PRIMARY KEY,\n"
+    "  run_id INTEGER NOT NULL REFERENCES runs(run_id),\n"
+    "  path TEXT NOT NULL,\n"
+    "  source_run_id INTEGER NOT NULL,\n"
+    "  job_path TEXT NOT NULL,\n"
+    "  job_hash TEXT NOT NULL,\n"
+    "  seed INTEGER NOT NULL,\n"
+    "  slice_index INTEGER,\n"
+    "  slice_count INTEGER,\n"
+    "  starts INTEGER NOT NULL,\n"
+    "  starts_done INTEGER NOT NULL,\n"
+    "  starts_kept INTEGER NOT NULL,\n"
+    "  status TEXT NOT NULL,\n"
+    "  report_threshold REAL NOT NULL,\n"
+    "  loopfarm_version TEXT NOT NULL,\n"
+    "  merged_at TEXT NOT NULL\n"
+    ");\n"
+    "ALTER TABLE sessions ADD COLUMN input_id INTEGER REFERENCES merge_inputs(input_id);\n"
+    "ALTER TABLE sessions ADD COLUMN source_session_id INTEGER;\n";
+
+}  // namespace
+
+std::string schema_upgrade_sql(int from_version) {
+  switch (from_version) {
+    case 1:
+      return kUpgradeToVersion2;
+    default:
+      throw std::logic_error("schema_upgrade_sql: no upgrade from version " + std::to_string(from_version));
+  }
+}
+
+// Version 1 and every upgrade since: a new database has the very schema (the
+// same columns in the same order) that an upgraded one has.
+std::string schema_sql() {
+  std::string sql = schema_sql_version_1();
+  for (int version = 1; version < kDatabaseSchemaVersion; ++version) sql += schema_upgrade_sql(version);
+  return sql;
+}
+
 // The schema version of a loopfarm database, or 0 for an empty database (no
 // schema objects, no application_id: a file this program may initialise when
 // `allow_empty`). Refuses everything else. Reads only.
@@ -198,7 +250,7 @@ int check_identity(const std::string& path, sqlite3* db, bool allow_empty) {
                    " is newer than this loopfarm " LOOPFARM_VERSION " knows (" +
                    std::to_string(kDatabaseSchemaVersion) + "): use a newer loopfarm");
   }
-  if (version != kDatabaseSchemaVersion) fail(path, "unknown schema version " + std::to_string(version));
+  if (version < kOldestDatabaseSchemaVersion) fail(path, "unknown schema version " + std::to_string(version));
   return static_cast<int>(version);
 }
 

@@ -22,9 +22,14 @@ std::vector<std::string> candidate_columns();
 // Every CREATE statement of schema version kDatabaseSchemaVersion.
 std::string schema_sql();
 
-// The schema version of a loopfarm database, or 0 for an empty database (no
-// schema objects, no application_id: a file this program may initialise when
-// `allow_empty`). Refuses everything else. Reads only.
+// The statements that upgrade a database of schema version `from_version` to
+// the next (the caller sets PRAGMA user_version, in the same transaction).
+std::string schema_upgrade_sql(int from_version);
+
+// The schema version of a loopfarm database (kOldestDatabaseSchemaVersion to
+// kDatabaseSchemaVersion), or 0 for an empty database (no schema objects, no
+// application_id: a file this program may initialise when `allow_empty`).
+// Refuses everything else. Reads only.
 int check_identity(const std::string& path, sqlite3* db, bool allow_empty);
 
 // PRAGMA quick_check; damage is refused with a few of its problems on one line.

@@ -96,6 +96,8 @@ class Statement {
     check(sqlite3_bind_text(stmt_, i, value.data(), static_cast<int>(value.size()), SQLITE_TRANSIENT));
   }
   void bind(int i, const char* value) { check(sqlite3_bind_text(stmt_, i, value, -1, SQLITE_TRANSIENT)); }
+  // A column of another statement's current row, as it is (type and value).
+  void bind_value(int i, const sqlite3_value* value) { check(sqlite3_bind_value(stmt_, i, value)); }
 
   // True for a row, false when done; throws on an error (the statement is
   // reset, so that it holds no lock).
@@ -121,6 +123,8 @@ class Statement {
   }
 
   std::int64_t integer(int column) const { return sqlite3_column_int64(stmt_, column); }
+  // Valid until the statement steps or is reset.
+  sqlite3_value* value(int column) const { return sqlite3_column_value(stmt_, column); }
   bool is_null(int column) const { return sqlite3_column_type(stmt_, column) == SQLITE_NULL; }
   double real(int column) const { return sqlite3_column_double(stmt_, column); }
   std::string text(int column) const {

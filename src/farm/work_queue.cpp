@@ -5,14 +5,14 @@
 
 namespace loopfarm {
 
-PendingCursor::PendingCursor(const std::vector<IndexRange>& committed, std::uint64_t starts) {
-  std::uint64_t from = 0;
+PendingCursor::PendingCursor(const std::vector<IndexRange>& committed, IndexRange range) {
+  std::uint64_t from = range.first;
   for (const IndexRange& c : committed) {
-    if (c.first >= starts) break;
+    if (c.first >= range.last) break;
     if (c.first > from) todo_.push_back({from, c.first});
     from = std::max(from, c.last);
   }
-  if (from < starts) todo_.push_back({from, starts});
+  if (from < range.last) todo_.push_back({from, range.last});
   if (!todo_.empty()) at_ = todo_.front().first;
 }
 

@@ -254,18 +254,19 @@ TEST_F(ResultsDatabaseTest, CreatesTheSchemaWithItsPragmas) {
     EXPECT_EQ(value(raw.db, "PRAGMA journal_mode"), "wal");
   }
   RawConnection raw(path, SQLITE_OPEN_READONLY);
-  EXPECT_EQ(value(raw.db, "PRAGMA user_version"), "1");
+  EXPECT_EQ(value(raw.db, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
   EXPECT_EQ(value(raw.db, "PRAGMA application_id"), std::to_string(kDatabaseApplicationId));
   EXPECT_EQ(value(raw.db, "PRAGMA journal_mode"), "wal");
   const std::string schema = "SELECT type, name FROM sqlite_schema WHERE name NOT LIKE 'sqlite_%' ORDER BY 1, 2";
   const auto objects = rows(raw.db, schema);
   std::vector<std::string> names;
   for (const auto& row : objects) names.push_back(row[0] + " " + row[1]);
-  EXPECT_EQ(names, (std::vector<std::string>{
-                       "index candidates_by_cell", "index candidates_by_joints_family", "index candidates_by_key",
-                       "index sessions_by_run", "index starts_by_candidate", "index starts_zero_by_energy",
-                       "table candidates", "table runs", "table sessions", "table starts", "view energy_histogram",
-                       "view family_counts", "view run_summary", "view status_counts", "view zero_minima"}));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{
+                "index candidates_by_cell", "index candidates_by_joints_family", "index candidates_by_key",
+                "index sessions_by_run", "index starts_by_candidate", "index starts_zero_by_energy", "table candidates",
+                "table merge_inputs", "table runs", "table sessions", "table starts", "view energy_histogram",
+                "view family_counts", "view run_summary", "view status_counts", "view zero_minima"}));
   // Reopening an existing database neither fails nor changes the schema.
   { ResultsDatabase again = ResultsDatabase::open(path, DatabaseMode::write); }
   EXPECT_EQ(rows(raw.db, schema), objects);
@@ -500,7 +501,7 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
   {
     { ResultsDatabase db = ResultsDatabase::open(newer, DatabaseMode::write); }
     RawConnection raw(newer);
-    exec(raw.db, "PRAGMA user_version = 2");
+    exec(raw.db, "PRAGMA user_version = " + std::to_string(kDatabaseSchemaVersion + 1));
   }
   const std::string damaged = file("damaged.sqlite");
   {
@@ -534,7 +535,8 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
     std::string why;
   };
   for (const Case& c : {Case{foreign, "not a loopfarm results database (PRAGMA application_id is 0x00000000"},
-                        Case{garbage, "not an SQLite database"}, Case{newer, "schema version 2 is newer"},
+                        Case{garbage, "not an SQLite database"},
+                        Case{newer, "schema version " + std::to_string(kDatabaseSchemaVersion + 1) + " is newer"},
                         Case{damaged, "damaged (PRAGMA quick_check: "}, Case{truncated, "damaged ("},
                         Case{header, "not an SQLite database"}}) {
     SCOPED_TRACE(c.path);
@@ -580,7 +582,7 @@ TEST_F(ResultsDatabaseTest, EmptyFileIsInitialised) {
   ASSERT_TRUE(fs::exists(path));
   EXPECT_NE(error_of([&] { ResultsDatabase::open(path, DatabaseMode::read); }).find("empty"), std::string::npos);
   ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
-  EXPECT_EQ(value(db, "PRAGMA user_version"), "1");
+  EXPECT_EQ(value(db, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
 }
 
 // The writer checkpoints before it closes, so that the file alone holds every

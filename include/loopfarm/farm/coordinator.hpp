@@ -55,16 +55,17 @@ StartRecord run_start_record(const Job& job, std::uint64_t index);
 struct ResumePlan {
   std::int64_t run_id = 0;
   PendingCursor pending;
-  long starts = 0;     // the run's target
-  long committed = 0;  // by earlier sessions
+  long starts = 0;     // the run's target: its slice's starts for a slice
+  long committed = 0;  // of them, by earlier sessions
   long zeros = 0;
   long candidates = 0;
 };
 
-// Decides the run (ResultsDatabase::open_run: a new run, or the same job and
-// seed resumed; another job throws DatabaseError) and opens its session with
-// `ranks`.
-ResumePlan plan_run(ResultsDatabase& db, const Job& job, bool new_run, int ranks);
+// Decides the run (ResultsDatabase::open_run: a new run, or the same job, seed
+// and slice resumed; another job or slice throws DatabaseError) and opens its
+// session with `ranks`. With `slice`, only that slice of the job's starts.
+ResumePlan plan_run(ResultsDatabase& db, const Job& job, bool new_run, int ranks,
+                    const std::optional<StartSlice>& slice = {});
 
 struct CoordinatorSummary {
   long total = 0;       // the run's target

@@ -18,6 +18,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <optional>
 
 #include "loopfarm/farm/coordinator.hpp"
 #include "loopfarm/farm/progress.hpp"
@@ -49,7 +50,8 @@ class MpiSession {
 struct FarmOptions {
   int chunk = 16;  // start indices per request
   ProgressStyle progress = ProgressStyle::log;
-  bool new_run = false;  // add a new run to a database that holds another job
+  bool new_run = false;             // add a new run to a database that holds another job
+  std::optional<StartSlice> slice;  // run only this slice of the job's starts (a run of its own)
 };
 
 enum class FarmStatus {

@@ -47,8 +47,11 @@ class DatabaseError : public std::runtime_error {
 
 // PRAGMA application_id of a loopfarm database: "LOOP" in ASCII.
 inline constexpr std::int32_t kDatabaseApplicationId = 0x4C4F4F50;
-// PRAGMA user_version: the schema version this build writes and reads.
-inline constexpr int kDatabaseSchemaVersion = 1;
+// PRAGMA user_version: the schema version this build writes. It reads every
+// version from kOldestDatabaseSchemaVersion on, and upgrades an older file to
+// this one when it opens it for writing (results_schema.cpp says what changed).
+inline constexpr int kDatabaseSchemaVersion = 2;
+inline constexpr int kOldestDatabaseSchemaVersion = 1;
 // busy_timeout: how long a connection waits for another one's lock.
 inline constexpr int kDatabaseBusyTimeoutMs = 10000;
 
@@ -60,8 +63,28 @@ enum class DatabaseMode {
 enum class RunStatus { running, stopped, complete, failed };
 const char* to_string(RunStatus status);
 
-// What identifies a run: its job (by the hash of the text) and seed. The other
-// fields are stored with it; `starts` is the target, which a resume may change.
+// Half-open range [first, last) of start indices.
+struct IndexRange {
+  std::uint64_t first = 0;
+  std::uint64_t last = 0;
+};
+
+// Slice `index` of `count` (0 <= index < count) of a job's start indices: the
+// count contiguous ranges of [0, starts) whose sizes differ by at most one,
+// slice I being [floor(I * starts / count), floor((I + 1) * starts / count)).
+struct StartSlice {
+  std::uint64_t index = 0;
+  std::uint64_t count = 1;
+};
+// The start indices of `slice` of [0, starts); of the whole job without one.
+IndexRange slice_range(const std::optional<StartSlice>& slice, std::uint64_t starts);
+// "I/K", as `loopfarm run --slice` takes it.
+std::string to_string(const StartSlice& slice);
+
+// What identifies a run: its job (by the hash of the text), seed and slice.
+// The other fields are stored with it; `starts` is the target, which a resume
+// may change, except for a slice (the slices of a job tile its starts only
+// when each is taken of the same target).
 struct RunIdentity {
   std::string job_path;
   std::string job_text;
@@ -70,12 +93,7 @@ struct RunIdentity {
   int joints = 0;
   double zero_threshold = 0.0;
   double report_threshold = 0.0;
-};
-
-// Half-open range [first, last) of start indices.
-struct IndexRange {
-  std::uint64_t first = 0;
-  std::uint64_t last = 0;
+  std::optional<StartSlice> slice;  // none: every start of the job
 };
 
 struct RunInfo {
@@ -112,6 +130,8 @@ struct RunRow {
   std::int64_t ranks = 0;        // of the last session
   int joints = 0;
   std::string started_at, updated_at;  // ISO 8601 UTC
+  std::optional<StartSlice> slice;     // none: every start of the job
+  std::int64_t merged_inputs = 0;      // databases `loopfarm merge` made it of (0: run here)
 };
 
 // Counts over the starts of one run, or of every run.
@@ -180,6 +200,17 @@ struct ConnectionPragmas {
 // FNV-1a, 64 bit, of the bytes of `text`, as 16 lowercase hex digits: runs.job_hash.
 std::string job_hash(std::string_view text);
 
+// What ResultsDatabase::merge did.
+struct MergeSummary {
+  std::int64_t inputs = 0;               // databases read
+  std::uint64_t starts = 0;              // start rows written (each start index once)
+  std::uint64_t overlapping_starts = 0;  // rows present in more than one input (equal; the first kept)
+  std::uint64_t target = 0;              // the merged run's starts target: the largest of the inputs'
+  std::int64_t candidates = 0;           // distinct linkages after de-duplication
+  std::int64_t verified = 0;             // verified starts: the candidates' hits together
+  bool complete = false;                 // every index of [0, target) is there
+};
+
 class ResultsDatabase {
  public:
   // Throws DatabaseError when the file cannot be opened or is refused: not
@@ -230,6 +261,20 @@ class ResultsDatabase {
   EnergyHistogram energy_histogram(std::optional<std::int64_t> run_id = {}) const;
   std::int64_t candidate_count() const;
   std::vector<CandidateRow> candidates(const CandidateFilter& filter) const;
+
+  // Merges the databases `inputs`, each holding one run of the same job (its
+  // text apart from the [output] table) and seed, into a new database `output`
+  // holding one run of every start they hold (the whole job: no slice), as if
+  // one uninterrupted run had computed them: every start index once (rows of
+  // the same index in several inputs must be equal, seconds and sessions
+  // apart), the verified starts de-duplicated again in start-index order, and
+  // where each row came from in merge_inputs and sessions (docs/guide/database.md,
+  // "Merging"). The output is written to a temporary file beside it and
+  // renamed at the end: a refusal (DatabaseError, refused: an input not a
+  // loopfarm database, of another job or seed, rows that differ, `output`
+  // already there) or a failure leaves no file behind and the inputs as they were.
+  static MergeSummary merge(const std::string& output, const std::vector<std::string>& inputs,
+                            double dedup_tolerance = 1e-5);
 
   // One read transaction: every query while it lives sees the same committed
   // state, even while a writer commits. Ends when it goes.

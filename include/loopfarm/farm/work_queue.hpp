@@ -20,13 +20,15 @@
 
 namespace loopfarm {
 
-// The start indices still to run, in increasing order: [0, starts) less the
-// committed ranges, walked by a cursor (kept as ranges: a run may have 1e8
-// starts).
+// The start indices still to run, in increasing order: [0, starts), or the
+// range of a slice, less the committed ranges, walked by a cursor (kept as
+// ranges: a run may have 1e8 starts).
 class PendingCursor {
  public:
   PendingCursor() = default;
-  PendingCursor(const std::vector<IndexRange>& committed, std::uint64_t starts);
+  PendingCursor(const std::vector<IndexRange>& committed, std::uint64_t starts)
+      : PendingCursor(committed, IndexRange{0, starts}) {}
+  PendingCursor(const std::vector<IndexRange>& committed, IndexRange range);
   bool done() const { return range_ >= todo_.size(); }
   std::uint64_t peek() const { return at_; }
   void advance();

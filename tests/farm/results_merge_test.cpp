@@ -1,0 +1,540 @@
+// Slices and merging in the results database: the slice arithmetic, a slice
+// as part of a run's identity, the upgrade of a version 1 database (a file
+// written before slices existed, tests/farm/fixtures/schema-v1.sqlite), and
+// ResultsDatabase::merge: three slices merged equal one run of the same
+// starts (candidates de-duplicated across the slices, row for row), overlaps,
+// provenance, and every refusal leaving no file behind. Records are built by
+// hand; no search runs.
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "loopfarm/farm/results_database.hpp"
+
+#ifndef LOOPFARM_SOURCE_DIR
+#error "LOOPFARM_SOURCE_DIR is defined by tests/CMakeLists.txt"
+#endif
+
+namespace loopfarm {
+namespace {
+
+namespace fs = std::filesystem;
+using Rows = std::vector<std::vector<std::string>>;
+
+class MergeTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    static int counter = 0;
+    dir_ = fs::temp_directory_path() /
+           ("loopfarm_results_merge_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string file(const std::string& name) const { return (dir_ / name).string(); }
+  // Every file in the test's directory.
+  std::vector<std::string> listing() const {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(dir_)) names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+  fs::path dir_;
+};
+
+// Every row of a query on the file at `path`, values as text (reals %.17g).
+// Read-write with query_only, as loopfarm report reads: the close removes the
+// -wal and -shm files the connection made, so that the directory's listing
+// shows only what the code under test left.
+Rows rows(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  Rows out;
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK ||
+      sqlite3_exec(db, "PRAGMA query_only = ON", nullptr, nullptr, nullptr) != SQLITE_OK) {
+    ADD_FAILURE() << path;
+    sqlite3_close_v2(db);
+    return out;
+  }
+  sqlite3_stmt* s = nullptr;
+  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s, nullptr) != SQLITE_OK) {
+    ADD_FAILURE() << sql << ": " << sqlite3_errmsg(db);
+  } else {
+    while (sqlite3_step(s) == SQLITE_ROW) {
+      std::vector<std::string> row;
+      for (int c = 0; c < sqlite3_column_count(s); ++c) {
+        char buffer[40];
+        switch (sqlite3_column_type(s, c)) {
+          case SQLITE_NULL:
+            row.push_back("NULL");
+            break;
+          case SQLITE_INTEGER:
+            row.push_back(std::to_string(sqlite3_column_int64(s, c)));
+            break;
+          case SQLITE_FLOAT:
+            std::snprintf(buffer, sizeof buffer, "%.17g", sqlite3_column_double(s, c));
+            row.push_back(buffer);
+            break;
+          default:
+            row.push_back(reinterpret_cast<const char*>(sqlite3_column_text(s, c)));
+        }
+      }
+      out.push_back(row);
+    }
+  }
+  sqlite3_finalize(s);
+  sqlite3_close_v2(db);
+  return out;
+}
+
+std::string value(const std::string& path, const std::string& sql) {
+  const Rows r = rows(path, sql);
+  return r.empty() || r[0].empty() ? "no row" : r[0][0];
+}
+
+void exec(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
+  char* message = nullptr;
+  EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message), SQLITE_OK) << (message ? message : "");
+  sqlite3_free(message);
+  sqlite3_close_v2(db);
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const DatabaseError& e) {
+    EXPECT_EQ(e.cause(), DatabaseError::Cause::refused) << e.what();
+    return e.what();
+  }
+  return "no DatabaseError";
+}
+
+// What one run of the starts writes, by content: the starts but for their
+// wall time and session, and the whole candidates table.
+Rows starts_content(const std::string& path) {
+  return rows(
+      path,
+      "SELECT start_index, status, E_mean, E_max, objective, evaluations, zero, verified, candidate_id, a1, a4, "
+      "alpha2_deg, d3 FROM starts ORDER BY start_index");
+}
+Rows candidates_content(const std::string& path) {
+  return rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
+}
+
+// --- hand-built starts of one job ---------------------------------------------
+
+LoopGeometry geometry_deg(std::vector<double> a, std::vector<double> alpha_deg, std::vector<double> d) {
+  return LoopGeometry::from_degrees(a, alpha_deg, d);
+}
+
+constexpr std::uint64_t kStarts = 30;
+const char* const kJob = "[search]\nstarts = 30\nseed = 4\n\n[output]\ndatabase = \"a.sqlite\"\n";
+
+RunIdentity identity(const std::string& text = kJob, std::uint64_t seed = 4,
+                     std::optional<StartSlice> slice = std::nullopt) {
+  RunIdentity id;
+  id.job_path = "jobs/test.toml";
+  id.job_text = text;
+  id.seed = seed;
+  id.starts = kStarts;
+  id.joints = 4;
+  id.zero_threshold = 1e-12;
+  id.report_threshold = 1e-6;
+  id.slice = slice;
+  return id;
+}
+
+// Start i: three linkages A, B (every slice) and C (from start 21 on), found
+// by verified starts whose canonical geometries differ by less than the
+// de-duplication tolerance and whose keys differ (so that the numeric test
+// decides), with residuals that say which start represents a candidate;
+// between them starts that are no zero, or a zero not verified.
+StartRecord start(std::uint64_t i) {
+  StartRecord r;
+  r.index = i;
+  r.status = "ftol_reached";
+  r.E_mean = 1e-3 * static_cast<double>(i + 1);
+  r.E_max = 2.0 * r.E_mean;
+  r.objective = r.E_mean;
+  r.evaluations = 10 + static_cast<int>(i);
+  r.seconds = 0.25;
+  r.final_geometry = geometry_deg({1, 2, 3, 2.5}, {20, 70, 40, 110}, {0.1, -0.3, 0.2, 0});
+  r.final_angles = JointVector::Zero(4);
+  if (i % 5 == 3) return r;
+  r.E_mean = r.E_max = r.objective = 1e-20 * static_cast<double>(i + 1);
+  r.zero = true;
+  if (i % 5 == 4) return r;
+  r.status = "stopval_reached";
+  r.verified = true;
+  const char linkage = i >= 21 && i % 3 == 0 ? 'C' : (i % 2 == 0 ? 'A' : 'B');
+  const double base = linkage == 'A' ? 30.0 : (linkage == 'B' ? 50.0 : 70.0);
+  const double jitter = 1e-7 * static_cast<double>(i % 3);  // well inside the 1e-5 tolerance
+  r.candidate.canonical_geometry = geometry_deg({0.6 + jitter, 1.2, 0.6, 1.2}, {base, 90, base, 90}, {0, 0, 0, 0});
+  r.final_geometry = r.candidate.canonical_geometry;
+  r.candidate.canonical_key = std::string("key-") + linkage + "-" + std::to_string(i % 3);
+  r.candidate.family = "bennett";
+  r.candidate.setup = "asymmetric";
+  r.candidate.detail = "start " + std::to_string(i);
+  r.candidate.family_residual = 1e-15 * static_cast<double>(i + 1);
+  r.candidate.bennett_residual = r.candidate.family_residual;
+  r.candidate.planar_residual = 0.5;
+  r.candidate.spherical_residual = 0.75;
+  r.candidate.trivial_residual = std::numeric_limits<double>::infinity();
+  r.candidate.rigid_residual = 1e-13;
+  r.candidate.full_turn = true;
+  r.candidate.range_hi_deg = 360.0;
+  r.candidate.local_dimension = 3;
+  r.candidate.free_parameters = 12;
+  r.candidate.singular_values = {2.0, 0.5, 1e-13};
+  return r;
+}
+
+// A database holding one run of `id`: the starts of its slice (or of [first,
+// last) when given), committed in index order four at a time by one session.
+void write_run(const std::string& path, const RunIdentity& id, std::optional<IndexRange> only = std::nullopt) {
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  const std::int64_t run = db.open_run(id).run_id;
+  db.begin_session(run, 2);
+  const IndexRange range = only ? *only : slice_range(id.slice, id.starts);
+  std::vector<StartRecord> batch;
+  for (std::uint64_t i = range.first; i < range.last; ++i) {
+    batch.push_back(start(i));
+    if (batch.size() == 4 || i + 1 == range.last) {
+      db.commit(run, batch);
+      batch.clear();
+    }
+  }
+  db.end_session(RunStatus::complete);
+}
+
+StartSlice slice(std::uint64_t index, std::uint64_t count) { return StartSlice{index, count}; }
+
+// --- slices --------------------------------------------------------------------
+
+TEST(SliceRange, TilesTheStartsInNearlyEqualContiguousSlices) {
+  for (std::uint64_t starts : {0ull, 1ull, 7ull, 30ull, 100ull, 1001ull}) {
+    for (std::uint64_t count : {1ull, 2ull, 3ull, 7ull, 16ull}) {
+      std::uint64_t next = 0, smallest = starts, largest = 0;
+      for (std::uint64_t i = 0; i < count; ++i) {
+        const IndexRange r = slice_range(slice(i, count), starts);
+        EXPECT_EQ(r.first, next) << starts << " " << i << "/" << count;
+        EXPECT_EQ(r.first, i * starts / count);
+        next = r.last;
+        smallest = std::min(smallest, r.last - r.first);
+        largest = std::max(largest, r.last - r.first);
+      }
+      EXPECT_EQ(next, starts);
+      EXPECT_LE(largest - smallest, 1u);
+    }
+  }
+  const IndexRange whole = slice_range(std::nullopt, 30);
+  EXPECT_EQ(whole.first, 0u);
+  EXPECT_EQ(whole.last, 30u);
+  // index * starts beyond 64 bits.
+  const std::uint64_t huge = 1ull << 53;
+  EXPECT_EQ(slice_range(slice(999, 1000), huge).last, huge);
+  EXPECT_EQ(slice_range(slice(1, 3), huge).first, huge / 3);
+  EXPECT_THROW(slice_range(slice(3, 3), 30), std::invalid_argument);
+  EXPECT_THROW(slice_range(slice(0, 0), 30), std::invalid_argument);
+  EXPECT_EQ(to_string(slice(2, 8)), "2/8");
+}
+
+TEST_F(MergeTest, TheSliceIsPartOfTheRunsIdentity) {
+  const std::string path = file("slice1.sqlite");
+  write_run(path, identity(kJob, 4, slice(1, 3)));
+  EXPECT_EQ(rows(path, "SELECT slice_index, slice_count, starts_done FROM runs"), (Rows{{"1", "3", "10"}}));
+  const std::string before = file_bytes(path);
+  struct Case {
+    RunIdentity id;
+    std::string why;
+  };
+  RunIdentity more = identity(kJob, 4, slice(1, 3));
+  more.starts = 60;
+  for (const Case& c : {Case{identity(kJob, 4, slice(2, 3)), "slice 1/3 of 30 starts"},
+                        Case{identity(kJob, 4, slice(1, 4)), "slice 1/4"}, Case{identity(), "every start"},
+                        Case{more, "--starts 30"}}) {
+    SCOPED_TRACE(c.why);
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::string text = error_of([&] { db.open_run(c.id); });
+    EXPECT_NE(text.find(path), std::string::npos) << text;
+    EXPECT_NE(text.find(c.why), std::string::npos) << text;
+    EXPECT_NE(text.find("--new-run"), std::string::npos) << text;
+  }
+  EXPECT_EQ(file_bytes(path), before);
+  // The same slice resumes; --new-run adds a run of another slice.
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  const RunInfo same = db.open_run(identity(kJob, 4, slice(1, 3)));
+  EXPECT_FALSE(same.created);
+  EXPECT_EQ(same.committed_count(), 10u);
+  EXPECT_TRUE(db.open_run(identity(kJob, 4, slice(2, 3)), true).created);
+  const std::vector<RunRow> runs = db.runs();
+  ASSERT_EQ(runs.size(), 2u);
+  ASSERT_TRUE(runs[1].slice.has_value());
+  EXPECT_EQ(to_string(*runs[1].slice), "2/3");
+}
+
+// --- a database written before slices: schema version 1 -------------------------
+
+const std::string kFixture = std::string(LOOPFARM_SOURCE_DIR) + "/tests/farm/fixtures/schema-v1.sqlite";
+
+TEST_F(MergeTest, AVersion1DatabaseIsReadAsItIsAndUpgradedByItsNextRun) {
+  const std::string path = file("v1.sqlite");
+  fs::copy_file(kFixture, path);
+  ASSERT_EQ(value(path, "PRAGMA user_version"), "1");
+  const std::string before = file_bytes(path);
+  const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
+  const Rows candidates = candidates_content(path);
+  ASSERT_EQ(starts.size(), 12u);
+  {
+    // Read: as it is, nothing written.
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
+    const std::vector<RunRow> runs = db.runs();
+    ASSERT_EQ(runs.size(), 1u);
+    EXPECT_FALSE(runs[0].slice.has_value());
+    EXPECT_EQ(runs[0].starts_done, 12);
+  }
+  EXPECT_EQ(file_bytes(path), before);
+  {
+    // Opening for writing and then refusing another job leaves it version 1.
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    RunIdentity other = identity("[search]\nseed = 99\n", 99);
+    EXPECT_NE(error_of([&] { db.open_run(other); }).find("--new-run"), std::string::npos);
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), "1");
+  // Its own job resumes it: upgraded in the same transaction, rows kept.
+  RunIdentity own;
+  own.job_path = value(path, "SELECT job_path FROM runs");
+  own.job_text = value(path, "SELECT job_text FROM runs");
+  own.seed = 7;
+  own.starts = 12;
+  own.joints = 4;
+  own.zero_threshold = 1e-12;
+  own.report_threshold = 1e-3;
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const RunInfo run = db.open_run(own);
+    EXPECT_FALSE(run.created);
+    EXPECT_EQ(run.committed_count(), 12u);
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
+  EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
+  EXPECT_EQ(rows(path, "SELECT slice_index, slice_count FROM runs"), (Rows{{"NULL", "NULL"}}));
+  // The upgraded schema is the very schema of a new database.
+  const std::string fresh = file("fresh.sqlite");
+  { ResultsDatabase db = ResultsDatabase::open(fresh, DatabaseMode::write); }
+  const std::string schema = "SELECT type, name, sql FROM sqlite_schema ORDER BY type, name";
+  EXPECT_EQ(rows(path, schema), rows(fresh, schema));
+  EXPECT_EQ(candidates_content(path), candidates);
+}
+
+// --- merge ---------------------------------------------------------------------
+
+TEST_F(MergeTest, ThreeSlicesMergedEqualOneRunOfTheSameStarts) {
+  const std::string whole = file("whole.sqlite");
+  write_run(whole, identity());
+  std::vector<std::string> slices;
+  for (std::uint64_t i = 0; i < 3; ++i) {
+    slices.push_back(file("slice" + std::to_string(i) + ".sqlite"));
+    // Each slice's job names its own node-local database: [output] is not the job's identity.
+    const std::string text =
+        "[search]\nstarts = 30\nseed = 4\n\n[output]\ndatabase = \"/tmp/node" + std::to_string(i) + ".sqlite\"\n";
+    write_run(slices.back(), identity(text, 4, slice(i, 3)));
+  }
+  // The candidates straddle the slices: each slice holds A and B.
+  for (const std::string& s : slices) {
+    EXPECT_GE(std::stoi(value(s, "SELECT COUNT(*) FROM candidates")), 2) << s;
+  }
+  std::vector<std::string> befores;
+  for (const std::string& s : slices) befores.push_back(file_bytes(s));
+
+  const std::string merged = file("merged.sqlite");
+  const MergeSummary summary = ResultsDatabase::merge(merged, slices);
+  EXPECT_EQ(summary.inputs, 3);
+  EXPECT_EQ(summary.starts, kStarts);
+  EXPECT_EQ(summary.overlapping_starts, 0u);
+  EXPECT_EQ(summary.target, kStarts);
+  EXPECT_TRUE(summary.complete);
+  EXPECT_EQ(summary.candidates, 3);
+  EXPECT_EQ(summary.verified, std::stoll(value(whole, "SELECT SUM(hits) FROM candidates")));
+
+  const Rows candidates = candidates_content(whole);
+  ASSERT_EQ(candidates.size(), 3u);
+  EXPECT_EQ(candidates_content(merged), candidates);
+  EXPECT_EQ(starts_content(merged), starts_content(whole));
+  EXPECT_EQ(rows(merged, "SELECT job_text, seed, starts, starts_done, status, slice_index, joints FROM runs"),
+            (Rows{{value(slices[0], "SELECT job_text FROM runs"), "4", "30", "30", "complete", "NULL", "4"}}));
+  for (size_t i = 0; i < slices.size(); ++i) EXPECT_EQ(file_bytes(slices[i]), befores[i]) << slices[i];
+  EXPECT_EQ(listing(), (std::vector<std::string>{"merged.sqlite", "slice0.sqlite", "slice1.sqlite", "slice2.sqlite",
+                                                 "whole.sqlite"}));
+
+  // Provenance: each input a row, each start the session and input it came from.
+  EXPECT_EQ(rows(merged,
+                 "SELECT input_id, path, source_run_id, slice_index, slice_count, starts, starts_done, starts_kept, "
+                 "status FROM merge_inputs ORDER BY input_id"),
+            (Rows{{"1", slices[0], "1", "0", "3", "30", "10", "10", "complete"},
+                  {"2", slices[1], "1", "1", "3", "30", "10", "10", "complete"},
+                  {"3", slices[2], "1", "2", "3", "30", "10", "10", "complete"}}));
+  EXPECT_EQ(rows(merged,
+                 "SELECT i.slice_index, MIN(s.start_index), MAX(s.start_index), COUNT(*) FROM starts AS s "
+                 "JOIN sessions AS e ON e.session_id = s.session_id JOIN merge_inputs AS i ON i.input_id = e.input_id "
+                 "GROUP BY i.input_id ORDER BY i.input_id"),
+            (Rows{{"0", "0", "9", "10"}, {"1", "10", "19", "10"}, {"2", "20", "29", "10"}}));
+  EXPECT_EQ(
+      rows(merged, "SELECT session_id, input_id, source_session_id, ranks, status FROM sessions"),
+      (Rows{{"1", "1", "1", "2", "complete"}, {"2", "2", "1", "2", "complete"}, {"3", "3", "1", "2", "complete"}}));
+
+  // The order of the inputs does not matter; neither does merging in steps.
+  const std::string reordered = file("reordered.sqlite");
+  ResultsDatabase::merge(reordered, {slices[2], slices[0], slices[1]});
+  EXPECT_EQ(candidates_content(reordered), candidates);
+  EXPECT_EQ(starts_content(reordered), starts_content(whole));
+  const std::string part = file("part.sqlite"), stepwise = file("stepwise.sqlite");
+  ResultsDatabase::merge(part, {slices[0], slices[1]});
+  EXPECT_EQ(value(part, "SELECT status FROM runs"), "stopped");  // 20 of 30 starts: resumable
+  ResultsDatabase::merge(stepwise, {part, slices[2]});
+  EXPECT_EQ(candidates_content(stepwise), candidates);
+  EXPECT_EQ(starts_content(stepwise), starts_content(whole));
+  // The earlier merge's inputs are kept, and the sessions still name them.
+  EXPECT_EQ(rows(stepwise, "SELECT input_id, path, slice_index FROM merge_inputs ORDER BY input_id"),
+            (Rows{{"1", slices[0], "0"}, {"2", slices[1], "1"}, {"3", part, "NULL"}, {"4", slices[2], "2"}}));
+  EXPECT_EQ(rows(stepwise, "SELECT input_id, source_session_id FROM sessions ORDER BY session_id"),
+            (Rows{{"1", "1"}, {"2", "1"}, {"4", "1"}}));
+}
+
+TEST_F(MergeTest, OverlappingEqualStartsAreKeptOnceAndAResumeFillsTheGaps) {
+  const std::string whole = file("whole.sqlite"), first = file("first.sqlite"), middle = file("middle.sqlite");
+  write_run(whole, identity());
+  write_run(first, identity(), IndexRange{0, 12});  // a run stopped after 12 starts
+  write_run(middle, identity(kJob, 4, slice(1, 3)));
+  const std::string merged = file("merged.sqlite");
+  const MergeSummary summary = ResultsDatabase::merge(merged, {first, middle});
+  EXPECT_EQ(summary.starts, 20u);
+  EXPECT_EQ(summary.overlapping_starts, 2u);  // starts 10 and 11
+  EXPECT_FALSE(summary.complete);
+  EXPECT_EQ(rows(merged, "SELECT starts_kept FROM merge_inputs ORDER BY input_id"), (Rows{{"12"}, {"8"}}));
+  EXPECT_EQ(value(merged, "SELECT status FROM runs"), "stopped");
+  // The merged run is a run of the whole job: the same job resumes it.
+  {
+    ResultsDatabase db = ResultsDatabase::open(merged, DatabaseMode::write);
+    const RunInfo run = db.open_run(identity());
+    EXPECT_FALSE(run.created);
+    EXPECT_EQ(run.committed_count(), 20u);
+    std::vector<StartRecord> rest;
+    for (std::uint64_t i = 20; i < kStarts; ++i) rest.push_back(start(i));
+    db.commit(run.run_id, rest);
+  }
+  EXPECT_EQ(candidates_content(merged), candidates_content(whole));
+  EXPECT_EQ(starts_content(merged), starts_content(whole));
+}
+
+TEST_F(MergeTest, TheSmallestReportThresholdDecidesWhichStartsKeepTheirGeometry) {
+  const std::string low = file("low.sqlite"), high = file("high.sqlite");
+  RunIdentity strict = identity(kJob, 4, slice(0, 2));
+  strict.report_threshold = 1e-12;  // only the zeros keep their geometry
+  write_run(low, strict);
+  RunIdentity loose = identity(kJob, 4, slice(1, 2));
+  loose.report_threshold = 1.0;  // every start keeps its geometry
+  write_run(high, loose);
+  ASSERT_EQ(value(high, "SELECT COUNT(*) FROM starts WHERE a1 IS NULL"), "0");
+  const std::string merged = file("merged.sqlite");
+  ResultsDatabase::merge(merged, {high, low});
+  EXPECT_EQ(value(merged, "SELECT report_threshold FROM runs"), "9.9999999999999998e-13");
+  EXPECT_EQ(value(merged, "SELECT COUNT(*) FROM starts WHERE a1 IS NOT NULL AND E_mean > 1e-12"), "0");
+  EXPECT_EQ(value(merged, "SELECT COUNT(*) FROM starts WHERE a1 IS NULL AND zero = 1"), "0");
+}
+
+TEST_F(MergeTest, RefusesMismatchedInputsAndWritesNothing) {
+  const std::string a = file("a.sqlite"), b = file("b.sqlite");
+  write_run(a, identity(kJob, 4, slice(0, 2)));
+  write_run(b, identity(kJob, 4, slice(1, 2)));
+  const std::string other_job = file("other-job.sqlite"), other_seed = file("other-seed.sqlite");
+  write_run(other_job, identity("[search]\nstarts = 30\nseed = 4\nzero_threshold = 1e-10\n", 4, slice(1, 2)));
+  write_run(other_seed, identity(kJob, 5, slice(1, 2)));   // the same text, another --seed
+  const std::string differing = file("differing.sqlite");  // slice 1 with one start's energy changed
+  fs::copy_file(b, differing);
+  exec(differing, "UPDATE starts SET E_max = 1 WHERE start_index = 17");
+  const std::string two_runs = file("two-runs.sqlite");
+  write_run(two_runs, identity(kJob, 4, slice(1, 2)));
+  {
+    ResultsDatabase db = ResultsDatabase::open(two_runs, DatabaseMode::write);
+    db.open_run(identity(kJob, 4, slice(0, 2)), true);
+  }
+  const std::string empty = file("empty.sqlite");
+  { ResultsDatabase db = ResultsDatabase::open(empty, DatabaseMode::write); }
+  const std::string existing = file("existing.sqlite");
+  fs::copy_file(a, existing);
+  const std::string not_sqlite = file("notes.sqlite");
+  { std::ofstream(not_sqlite) << "not a database\n"; }
+
+  struct Case {
+    std::string output;
+    std::vector<std::string> inputs;
+    std::string culprit;
+    std::vector<std::string> why;
+  };
+  const std::string out = file("out.sqlite");
+  for (const Case& c : {
+           Case{out, {a, other_job}, other_job, {"differs from that of " + a, "outside [output]", "zero_threshold"}},
+           Case{out, {a, other_seed}, other_seed, {"seeds differ", "seed 5", "seed 4"}},
+           Case{out, {b, differing}, differing, {"start 17 differs", "E_max 1 here", b}},
+           Case{out, {a, two_runs}, two_runs, {"holds 2 runs"}},
+           Case{out, {empty, a}, empty, {"holds no run"}},
+           Case{out, {a, a}, a, {"given twice"}},
+           Case{out, {a, not_sqlite}, not_sqlite, {"not an SQLite database"}},
+           Case{out, {a, file("missing.sqlite")}, file("missing.sqlite"), {"no such file"}},
+           Case{existing, {a, b}, existing, {"already exists"}},
+           Case{file("no-such-dir/out.sqlite"), {a, b}, file("no-such-dir/out.sqlite"), {"cannot create"}},
+       }) {
+    SCOPED_TRACE(c.culprit + " " + c.why.front());
+    const std::vector<std::string> files = listing();
+    std::vector<std::string> bytes;
+    for (const std::string& name : files) bytes.push_back(file_bytes(file(name)));
+    const std::string text = error_of([&] { ResultsDatabase::merge(c.output, c.inputs); });
+    EXPECT_NE(text.find(c.culprit), std::string::npos) << text;
+    for (const std::string& why : c.why) EXPECT_NE(text.find(why), std::string::npos) << text;
+    EXPECT_EQ(text.find('\n'), std::string::npos) << text;
+    // Nothing written: no output, no temporary file, every file as it was.
+    EXPECT_EQ(listing(), files);
+    for (size_t i = 0; i < files.size(); ++i) EXPECT_EQ(file_bytes(file(files[i])), bytes[i]) << files[i];
+  }
+  // The same pair with nothing wrong merges.
+  EXPECT_EQ(ResultsDatabase::merge(out, {a, b}).starts, kStarts);
+}
+
+TEST_F(MergeTest, AVersion1DatabaseMergesAsItIs) {
+  const std::string v1 = file("v1.sqlite");
+  fs::copy_file(kFixture, v1);
+  const std::string before = file_bytes(v1);
+  const std::string merged = file("merged.sqlite");
+  const MergeSummary summary = ResultsDatabase::merge(merged, {v1});
+  EXPECT_EQ(summary.starts, 12u);
+  EXPECT_TRUE(summary.complete);
+  EXPECT_EQ(file_bytes(v1), before);
+  EXPECT_EQ(candidates_content(merged), candidates_content(v1));
+  EXPECT_EQ(starts_content(merged), starts_content(v1));
+  EXPECT_EQ(value(merged, "SELECT COUNT(*) FROM sessions WHERE input_id = 1"),
+            value(v1, "SELECT COUNT(*) FROM sessions"));
+}
+
+}  // namespace
+}  // namespace loopfarm
