@@ -295,6 +295,16 @@ TEST(WorkQueue, PendingCursorWalksTheGapsBetweenCommittedRanges) {
   EXPECT_EQ(PendingCursor({}, 3).count(), 3u);
 }
 
+TEST(WorkQueue, PendingCursorOfASliceWalksOnlyItsRange) {
+  // Slice [10, 20) of a run whose starts 12, 13 and 25 are committed.
+  PendingCursor cursor({{12, 14}, {25, 26}}, IndexRange{10, 20});
+  std::vector<std::uint64_t> seen;
+  for (; !cursor.done(); cursor.advance()) seen.push_back(cursor.peek());
+  EXPECT_EQ(seen, (std::vector<std::uint64_t>{10, 11, 14, 15, 16, 17, 18, 19}));
+  EXPECT_TRUE(PendingCursor({{0, 40}}, IndexRange{10, 20}).done());
+  EXPECT_TRUE(PendingCursor({}, IndexRange{7, 7}).done());  // an empty slice
+}
+
 TEST(WorkQueue, OrderedCommitsHoldBackWhatArrivesEarly) {
   OrderedCommits commits(PendingCursor({{2, 3}}, 6));  // pending 0, 1, 3, 4, 5
   commits.add(fake_record(3));
