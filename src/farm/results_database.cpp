@@ -115,75 +115,136 @@ std::uint64_t RunInfo::committed_prefix() const {
   return !committed.empty() && committed.front().first == 0 ? committed.front().last : 0;
 }
 
+// Brings the in-memory index of candidates up to the table: loads it on first
+// use, and again when another connection has committed since (PRAGMA
+// data_version) or the table holds an id it has not seen (rows written on
+// this connection other than through place_candidate). Twice a commit, not
+// per start.
+void ResultsDatabase::Impl::refresh_candidate_index() {
+  const std::int64_t version = prepared(data_version, "PRAGMA data_version").step("cannot read PRAGMA data_version")
+                                   ? data_version.integer(0)
+                                   : 0;
+  data_version.reset();
+  Statement& highest = prepared(highest_candidate, "SELECT MAX(candidate_id) FROM candidates");
+  const std::int64_t highest_id = highest.step("cannot read the candidates") ? highest.integer(0) : 0;
+  highest.reset();
+  if (candidate_index.loaded() && candidate_index.data_version() == version &&
+      highest_id <= candidate_index.highest_id()) {
+    return;
+  }
+  candidate_index.clear();
+  Statement all;
+  all.prepare(path, db(), "SELECT candidate_id, joints, canonical_key, grid_cell FROM candidates");
+  while (all.step("cannot read the candidates")) {
+    const std::int64_t id = all.integer(0);
+    const int joints = static_cast<int>(all.integer(1));
+    candidate_index.add(key_hash(joints, all.text(2)), id);
+    std::uint64_t cell = 0;
+    // A grid_cell that is not a list of 3 n integers is no cell a lookup names.
+    if (cell_hash_of_name(joints, all.text(3), cell)) candidate_index.add(cell, id);
+  }
+  candidate_index.set_loaded(version);
+}
+
+// Row `id` of candidates with its grid cell, if there is one.
+std::optional<ResultsDatabase::Impl::StoredCandidate> ResultsDatabase::Impl::read_candidate(std::int64_t id) {
+  static const std::string sql = "SELECT candidate_id, canonical_key, first_run, first_start, " +
+                                 geometry_columns("", "") +
+                                 ", joints, grid_cell FROM candidates WHERE candidate_id = ?1";
+  Statement& s = prepared(select_by_id, sql);
+  s.bind(1, id);
+  if (!s.step("cannot read the candidates")) return std::nullopt;
+  StoredCandidate out;
+  CanonicalEntry& c = out.entry;
+  c.id = s.integer(0);
+  c.key = s.text(1);
+  c.first_run = s.integer(2);
+  c.first_start = s.integer(3);
+  c.joints = static_cast<int>(s.integer(4 + 3 * kMaxJoints));
+  const int n = std::clamp(c.joints, 0, kMaxJoints);
+  for (int i = 0; i < n; ++i) {
+    c.values[i] = s.real(4 + i);
+    c.values[n + i] = twist_from_stored(s.real(4 + kMaxJoints + i));
+    c.values[2 * n + i] = s.real(4 + 2 * kMaxJoints + i);
+  }
+  out.grid_cell = s.text(5 + 3 * kMaxJoints);
+  s.reset();
+  return out;
+}
+
+void ResultsDatabase::Impl::index_candidate(std::int64_t id, const CanonicalEntry& c, const CellOptions& own_cell) {
+  candidate_index.add(key_hash(c.joints, c.key), id);
+  candidate_index.add(cell_hash(c.joints, own_cell, CellChoice{}), id);
+}
+
 // The stored candidate of the same linkage as `incoming`: the one with its
-// canonical key, else the nearest whose values are all within `tolerance`
-// (largest difference smallest, then lowest id). Looked up through the
-// indexes on (joints, canonical_key) and (joints, grid_cell), so that rank
-// 0's memory does not grow with the number of candidates and a lookup costs
-// the same whatever their number.
+// canonical key (the lowest id if several), else the nearest whose values are
+// all within `tolerance` (largest difference smallest, then lowest id) among
+// those stored in a grid cell `incoming` may share. The in-memory index names
+// the candidates that may have the key or lie in those cells; each is read
+// back by id and counts only if its key, or its grid_cell, is that one. A new
+// linkage (nearly every verified start) costs no SQL at all, and a lookup the
+// same whatever the number of candidates.
 std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const CanonicalEntry& incoming, double tolerance) {
+  if (!candidate_index.loaded()) refresh_candidate_index();
   const int n = incoming.joints;
-  auto read = [n](Statement& s) {
-    CanonicalEntry c;
-    c.id = s.integer(0);
-    c.key = s.text(1);
-    c.first_run = s.integer(2);
-    c.first_start = s.integer(3);
-    c.joints = n;
-    for (int i = 0; i < n; ++i) {
-      c.values[i] = s.real(4 + i);
-      c.values[n + i] = twist_from_stored(s.real(4 + kMaxJoints + i));
-      c.values[2 * n + i] = s.real(4 + 2 * kMaxJoints + i);
-    }
-    return c;
-  };
-  static const std::string columns =
-      "SELECT candidate_id, canonical_key, first_run, first_start, " + geometry_columns("", "") + " FROM candidates ";
-  Statement& by_key = prepared(select_by_key, columns +
-                                                  "WHERE joints = ?1 AND canonical_key = ?2 "
-                                                  "ORDER BY candidate_id LIMIT 1");
-  by_key.bind(1, n);
-  by_key.bind(2, incoming.key);
-  if (by_key.step("cannot read the candidates")) return read(by_key);
+  std::optional<CanonicalEntry> by_key;
+  candidate_index.for_each(key_hash(n, incoming.key), [&](std::int64_t id) {
+    if (by_key && by_key->id <= id) return;
+    std::optional<StoredCandidate> stored = read_candidate(id);
+    if (stored && stored->entry.joints == n && stored->entry.key == incoming.key) by_key = std::move(stored->entry);
+  });
+  if (by_key) return by_key;
 
   std::optional<CanonicalEntry> best;
   double best_distance = 0.0;
-  auto consider = [&](Statement& s) {
-    while (s.step("cannot read the candidates")) {
-      CanonicalEntry other = read(s);
-      const double distance = canonical_distance(incoming, other, tolerance);
-      if (distance > tolerance) continue;
-      if (!best || distance < best_distance || (distance == best_distance && other.id < best->id)) {
-        best = std::move(other);
-        best_distance = distance;
-      }
+  auto consider = [&](CanonicalEntry other) {
+    const double distance = canonical_distance(incoming, other, tolerance);
+    if (distance > tolerance) return;
+    if (!best || distance < best_distance || (distance == best_distance && other.id < best->id)) {
+      best = std::move(other);
+      best_distance = distance;
     }
   };
-  const auto options = cell_options(incoming, tolerance);
-  size_t combinations = 1;
-  for (const auto& o : options) combinations = std::min(combinations * o.size(), kMaxCellCombinations + 1);
-  if (combinations > kMaxCellCombinations) {
+  const CellOptions options = cell_options(incoming, tolerance);
+  if (options.combinations() > kMaxCellCombinations) {
     // Only with a tolerance near the cell width: compare with every candidate.
-    Statement& all = prepared(select_all, columns + "WHERE joints = ?1");
+    static const std::string sql = "SELECT candidate_id, canonical_key, first_run, first_start, " +
+                                   geometry_columns("", "") + " FROM candidates WHERE joints = ?1";
+    Statement& all = prepared(select_all, sql);
     all.bind(1, n);
-    consider(all);
+    while (all.step("cannot read the candidates")) {
+      CanonicalEntry c;
+      c.id = all.integer(0);
+      c.key = all.text(1);
+      c.first_run = all.integer(2);
+      c.first_start = all.integer(3);
+      c.joints = n;
+      for (int i = 0; i < n; ++i) {
+        c.values[i] = all.real(4 + i);
+        c.values[n + i] = twist_from_stored(all.real(4 + kMaxJoints + i));
+        c.values[2 * n + i] = all.real(4 + 2 * kMaxJoints + i);
+      }
+      consider(std::move(c));
+    }
     return best;
   }
-  // Every combination of each value's possible cells, odometer order.
-  std::vector<size_t> choice(options.size(), 0);
-  for (;;) {
-    Statement& cell = prepared(select_by_cell, columns + "WHERE joints = ?1 AND grid_cell = ?2");
-    cell.bind(1, n);
-    cell.bind(2, cell_name(options, choice));
-    consider(cell);
-    size_t i = 0;
-    while (i < choice.size() && ++choice[i] == options[i].size()) choice[i++] = 0;
-    if (i == choice.size()) break;
-  }
+  // Every combination of each value's possible cells.
+  CellChoice choice{};
+  do {
+    std::string name;  // the cell's text, made only if a candidate may be there
+    candidate_index.for_each(cell_hash(n, options, choice), [&](std::int64_t id) {
+      std::optional<StoredCandidate> stored = read_candidate(id);
+      if (!stored || stored->entry.joints != n) return;
+      if (name.empty()) name = cell_name(options, choice);
+      if (stored->grid_cell == name) consider(std::move(stored->entry));
+    });
+  } while (next_choice(options, choice));
   return best;
 }
 
-void ResultsDatabase::Impl::bind_candidate(Statement& s, std::int64_t run_id, const StartRecord& r) {
+void ResultsDatabase::Impl::bind_candidate(Statement& s, std::int64_t run_id, const StartRecord& r,
+                                           const std::string& grid_cell) {
   const CandidateRecord& c = r.candidate;
   const LoopGeometry& g = c.canonical_geometry;
   const int n = g.joints();
@@ -217,7 +278,7 @@ void ResultsDatabase::Impl::bind_candidate(Statement& s, std::int64_t run_id, co
   s.bind(p++, r.E_max);
   s.bind(p++, run_id);
   s.bind(p++, static_cast<std::int64_t>(r.index));
-  s.bind(p++, grid_cell(canonical_entry(r, run_id)));
+  s.bind(p++, grid_cell);
 }
 
 // The candidate_id for a verified record: an existing candidate of the same
@@ -228,6 +289,7 @@ std::int64_t ResultsDatabase::Impl::place_candidate(std::int64_t run_id, const S
   static const std::vector<std::string> columns = candidate_columns();
   CanonicalEntry incoming = canonical_entry(r, run_id);
   const std::optional<CanonicalEntry> match = find_candidate(incoming, tolerance);
+  const CellOptions own_cell = cell_options(incoming, 0.0);
   if (!match) {
     static const std::string sql = [] {
       std::string names, values;
@@ -238,10 +300,12 @@ std::int64_t ResultsDatabase::Impl::place_candidate(std::int64_t run_id, const S
       return "INSERT INTO candidates (" + names + ", hits) VALUES (" + values + ", 1)";
     }();
     Statement& s = prepared(insert_candidate, sql);
-    bind_candidate(s, run_id, r);
+    bind_candidate(s, run_id, r, cell_name(own_cell, CellChoice{}));
     s.run("cannot insert a candidate");
     ++summary.new_candidates;
-    return sqlite3_last_insert_rowid(db());
+    const std::int64_t id = sqlite3_last_insert_rowid(db());
+    index_candidate(id, incoming, own_cell);
+    return id;
   }
 
   const CanonicalEntry& existing = *match;
@@ -259,9 +323,10 @@ std::int64_t ResultsDatabase::Impl::place_candidate(std::int64_t run_id, const S
              std::to_string(columns.size() + 1);
     }();
     Statement& s = prepared(replace_candidate, sql);
-    bind_candidate(s, run_id, r);
+    bind_candidate(s, run_id, r, cell_name(own_cell, CellChoice{}));
     s.bind(static_cast<int>(columns.size() + 1), id);
     s.run("cannot update a candidate");
+    index_candidate(id, incoming, own_cell);
   } else {
     Statement& s = prepared(hit_candidate, "UPDATE candidates SET hits = hits + 1 WHERE candidate_id = ?1");
     s.bind(1, id);
@@ -336,7 +401,11 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
   if (journal != "wal") {
     fail(path, "cannot use WAL journal mode (got \"" + journal + "\"): put the database on a local disk");
   }
-  exec(path, db, "PRAGMA synchronous = NORMAL; PRAGMA foreign_keys = ON", "cannot set pragmas");
+  // A 64 MiB page cache (SQLite's default is 2 MiB): the indexes of candidates
+  // take random inserts, which read a page from the file each when the cache
+  // cannot hold them.
+  exec(path, db, "PRAGMA synchronous = NORMAL; PRAGMA foreign_keys = ON; PRAGMA cache_size = -65536",
+       "cannot set pragmas");
   Transaction transaction(path, db);
   // Again under the write lock: another process may have created it meanwhile.
   // An older schema is upgraded by the first write that needs it (open_run),
@@ -576,6 +645,7 @@ CommitSummary ResultsDatabase::commit(std::int64_t run_id, const std::vector<Sta
   const int joints = static_cast<int>(run.integer(0));
   const double report_threshold = run.real(1);
   run.reset();
+  m.refresh_candidate_index();
 
   static const std::string insert_sql = [] {
     std::string values;

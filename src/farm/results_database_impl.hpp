@@ -25,6 +25,11 @@ struct ResultsDatabase::Impl {
   store::Statement select_by_key;
   store::Statement select_by_cell;
   store::Statement select_all;
+  store::Statement select_by_id;
+  store::Statement data_version;
+  store::Statement highest_candidate;
+  // Every candidate's key and grid cell, for de-duplication (candidate_index.hpp).
+  store::CandidateIndex candidate_index;
 
   // PRAGMA user_version of the file: older ones are read as they are, and
   // upgraded by the first write that needs the newer schema (open_run).
@@ -65,9 +70,16 @@ struct ResultsDatabase::Impl {
   void upgrade_schema();
   void upgraded_schema() { schema_version = kDatabaseSchemaVersion; }
 
+  struct StoredCandidate {
+    store::CanonicalEntry entry;
+    std::string grid_cell;
+  };
+  void refresh_candidate_index();
+  std::optional<StoredCandidate> read_candidate(std::int64_t id);
+  void index_candidate(std::int64_t id, const store::CanonicalEntry& c, const store::CellOptions& own_cell);
   std::optional<store::CanonicalEntry> find_candidate(const store::CanonicalEntry& incoming, double tolerance);
   std::int64_t place_candidate(std::int64_t run_id, const StartRecord& r, double tolerance, CommitSummary& summary);
-  void bind_candidate(store::Statement& s, std::int64_t run_id, const StartRecord& r);
+  void bind_candidate(store::Statement& s, std::int64_t run_id, const StartRecord& r, const std::string& grid_cell);
 };
 
 }  // namespace loopfarm

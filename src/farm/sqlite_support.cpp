@@ -1,6 +1,7 @@
 // SQLite at the store's edge (sqlite_support.hpp).
 #include "sqlite_support.hpp"
 
+#include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -50,10 +51,12 @@ DatabaseError::Cause cause_of(int rc) {
   throw DatabaseError("results database " + path + ": " + what + ": " + message, DatabaseError::Cause::failed);
 }
 
+// std::to_chars with a precision writes what printf writes (the C++ standard
+// says so, and a test compares them), several times faster.
 std::string format_double(double value) {
   char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
-  return buffer;
+  const auto written = std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::general, 17);
+  return std::string(buffer, written.ptr);
 }
 
 // Opens `path` (or the URI `filename` for it); errors name `path`.
