@@ -128,6 +128,7 @@ CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, Coord
   CoordinatorSummary summary;
   const auto session_start = Clock::now();
   std::vector<StartRecord> batch;
+  batch.reserve(kCommitBatch);
   auto last_commit = Clock::now();
   auto flush = [&](bool force) {
     const auto now = Clock::now();
@@ -140,9 +141,6 @@ CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, Coord
     counts.candidates += c.new_candidates;
     batch.clear();
     last_commit = now;
-  };
-  auto take = [&](std::vector<StartRecord> records) {
-    for (StartRecord& r : records) batch.push_back(std::move(r));
   };
 
   int active_workers = transport.remote_workers();
@@ -169,7 +167,7 @@ CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, Coord
         if (work.empty()) --active_workers;
       }
       for (StartRecord& r : local.collect()) commits.add(std::move(r));
-      take(commits.ready());
+      commits.move_ready(batch);
       flush(false);
       progress.update(counts);
       summary.coordination_s += std::chrono::duration<double>(Clock::now() - work_start).count();
@@ -178,7 +176,7 @@ CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, Coord
     // What the thread finished between the last collect and its end.
     for (StartRecord& r : local.collect()) commits.add(std::move(r));
   }
-  take(commits.all());
+  commits.move_all(batch);
   flush(true);
   progress.update(counts, true);
   progress.finish();

@@ -42,8 +42,7 @@ void OrderedCommits::add(StartRecord record) {
   held_.emplace(index, std::move(record));
 }
 
-std::vector<StartRecord> OrderedCommits::ready() {
-  std::vector<StartRecord> out;
+void OrderedCommits::move_ready(std::vector<StartRecord>& out) {
   while (!cursor_.done()) {
     auto it = held_.find(cursor_.peek());
     if (it == held_.end()) break;
@@ -51,13 +50,23 @@ std::vector<StartRecord> OrderedCommits::ready() {
     held_.erase(it);
     cursor_.advance();
   }
+}
+
+void OrderedCommits::move_all(std::vector<StartRecord>& out) {
+  move_ready(out);
+  for (auto& [index, record] : held_) out.push_back(std::move(record));
+  held_.clear();
+}
+
+std::vector<StartRecord> OrderedCommits::ready() {
+  std::vector<StartRecord> out;
+  move_ready(out);
   return out;
 }
 
 std::vector<StartRecord> OrderedCommits::all() {
-  std::vector<StartRecord> out = ready();
-  for (auto& [index, record] : held_) out.push_back(std::move(record));
-  held_.clear();
+  std::vector<StartRecord> out;
+  move_all(out);
   return out;
 }
 

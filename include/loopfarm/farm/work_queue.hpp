@@ -61,9 +61,13 @@ class OrderedCommits {
  public:
   explicit OrderedCommits(PendingCursor pending) : cursor_(std::move(pending)) {}
   void add(StartRecord record);
-  // The records now in order: those with every earlier pending index in.
+  // Moves the records now in order (those with every earlier pending index
+  // in) to the end of `out`.
+  void move_ready(std::vector<StartRecord>& out);
+  // Moves everything held, gaps or not (a stopped run), to the end of `out`.
+  void move_all(std::vector<StartRecord>& out);
+  // The same as new vectors.
   std::vector<StartRecord> ready();
-  // Everything held, gaps or not (a stopped run).
   std::vector<StartRecord> all();
 
  private:
