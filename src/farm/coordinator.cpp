@@ -3,6 +3,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cstdio>
 #include <exception>
@@ -69,6 +70,107 @@ class LocalWorker {
   std::thread thread_;  // last: started once the members above exist
 };
 
+// Commits batches on a thread of its own, so that the coordinating thread
+// goes on answering workers, decoding and ordering records while SQLite
+// writes: the two halves of rank 0's work overlap. It holds one batch at a
+// time; handing over the next waits until the last is committed, so ingest
+// runs at the writer's pace and at most two batches are in memory. The
+// database is used by this thread alone from construction to destruction. A
+// failed commit ends the thread and is rethrown on the coordinating thread by
+// the next call.
+class BatchWriter {
+ public:
+  BatchWriter(ResultsDatabase& db, std::int64_t run_id) : db_(db), run_id_(run_id), thread_([this] { write(); }) {}
+  // Commits the batch in hand, if any, then joins.
+  ~BatchWriter() {
+    {
+      std::lock_guard lock(mutex_);
+      closing_ = true;
+    }
+    changed_.notify_all();
+    thread_.join();
+  }
+  BatchWriter(const BatchWriter&) = delete;
+  BatchWriter& operator=(const BatchWriter&) = delete;
+
+  // Hands `batch` over; it comes back empty (with the capacity of the last one).
+  void submit(std::vector<StartRecord>& batch) {
+    std::unique_lock lock(mutex_);
+    wait_until_idle(lock);
+    in_hand_.swap(batch);
+    busy_ = true;
+    changed_.notify_all();
+  }
+  // Returns once everything handed over is committed.
+  void drain() {
+    std::unique_lock lock(mutex_);
+    wait_until_idle(lock);
+  }
+  // The commits finished since the last call, summed.
+  CommitSummary take_committed() {
+    std::lock_guard lock(mutex_);
+    if (failure_) std::rethrow_exception(failure_);
+    const CommitSummary out = committed_;
+    committed_ = CommitSummary();
+    return out;
+  }
+  // Seconds spent committing, and waiting for it on the coordinating thread.
+  double writing_s() {
+    std::lock_guard lock(mutex_);
+    return writing_s_;
+  }
+  double waiting_s() const { return waiting_s_; }
+
+ private:
+  void wait_until_idle(std::unique_lock<std::mutex>& lock) {
+    const auto begin = std::chrono::steady_clock::now();
+    changed_.wait(lock, [this] { return !busy_ || failure_; });
+    waiting_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+    if (failure_) std::rethrow_exception(failure_);
+  }
+
+  void write() {
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      changed_.wait(lock, [this] { return busy_ || closing_; });
+      if (!busy_) return;
+      lock.unlock();
+      const auto begin = std::chrono::steady_clock::now();
+      CommitSummary c;
+      std::exception_ptr error;
+      try {
+        c = db_.commit(run_id_, in_hand_);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      in_hand_.clear();
+      lock.lock();
+      writing_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+      committed_.starts += c.starts;
+      committed_.zeros += c.zeros;
+      committed_.new_candidates += c.new_candidates;
+      committed_.repeat_hits += c.repeat_hits;
+      failure_ = error;
+      busy_ = false;
+      changed_.notify_all();
+      if (failure_) return;
+    }
+  }
+
+  ResultsDatabase& db_;
+  const std::int64_t run_id_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<StartRecord> in_hand_;
+  bool busy_ = false;  // in_hand_ is being (or about to be) committed
+  bool closing_ = false;
+  std::exception_ptr failure_;
+  CommitSummary committed_;
+  double writing_s_ = 0.0;
+  double waiting_s_ = 0.0;  // the coordinating thread's alone
+  std::thread thread_;      // last: started once the members above exist
+};
+
 }  // namespace
 
 StartRecord run_start_record(const Job& job, std::uint64_t index) {
@@ -130,17 +232,20 @@ CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, Coord
   std::vector<StartRecord> batch;
   batch.reserve(kCommitBatch);
   auto last_commit = Clock::now();
+  std::optional<BatchWriter> writer(std::in_place, db, plan.run_id);
   auto flush = [&](bool force) {
     const auto now = Clock::now();
     if (batch.empty()) return;
     if (!force && batch.size() < kCommitBatch && now - last_commit < kCommitInterval) return;
-    const CommitSummary c = db.commit(plan.run_id, batch);
+    writer->submit(batch);
+    last_commit = now;
+  };
+  auto count_commits = [&] {
+    const CommitSummary c = writer->take_committed();
     counts.done += c.starts;
     counts.done_here += c.starts;
     counts.zeros += c.zeros;
     counts.candidates += c.new_candidates;
-    batch.clear();
-    last_commit = now;
   };
 
   int active_workers = transport.remote_workers();
@@ -169,6 +274,7 @@ CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, Coord
       for (StartRecord& r : local.collect()) commits.add(std::move(r));
       commits.move_ready(batch);
       flush(false);
+      count_commits();
       progress.update(counts);
       summary.coordination_s += std::chrono::duration<double>(Clock::now() - work_start).count();
       if (!request) std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -178,6 +284,12 @@ CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, Coord
   }
   commits.move_all(batch);
   flush(true);
+  writer->drain();
+  count_commits();
+  // The coordination's cost: this thread's work, less its waits for the
+  // writer, and the writer's.
+  summary.coordination_s += writer->writing_s() - writer->waiting_s();
+  writer.reset();  // the database is this thread's again
   progress.update(counts, true);
   progress.finish();
 

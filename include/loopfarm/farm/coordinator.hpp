@@ -3,8 +3,9 @@
 // one (results out of order, a stop mid-chunk, a resume).
 //
 // The coordinator is also a worker: a thread of its own runs starts while the
-// calling thread answers the remote workers, commits results in start-index
-// order (work_queue.hpp) and reports progress. Work goes out in chunks on
+// calling thread answers the remote workers, puts results in start-index
+// order (work_queue.hpp) and reports progress; a third thread commits them,
+// a batch at a time, while the calling thread fills the next. Work goes out in chunks on
 // demand (local minimisations take very different times); a worker's results
 // come back with its next request.
 #pragma once
