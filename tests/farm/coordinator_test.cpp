@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <deque>
 #include <filesystem>
@@ -16,6 +17,7 @@
 #include <mutex>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -59,11 +61,16 @@ StartRecord fake_record(std::uint64_t index) {
 }
 
 // The runner the coordinator's own thread uses; it remembers what it ran.
+// `delay` per start keeps that thread from running every start before the
+// fake remote workers have had theirs (a fake record takes a microsecond;
+// a loaded machine may not schedule the coordinating thread for longer).
 struct RecordingRunner {
   std::mutex mutex;
   std::multiset<std::uint64_t> ran;
+  std::chrono::microseconds delay{0};
   StartRunner runner() {
     return [this](std::uint64_t index) {
+      if (delay.count() > 0) std::this_thread::sleep_for(delay);
       {
         std::lock_guard lock(mutex);
         ran.insert(index);
@@ -225,6 +232,7 @@ TEST_F(CoordinatorTest, AStopMidChunkKeepsWhatFinishedAndAResumeRunsExactlyTheRe
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
     const ResumePlan plan = plan_run(db, job_, false, 3);
     RecordingRunner runner;
+    runner.delay = std::chrono::milliseconds(1);  // the stop must find starts still to run
     FakeTransport transport(2, runner);
     transport.stop_mid_chunk(0, 2);  // worker 0 reports 2 of its first 8 and asks to stop
     StopFlag stop;
