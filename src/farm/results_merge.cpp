@@ -542,6 +542,9 @@ MergeSummary ResultsDatabase::merge(const std::string& output, const std::vector
             }
             insert_candidate.run("cannot insert a candidate");
             merged_candidate = sqlite3_last_insert_rowid(db);
+            // Into the store's in-memory index too, so that the next start
+            // of this linkage, from any input, finds it (find_candidate).
+            m.index_candidate(merged_candidate, entry, cell_options(entry, 0.0));
           }
           c.reset();
           kept.candidates[own] = merged_candidate;
