@@ -19,8 +19,8 @@
 namespace loopfarm {
 
 struct StartOptions {
-  // `loopfarm verify`'s options; also a zero's second analysis when the
-  // circuit through its pose cannot be followed (run_start).
+  // `loopfarm verify`'s options; also a zero's analysis from every circuit
+  // when the circuit through its pose cannot be followed (analyse_zero).
   VerificationOptions verification;
   ClassifyOptions classification;
   double rank_tolerance = 1e-6;  // local_dimension's relative singular-value threshold
