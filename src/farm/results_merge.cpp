@@ -529,13 +529,14 @@ MergeSummary ResultsDatabase::merge(const std::string& output, const std::vector
             hit.run("cannot update a candidate");
           } else {
             insert_candidate.reset();
+            const CellOptions own_cell = cell_options(entry, 0.0);
             for (int i = 0; i < static_cast<int>(candidate_names.size()); ++i) {
               if (i == kFirstRun) {
                 insert_candidate.bind(i + 1, run_id);
               } else if (i == kFirstStart) {
                 insert_candidate.bind(i + 1, static_cast<std::int64_t>(index));
               } else if (i == kGridCellColumn) {
-                insert_candidate.bind(i + 1, grid_cell(entry));
+                insert_candidate.bind(i + 1, cell_name(own_cell, CellChoice{}));
               } else {
                 insert_candidate.bind_value(i + 1, c.value(i));
               }
@@ -544,7 +545,7 @@ MergeSummary ResultsDatabase::merge(const std::string& output, const std::vector
             merged_candidate = sqlite3_last_insert_rowid(db);
             // Into the store's in-memory index too, so that the next start
             // of this linkage, from any input, finds it (find_candidate).
-            m.index_candidate(merged_candidate, entry, cell_options(entry, 0.0));
+            m.index_candidate(merged_candidate, entry, own_cell);
           }
           c.reset();
           kept.candidates[own] = merged_candidate;
