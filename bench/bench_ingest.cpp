@@ -2,7 +2,7 @@
 // transport with synthetic start records of the default job's real mix, written
 // by the store into a database on disk in WAL mode, without MPI.
 //
-//   build/release/bench/loopfarm_bench --benchmark_filter=BM_Ingest
+//   build/release/bench/loopfarm_bench --benchmark_filter='BM_(Ingest|Commit)'
 //
 // The mix is that of 6,000 starts of jobs/default.toml (loopfarm run
 // jobs/default.toml --starts 6000): 40.65 % zero minima, every one verified,
@@ -21,8 +21,8 @@
 // Counters: starts_per_s (starts committed per second of coordinate(), from
 // its first request to the session's end), us_per_start, cpu_us_per_start
 // (the process's CPU time over the same span: every thread of rank 0; on a
-// busy machine steadier than the wall time), candidates. Figures
-// are in docs/performance.md.
+// busy machine steadier than the wall time), candidates. BM_Commit times the
+// store alone on the same records. Figures are in docs/performance.md.
 #include <benchmark/benchmark.h>
 
 #include <time.h>
@@ -270,6 +270,63 @@ void BM_Ingest(benchmark::State& state) {
 }
 
 BENCHMARK(BM_Ingest)->Args({200000, 64})->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// The store alone: the same records, already decoded and in order, committed
+// by ResultsDatabase::commit in transactions of 8,192 starts (the writer
+// thread's batches) on the calling thread. What SQLite and the store's
+// de-duplication cost a start, without the coordinator: the bound on what one
+// writer can ingest. Args: starts.
+void BM_Commit(benchmark::State& state) {
+  const auto starts = static_cast<std::uint64_t>(state.range(0));
+  constexpr size_t kBatch = 8192;
+  std::vector<std::vector<StartRecord>> batches;
+  for (std::uint64_t i = 0; i < starts; ++i) {
+    if (i % kBatch == 0) batches.emplace_back().reserve(kBatch);
+    batches.back().push_back(synthetic_record(i));
+  }
+  RunIdentity identity;
+  identity.job_path = "synthetic.toml";
+  identity.job_text = "synthetic commit";
+  identity.seed = 1;
+  identity.starts = starts;
+  identity.joints = 4;
+  identity.zero_threshold = 1e-20;
+  identity.report_threshold = 1e-6;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("loopfarm_bench_commit_" + std::to_string(::getpid()) + ".sqlite"))
+          .string();
+  auto remove_database = [&path] {
+    for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path + suffix);
+  };
+
+  double seconds = 0.0;
+  std::uint64_t committed = 0;
+  long candidates = 0;
+  for (auto _ : state) {
+    remove_database();
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::int64_t run = db.open_run(identity).run_id;
+    db.begin_session(run, 1);
+    long new_candidates = 0;
+    const auto begin = std::chrono::steady_clock::now();
+    for (const std::vector<StartRecord>& batch : batches) {
+      const CommitSummary summary = db.commit(run, batch);
+      committed += static_cast<std::uint64_t>(summary.starts);
+      new_candidates += summary.new_candidates;
+    }
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+    state.SetIterationTime(elapsed);
+    seconds += elapsed;
+    db.end_session(RunStatus::complete);
+    candidates = new_candidates;
+  }
+  remove_database();
+  state.counters["starts_per_s"] = static_cast<double>(committed) / seconds;
+  state.counters["us_per_start"] = 1e6 * seconds / static_cast<double>(committed);
+  state.counters["candidates"] = static_cast<double>(candidates);
+}
+
+BENCHMARK(BM_Commit)->Arg(200000)->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace loopfarm

@@ -204,12 +204,24 @@ const char* const kUpgradeToVersion2 =
     "ALTER TABLE sessions ADD COLUMN input_id INTEGER REFERENCES merge_inputs(input_id);\n"
     "ALTER TABLE sessions ADD COLUMN source_session_id INTEGER;\n";
 
+// Version 2 to 3: de-duplication looks candidates up in rank 0's memory (an
+// index of their keys and grid cells, rebuilt from the table when a database
+// is opened), so the two SQL indexes that served it are dropped. Each made
+// every new candidate, 41 % of the default job's starts, cost a random insert
+// into a b-tree of text; without them a single writer stores about twice as
+// many starts a second (docs/performance.md). Nothing else changes.
+const char* const kUpgradeToVersion3 =
+    "DROP INDEX candidates_by_key;\n"
+    "DROP INDEX candidates_by_cell;\n";
+
 }  // namespace
 
 std::string schema_upgrade_sql(int from_version) {
   switch (from_version) {
     case 1:
       return kUpgradeToVersion2;
+    case 2:
+      return kUpgradeToVersion3;
     default:
       throw std::logic_error("schema_upgrade_sql: no upgrade from version " + std::to_string(from_version));
   }

@@ -1,6 +1,8 @@
 // Slices and merging in the results database: the slice arithmetic, a slice
 // as part of a run's identity, the upgrade of a version 1 database (a file
-// written before slices existed, tests/farm/fixtures/schema-v1.sqlite), and
+// written before slices existed, tests/farm/fixtures/schema-v1.sqlite) and of
+// a version 2 one (before de-duplication moved into memory, schema-v2.sqlite),
+// and
 // ResultsDatabase::merge: three slices merged equal one run of the same
 // starts (candidates de-duplicated across the slices, row for row), overlaps,
 // provenance, and every refusal leaving no file behind. Records are built by
@@ -297,6 +299,20 @@ TEST_F(MergeTest, TheSliceIsPartOfTheRunsIdentity) {
 
 const std::string kFixture = std::string(LOOPFARM_SOURCE_DIR) + "/tests/farm/fixtures/schema-v1.sqlite";
 
+// The identity of the run in a fixture (tests/farm/fixtures/README.md), with
+// `starts` as its target.
+RunIdentity fixture_identity(const std::string& path, std::uint64_t starts) {
+  RunIdentity own;
+  own.job_path = value(path, "SELECT job_path FROM runs");
+  own.job_text = value(path, "SELECT job_text FROM runs");
+  own.seed = 7;
+  own.starts = starts;
+  own.joints = 4;
+  own.zero_threshold = 1e-12;
+  own.report_threshold = 1e-3;
+  return own;
+}
+
 TEST_F(MergeTest, AVersion1DatabaseIsReadAsItIsAndUpgradedByItsNextRun) {
   const std::string path = file("v1.sqlite");
   fs::copy_file(kFixture, path);
@@ -322,17 +338,9 @@ TEST_F(MergeTest, AVersion1DatabaseIsReadAsItIsAndUpgradedByItsNextRun) {
   }
   EXPECT_EQ(value(path, "PRAGMA user_version"), "1");
   // Its own job resumes it: upgraded in the same transaction, rows kept.
-  RunIdentity own;
-  own.job_path = value(path, "SELECT job_path FROM runs");
-  own.job_text = value(path, "SELECT job_text FROM runs");
-  own.seed = 7;
-  own.starts = 12;
-  own.joints = 4;
-  own.zero_threshold = 1e-12;
-  own.report_threshold = 1e-3;
   {
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
-    const RunInfo run = db.open_run(own);
+    const RunInfo run = db.open_run(fixture_identity(path, 12));
     EXPECT_FALSE(run.created);
     EXPECT_EQ(run.committed_count(), 12u);
   }
@@ -345,6 +353,85 @@ TEST_F(MergeTest, AVersion1DatabaseIsReadAsItIsAndUpgradedByItsNextRun) {
   const std::string schema = "SELECT type, name, sql FROM sqlite_schema ORDER BY type, name";
   EXPECT_EQ(rows(path, schema), rows(fresh, schema));
   EXPECT_EQ(candidates_content(path), candidates);
+}
+
+// --- a database written before de-duplication moved into memory: version 2 ----
+
+const std::string kVersion2Fixture = std::string(LOOPFARM_SOURCE_DIR) + "/tests/farm/fixtures/schema-v2.sqlite";
+
+// Start 12 of the fixture's job as a verified start that found stored
+// candidate `id` again: its geometry read back from the row, under its own key
+// or another one (then only the numeric comparison can find the match).
+StartRecord repeat_of_stored_candidate(const std::string& path, int id, const std::string& key) {
+  const Rows row = rows(path,
+                        "SELECT canonical_key, a1, a2, a3, a4, alpha1_deg, alpha2_deg, alpha3_deg, alpha4_deg, "
+                        "d1, d2, d3, d4 FROM candidates WHERE candidate_id = " +
+                            std::to_string(id));
+  StartRecord r = start(12);
+  if (row.size() != 1) {
+    ADD_FAILURE() << "no candidate " << id << " in " << path;
+    return r;
+  }
+  std::vector<double> a, alpha, d;
+  for (int i = 0; i < 4; ++i) {
+    a.push_back(std::stod(row[0][1 + i]));
+    alpha.push_back(std::stod(row[0][5 + i]));
+    d.push_back(std::stod(row[0][9 + i]));
+  }
+  r.candidate.canonical_geometry = geometry_deg(a, alpha, d);
+  r.candidate.canonical_key = key.empty() ? row[0][0] : key;
+  return r;
+}
+
+TEST_F(MergeTest, AVersion2DatabaseLosesTheDeduplicationIndexesAndStillFindsItsCandidates) {
+  const std::string path = file("v2.sqlite");
+  fs::copy_file(kVersion2Fixture, path);
+  ASSERT_EQ(value(path, "PRAGMA user_version"), "2");
+  const std::string before = file_bytes(path);
+  const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
+  const Rows candidates = candidates_content(path);
+  ASSERT_EQ(starts.size(), 12u);
+  ASSERT_GE(candidates.size(), 2u);
+  const std::string indexes =
+      "SELECT name FROM sqlite_schema WHERE type = 'index' AND tbl_name = 'candidates' "
+      "ORDER BY name";
+  EXPECT_EQ(rows(path, indexes),
+            (Rows{{"candidates_by_cell"}, {"candidates_by_joints_family"}, {"candidates_by_key"}}));
+  {
+    // Read: as it is, nothing written.
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
+    EXPECT_EQ(db.runs().at(0).starts_done, 12);
+  }
+  EXPECT_EQ(file_bytes(path), before);
+
+  // Its own job, resumed with more starts: upgraded in the same transaction.
+  CommitSummary by_key, by_value;
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const RunInfo run = db.open_run(fixture_identity(path, 14));
+    EXPECT_EQ(run.committed_count(), 12u);
+    // The candidates written before the upgrade are found again, by key and by value.
+    by_key = db.commit(run.run_id, {repeat_of_stored_candidate(path, 1, "")});
+    StartRecord near = repeat_of_stored_candidate(path, 2, "a key no candidate has");
+    near.index = 13;
+    by_value = db.commit(run.run_id, {near});
+  }
+  EXPECT_EQ(by_key.new_candidates, 0);
+  EXPECT_EQ(by_key.repeat_hits, 1);
+  EXPECT_EQ(by_value.new_candidates, 0);
+  EXPECT_EQ(by_value.repeat_hits, 1);
+  EXPECT_EQ(value(path, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
+  EXPECT_EQ(rows(path, indexes), (Rows{{"candidates_by_joints_family"}}));
+  EXPECT_EQ(rows(path, "SELECT * FROM starts WHERE start_index < 12 ORDER BY start_index"), starts);
+  EXPECT_EQ(rows(path, "SELECT candidate_id, hits FROM candidates WHERE candidate_id <= 2 ORDER BY candidate_id"),
+            (Rows{{"1", std::to_string(std::stoi(candidates[0].back()) + 1)},
+                  {"2", std::to_string(std::stoi(candidates[1].back()) + 1)}}));
+  EXPECT_EQ(value(path, "SELECT COUNT(*) FROM candidates"), std::to_string(candidates.size()));
+  // The upgraded schema is the very schema of a new database.
+  const std::string fresh = file("fresh.sqlite");
+  { ResultsDatabase db = ResultsDatabase::open(fresh, DatabaseMode::write); }
+  const std::string schema = "SELECT type, name, sql FROM sqlite_schema ORDER BY type, name";
+  EXPECT_EQ(rows(path, schema), rows(fresh, schema));
 }
 
 // --- merge ---------------------------------------------------------------------

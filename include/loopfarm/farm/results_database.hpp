@@ -50,7 +50,7 @@ inline constexpr std::int32_t kDatabaseApplicationId = 0x4C4F4F50;
 // PRAGMA user_version: the schema version this build writes. It reads every
 // version from kOldestDatabaseSchemaVersion on, and upgrades an older file to
 // this one when it opens it for writing (results_schema.cpp says what changed).
-inline constexpr int kDatabaseSchemaVersion = 2;
+inline constexpr int kDatabaseSchemaVersion = 3;
 inline constexpr int kOldestDatabaseSchemaVersion = 1;
 // busy_timeout: how long a connection waits for another one's lock.
 inline constexpr int kDatabaseBusyTimeoutMs = 10000;
