@@ -240,7 +240,8 @@ Subcommand add_run_command(CLI::App& parent) {
   app->add_option("--chunk", args->chunk, "start indices handed out per request")
       ->type_name("K")
       ->capture_default_str();
-  app->add_option("--progress", args->progress, "auto (bar on a terminal, else a line every 10 s), bar, log or none")
+  app->add_option("--progress", args->progress,
+                  "auto (a bar on a terminal, else a line within 2 s and then every 10 s), bar, log or none")
       ->type_name("STYLE")
       ->capture_default_str();
   return {app, [args] { return run_run_command(*args); }};

@@ -247,6 +247,22 @@ CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, Coord
     counts.zeros += c.zeros;
     counts.candidates += c.new_candidates;
   };
+  // Progress counts a start when its record arrives, not when its batch is
+  // committed (every 8,192 starts or 2 s); candidates are known only once
+  // committed (de-duplication).
+  long arrived = 0, arrived_zeros = 0;
+  auto arrive = [&](StartRecord& r) {
+    ++arrived;
+    arrived_zeros += r.zero ? 1 : 0;
+    commits.add(std::move(r));
+  };
+  auto show_progress = [&] {
+    ProgressCounts shown = counts;
+    shown.done = plan.committed + arrived;
+    shown.done_here = arrived;
+    shown.zeros = plan.zeros + arrived_zeros;
+    progress.update(shown);
+  };
 
   int active_workers = transport.remote_workers();
   {
@@ -266,16 +282,16 @@ CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, Coord
         ++summary.messages;
         // A worker that caught a signal stops the whole run.
         if (request->stopping) stop.request(SIGUSR1);
-        for (StartRecord& r : request->records) commits.add(std::move(r));
+        for (StartRecord& r : request->records) arrive(r);
         const std::vector<std::uint64_t> work = dispenser.take();
         transport.send_work(request->worker, work);
         if (work.empty()) --active_workers;
       }
-      for (StartRecord& r : local.collect()) commits.add(std::move(r));
+      for (StartRecord& r : local.collect()) arrive(r);
       commits.move_ready(batch);
       flush(false);
       count_commits();
-      progress.update(counts);
+      show_progress();
       summary.coordination_s += std::chrono::duration<double>(Clock::now() - work_start).count();
       if (!request) std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }

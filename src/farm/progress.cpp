@@ -1,5 +1,7 @@
+// Progress of a farm run (progress.hpp).
 #include "loopfarm/farm/progress.hpp"
 
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -24,6 +26,24 @@ std::string duration_text(double seconds) {
   return buffer;
 }
 
+// The width of the terminal `out` is, else $COLUMNS, else 80.
+int terminal_columns(std::FILE* out) {
+  winsize size{};
+  if (out != nullptr && ::ioctl(fileno(out), TIOCGWINSZ, &size) == 0 && size.ws_col > 0) return size.ws_col;
+  if (const char* columns = std::getenv("COLUMNS")) {
+    const int n = std::atoi(columns);
+    if (n > 0) return n;
+  }
+  return 80;
+}
+
+// 1234567 as "1,234,567".
+std::string grouped(long n) {
+  std::string digits = std::to_string(n < 0 ? -n : n);
+  for (int at = static_cast<int>(digits.size()) - 3; at > 0; at -= 3) digits.insert(static_cast<size_t>(at), ",");
+  return n < 0 ? "-" + digits : digits;
+}
+
 }  // namespace
 
 ProgressStyle default_progress_style() {
@@ -33,41 +53,70 @@ ProgressStyle default_progress_style() {
   return ProgressStyle::bar;
 }
 
-Progress::Progress(ProgressStyle style, double log_interval_s, std::FILE* out)
-    : style_(style), interval_(log_interval_s), out_(out), start_(std::chrono::steady_clock::now()), last_(start_) {}
+Progress::Progress(ProgressStyle style, double log_interval_s, std::FILE* out, int columns)
+    : style_(style),
+      interval_(log_interval_s),
+      out_(out),
+      columns_(columns > 0 ? columns : terminal_columns(out)),
+      start_(std::chrono::steady_clock::now()) {}
 
+// The fields most wanted first (done, rate, ETA), so that a line cut to a
+// narrow terminal loses the counts of zeros and candidates before them.
 std::string Progress::line(const ProgressCounts& c, double elapsed_s) {
   const double rate = elapsed_s > 0 ? static_cast<double>(c.done_here) / elapsed_s : 0.0;
   const long left = c.total - c.done;
   const double eta = rate > 0 ? static_cast<double>(left) / rate : NAN;
   const double percent = c.total > 0 ? 100.0 * static_cast<double>(c.done) / static_cast<double>(c.total) : 100.0;
+  char rate_text[32];
+  if (rate >= 100.0) {
+    std::snprintf(rate_text, sizeof rate_text, "%s", grouped(std::lround(rate)).c_str());
+  } else {
+    std::snprintf(rate_text, sizeof rate_text, "%.3g", rate);
+  }
   char buffer[256];
-  std::snprintf(buffer, sizeof buffer,
-                "%ld/%ld starts (%.1f%%), %.3g starts/s, %ld zero minima, %ld candidates, ETA %s", c.done, c.total,
-                percent, rate, c.zeros, c.candidates, left <= 0 ? "0s" : duration_text(eta).c_str());
+  std::snprintf(buffer, sizeof buffer, "%s/%s starts (%.1f%%), %s starts/s, ETA %s, %s zero minima, %s candidates",
+                grouped(c.done).c_str(), grouped(c.total).c_str(), percent, rate_text,
+                left <= 0 ? "0s" : duration_text(eta).c_str(), grouped(c.zeros).c_str(), grouped(c.candidates).c_str());
   return buffer;
 }
 
-void Progress::update(const ProgressCounts& counts, bool force) {
-  if (style_ == ProgressStyle::none) return;
-  const auto now = std::chrono::steady_clock::now();
-  const double since_last = std::chrono::duration<double>(now - last_).count();
-  const double min_gap = style_ == ProgressStyle::bar ? 0.2 : interval_;
-  if (!force && since_last < min_gap) return;
-  last_ = now;
-  const double elapsed = std::chrono::duration<double>(now - start_).count();
-  const std::string text = line(counts, elapsed);
-  if (style_ == ProgressStyle::bar) {
-    constexpr int kWidth = 24;
+std::string Progress::bar_line(const ProgressCounts& counts, double elapsed_s, int columns) {
+  const std::string text = line(counts, elapsed_s);
+  const int room = columns - 1;  // the last column left free: writing there wraps on some terminals
+  constexpr int kMaxBar = 24, kMinBar = 8;
+  const int bar_width = std::min(kMaxBar, room - static_cast<int>(text.size()) - 3);
+  std::string out;
+  if (bar_width >= kMinBar) {
     const double fraction = counts.total > 0 ? static_cast<double>(counts.done) / static_cast<double>(counts.total) : 1;
-    const int filled = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * kWidth);
+    const int filled = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * bar_width);
     std::string bar(static_cast<size_t>(filled), '#');
-    bar.resize(kWidth, '.');
+    bar.resize(static_cast<size_t>(bar_width), '.');
+    out = "[" + bar + "] ";
+  }
+  out += text;
+  if (static_cast<int>(out.size()) > room) out.resize(static_cast<size_t>(std::max(room, 0)));
+  return out;
+}
+
+void Progress::update(const ProgressCounts& counts, bool force) {
+  update_at(counts, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(), force);
+}
+
+void Progress::update_at(const ProgressCounts& counts, double elapsed_s, bool force) {
+  if (style_ == ProgressStyle::none) return;
+  // A bar shows at once; a log's first line comes within kFirstLog (a run
+  // under mpirun shows it is alive), the next ones every interval_.
+  const double gap = style_ == ProgressStyle::bar ? (shown_ ? kBarInterval : 0.0)
+                                                  : (shown_ ? interval_ : std::min(interval_, kFirstLog));
+  if (!force && elapsed_s - last_s_ < gap) return;
+  last_s_ = elapsed_s;
+  shown_ = true;
+  if (style_ == ProgressStyle::bar) {
     // \r and clear-to-end-of-line: redraw in place.
-    std::fprintf(out_, "\r[%s] %s\033[K", bar.c_str(), text.c_str());
+    std::fprintf(out_, "\r%s\033[K", bar_line(counts, elapsed_s, columns_).c_str());
     drawn_ = true;
   } else {
-    std::fprintf(out_, "loopfarm run: %s\n", text.c_str());
+    std::fprintf(out_, "loopfarm run: %s\n", line(counts, elapsed_s).c_str());
   }
   std::fflush(out_);
 }

@@ -11,10 +11,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <deque>
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <regex>
 #include <set>
 #include <string>
 #include <thread>
@@ -223,6 +226,48 @@ TEST_F(CoordinatorTest, ResultsOutOfOrderAreCommittedInIndexOrder) {
   EXPECT_EQ(s.zeros, db.start_counts().zeros);
   EXPECT_EQ(s.candidates, db.candidate_count());
   EXPECT_EQ(db.runs().at(0).status, "complete");
+}
+
+// Progress counts a start when its record reaches the coordinator: with
+// every update logged, the lines before the last show starts done while the
+// run's records still wait for their batch (committed every 8,192 starts or
+// 2 s: once, at the end, in a run of milliseconds).
+TEST_F(CoordinatorTest, ProgressCountsStartsAsTheirRecordsArrive) {
+  ResultsDatabase db = ResultsDatabase::open(file("farm.sqlite"), DatabaseMode::write);
+  const ResumePlan plan = plan_run(db, job_, false, 4);
+  RecordingRunner runner;
+  FakeTransport transport(3, runner);
+  StopFlag stop;
+  char* buffer = nullptr;
+  size_t size = 0;
+  std::FILE* out = open_memstream(&buffer, &size);
+  ASSERT_NE(out, nullptr);
+  CoordinatorSummary s;
+  {
+    Progress every_update(ProgressStyle::log, 0.0, out);
+    s = coordinate(db, plan, transport, runner.runner(), 5, stop, every_update);
+  }
+  std::fclose(out);
+  const std::string log(buffer, size);
+  std::free(buffer);
+  ASSERT_TRUE(s.complete);
+  std::vector<long> done, zeros;
+  const std::regex pattern(R"(loopfarm run: ([0-9,]+)/200 starts .* ([0-9,]+) zero minima)");
+  for (auto it = std::sregex_iterator(log.begin(), log.end(), pattern); it != std::sregex_iterator(); ++it) {
+    auto number = [](std::string text) {
+      text.erase(std::remove(text.begin(), text.end(), ','), text.end());
+      return std::stol(text);
+    };
+    done.push_back(number((*it)[1].str()));
+    zeros.push_back(number((*it)[2].str()));
+  }
+  ASSERT_GE(done.size(), 3u) << log;
+  EXPECT_TRUE(std::is_sorted(done.begin(), done.end())) << log;
+  EXPECT_EQ(done.back(), kStarts);
+  EXPECT_EQ(zeros.back(), s.zeros);
+  // Before the last (forced) line: starts and zeros counted, not yet committed.
+  EXPECT_GT(*std::max_element(done.begin(), done.end() - 1), 0) << log;
+  EXPECT_GT(*std::max_element(zeros.begin(), zeros.end() - 1), 0) << log;
 }
 
 TEST_F(CoordinatorTest, AStopMidChunkKeepsWhatFinishedAndAResumeRunsExactlyTheRest) {
