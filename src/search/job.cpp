@@ -246,19 +246,10 @@ Job parse_table(const toml::table& root, const std::string& file) {
                    }
                    const std::string path = r.string(node, full);
                    if (path.empty()) r.fail(node.source(), full, "empty path");
-                   // Relative to the job file, so that a job runs the same from anywhere.
-                   const std::filesystem::path p(path);
-                   job.output.database =
-                       p.is_absolute() || file.empty()
-                           ? path
-                           : (std::filesystem::path(file).parent_path() / p).lexically_normal().string();
+                   // As given: a relative path names a file where the user
+                   // stands (the working directory), as on the command line.
+                   job.output.database = path;
                  });
-    if (!t->contains("database")) {
-      job.output.database =
-          (std::filesystem::path(file).parent_path() / job.output.database).lexically_normal().string();
-    }
-  } else {
-    job.output.database = (std::filesystem::path(file).parent_path() / job.output.database).lexically_normal().string();
   }
   return job;
 }

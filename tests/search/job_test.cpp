@@ -127,7 +127,7 @@ TEST(Job, ParsesEveryTableInTheDocumentedUnits) {
   EXPECT_EQ(job.steering.deflate, (std::vector<std::string>{"planar", "trivial"}));
   EXPECT_EQ(job.steering.deflation_power, 3.0);
   EXPECT_EQ(job.steering.deflation_shift, 0.5);
-  EXPECT_EQ(job.output.database, "dir/out/results.sqlite");  // relative to the job file
+  EXPECT_EQ(job.output.database, "out/results.sqlite");  // where the user stands, not the job file
   EXPECT_EQ(job.output.report_threshold, 1e-4);
 }
 
@@ -150,8 +150,10 @@ TEST(Job, EmptyFileGivesTheDocumentedDefaults) {
   EXPECT_TRUE(job.steering.deflate.empty());
   EXPECT_EQ(job.output.database, "loopfarm.sqlite");
   EXPECT_EQ(job.output.report_threshold, 1e-6);
-  // An [output] table without a database keeps the default, still relative to the job file.
-  EXPECT_EQ(parse_job("[output]\nreport_threshold = 1e-3\n", "dir/job.toml").output.database, "dir/loopfarm.sqlite");
+  // An [output] table without a database keeps the default, in the working directory.
+  EXPECT_EQ(parse_job("[output]\nreport_threshold = 1e-3\n", "dir/job.toml").output.database, "loopfarm.sqlite");
+  EXPECT_EQ(parse_job("", "dir/job.toml").output.database, "loopfarm.sqlite");
+  EXPECT_EQ(parse_job("[output]\ndatabase = \"/abs/r.sqlite\"\n", "dir/job.toml").output.database, "/abs/r.sqlite");
   EXPECT_EQ(parse_job("[search]\nstarts = 5\n", "x.toml").text, "[search]\nstarts = 5\n");
 }
 
@@ -387,7 +389,7 @@ TEST(Job, NonAsciiInCommentsAndStringsIsAccepted) {
   EXPECT_EQ(job.loop.compliance, Compliance::full);
   EXPECT_EQ(job.optimizer.algorithm, "gauss-newton");
   EXPECT_EQ(job.steering.deflate, std::vector<std::string>{"planar"});
-  EXPECT_EQ(job.output.database, "dir/r\xC3\xA9sultats-\xC2\xA7.sqlite");
+  EXPECT_EQ(job.output.database, "r\xC3\xA9sultats-\xC2\xA7.sqlite");
   EXPECT_FALSE(
       find_toml_hazard("s = '''\n\xC2\xA7'''\nt = \"\"\"\xC2\xA7\\n\"\"\"\nu = \"\xC2\xA7\\\"\"\n").has_value());
 }

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The farm as users run it: `loopfarm run` alone and under mpirun, resume,
-# stop by signal, refusal of another job, and `loopfarm report`.
+# stop by signal, refusal of another job, `loopfarm report`, and where
+# relative paths lead.
 #
 #   tests/tools/farm_test.sh LOOPFARM SOURCE_DIR CASE [MPIEXEC]
 #
-# CASE: ranks | resume | signal | refuse | report. Each case makes its own
+# CASE: ranks | resume | signal | refuse | report | paths. Each case makes its own
 # temporary directory and removes it. Exit 0 on success; on failure one line
 # saying what differed, and exit 1.
 set -euo pipefail
@@ -324,6 +325,23 @@ report)
     [[ $code -eq 2 ]] || fail "'report $args' exited with $code, not 2"
     [[ "$(wc -l <"$tmp/err")" -eq 1 ]] || fail "'report $args' printed $(wc -l <"$tmp/err") lines"
   done
+  ;;
+paths)
+  # Relative paths are the user's: the job's database lands in the working
+  # directory, not beside the job file, run alone and through
+  # jobs/mpirun-local.sh (which must not change directory).
+  mkdir -p "$tmp/jobs" "$tmp/here"
+  sed 's/^starts = 40/starts = 6/' "$job" >"$tmp/jobs/small.toml"
+  (cd "$tmp/here" && "$loopfarm" run ../jobs/small.toml --progress none) || fail "run from another directory exited with $?"
+  [[ -f "$tmp/here/job.sqlite" ]] || fail "the job's database is not in the working directory: $(ls "$tmp/here" "$tmp/jobs")"
+  [[ ! -e "$tmp/jobs/job.sqlite" ]] || fail "the job's database was written beside the job file"
+  rm -f "$tmp/here/job.sqlite"
+  realpath_loopfarm="$(realpath "$loopfarm")"
+  (cd "$tmp/here" && LOOPFARM="$realpath_loopfarm" NP=2 "$source_dir/jobs/mpirun-local.sh" ../jobs/small.toml \
+    --progress none --db rel.sqlite) || fail "jobs/mpirun-local.sh exited with $?"
+  [[ "$(sqlite3 "$tmp/here/rel.sqlite" 'SELECT COUNT(*) FROM starts')" == 6 ]] ||
+    fail "jobs/mpirun-local.sh did not write --db rel.sqlite where it was called: $(ls "$tmp/here")"
+  [[ "$(sqlite3 "$tmp/here/rel.sqlite" 'SELECT ranks FROM runs')" == 2 ]] || fail "jobs/mpirun-local.sh did not run 2 ranks"
   ;;
 *)
   fail "unknown case"

@@ -80,7 +80,7 @@ merge)
   # Three slices, the middle one under mpirun with 2 ranks, each job file
   # naming its own database (as node-local paths would).
   for i in 0 1 2; do
-    sed "s|^database = .*|database = \"node$i.sqlite\"|" "$job" >"$tmp/job$i.toml"
+    sed "s|^database = .*|database = \"$tmp/node$i.sqlite\"|" "$job" >"$tmp/job$i.toml"
   done
   "$loopfarm" run "$tmp/job0.toml" --slice 0/3 --progress none 2>"$tmp/err" || fail "slice 0 exited with $?"
   grep -q "10 of 10 starts of slice 0/3 (start indices \[0, 10) of 30)" "$tmp/err" || fail "slice 0 said: $(head -1 "$tmp/err")"
