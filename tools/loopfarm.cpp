@@ -57,9 +57,7 @@ int run_subcommand(const loopfarm::cli::Subcommand& command) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run_loopfarm(int argc, char** argv) {
   CLI::App app{"loopfarm: find movable over-constrained linkages by minimising elastic cycle energy.", "loopfarm"};
   app.set_version_flag("--version", std::string("loopfarm ") + LOOPFARM_VERSION);
   app.require_subcommand(1);
@@ -117,5 +115,13 @@ int main(int argc, char** argv) {
   if (std::fflush(stdout) != 0 && code == 0) {
     return report("loopfarm", "cannot write to standard output", kExitFailure);
   }
+  return code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int code = run_loopfarm(argc, argv);
+  loopfarm::cli::record_exit_code(code);
   return code;
 }

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <string>
@@ -143,8 +144,21 @@ std::string signal_name(int signal) {
   }
 }
 
-std::string resume_command(const RunArguments& args, const RunRequest& s) {
-  std::string command = "loopfarm run " + args.job;
+// This process's rank as the MPI launcher tells it (Open MPI, PMIx, MPICH,
+// Slurm), read before MPI starts, so that a usage error knows it too; 0 when
+// not launched by one.
+long launcher_rank() {
+  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK", "SLURM_PROCID"}) {
+    if (const char* value = std::getenv(name)) return std::strtol(value, nullptr, 10);
+  }
+  return 0;
+}
+
+// The command that resumes the run, as far as this program knows it: mpirun's
+// other options (hosts, a script that launched it) are not visible here.
+std::string resume_command(const RunArguments& args, const RunRequest& s, int ranks) {
+  std::string command =
+      (ranks > 1 ? "mpirun -np " + std::to_string(ranks) + " " : std::string()) + "loopfarm run " + args.job;
   if (!args.starts.empty()) command += " --starts " + args.starts;
   if (!args.seed.empty()) command += " --seed " + args.seed;
   if (s.farm.slice) command += " --slice " + to_string(*s.farm.slice);
@@ -165,6 +179,11 @@ int run_run_command(const RunArguments& args) {
     return kExitUsage;
   }
   const RunRequest& s = *settings;
+  // Destroyed before `mpi`: the code is on disk before MPI_Finalize.
+  struct ExitRecord {
+    int code = kExitFailure;
+    ~ExitRecord() { record_exit_code(code); }
+  } exit_record;
   FarmSummary summary;
   try {
     summary = run_farm(s.job, mpi.world(), g_stop, s.farm);
@@ -173,13 +192,14 @@ int run_run_command(const RunArguments& args) {
     // The system's failure (a full disk, an I/O error): exit 1, the
     // database as its last commit left it, to be resumed.
     if (error.cause() == DatabaseError::Cause::failed) throw EnvironmentError(std::string("database: ") + error.what());
+    exit_record.code = kExitUsage;
     throw UsageError("database", error.what());
   }
   switch (summary.status) {
     case FarmStatus::refused:
-      return kExitUsage;
+      return exit_record.code = kExitUsage;
     case FarmStatus::failed:
-      return kExitFailure;
+      return exit_record.code = kExitFailure;
     case FarmStatus::complete:
     case FarmStatus::stopped:
       break;
@@ -187,6 +207,7 @@ int run_run_command(const RunArguments& args) {
   // Every rank exits with rank 0's code, so that mpirun passes it on (3 for a
   // stopped run); only rank 0 reports.
   const int code = summary.status == FarmStatus::complete ? kExitSuccess : kExitStopped;
+  exit_record.code = code;
   if (mpi.rank() != 0) return code;
   const std::string& database = s.job.output.database;
   std::string slice;
@@ -208,7 +229,7 @@ int run_run_command(const RunArguments& args) {
                summary.peak_mb_max);
   if (summary.status == FarmStatus::stopped) {
     std::fprintf(stderr, "loopfarm run: stopped by %s; resume with: %s\n", signal_name(summary.stop_signal).c_str(),
-                 resume_command(args, s).c_str());
+                 resume_command(args, s, summary.ranks).c_str());
   }
   return code;
 }
@@ -245,6 +266,15 @@ Subcommand add_run_command(CLI::App& parent) {
       ->type_name("STYLE")
       ->capture_default_str();
   return {app, [args] { return run_run_command(*args); }};
+}
+
+void record_exit_code(int code) {
+  const char* path = std::getenv("LOOPFARM_EXIT_FILE");
+  if (path == nullptr || *path == '\0' || launcher_rank() != 0) return;
+  if (std::FILE* file = std::fopen(path, "w")) {
+    std::fprintf(file, "%d\n", code);
+    std::fclose(file);
+  }
 }
 
 }  // namespace loopfarm::cli

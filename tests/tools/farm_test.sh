@@ -5,7 +5,7 @@
 #
 #   tests/tools/farm_test.sh LOOPFARM SOURCE_DIR CASE [MPIEXEC]
 #
-# CASE: ranks | resume | signal | refuse | report | paths. Each case makes its own
+# CASE: ranks | resume | signal | refuse | report | paths | script. Each case makes its own
 # temporary directory and removes it. Exit 0 on success; on failure one line
 # saying what differed, and exit 1.
 set -euo pipefail
@@ -139,7 +139,7 @@ signal)
     sed -i "s/^starts = [0-9]*\$/starts = $long/" "$job"
   done
   [[ $code -eq 3 ]] || fail "a stopped run exited with $code, not 3: $(tail -2 "$tmp/err")"
-  grep -q "resume with: loopfarm run" "$tmp/err" || fail "no resume line: $(tail -1 "$tmp/err")"
+  grep -q "resume with: mpirun -np 2 loopfarm run" "$tmp/err" || fail "no resume line: $(tail -1 "$tmp/err")"
   done_before="$(sqlite3 "$tmp/stopped.sqlite" 'SELECT COUNT(*) FROM starts')"
   [[ "$done_before" -lt "$long" ]] || fail "the run was not stopped early ($done_before starts)"
   [[ "$(sqlite3 "$tmp/stopped.sqlite" 'SELECT status FROM runs')" == stopped ]] || fail "run status is not stopped"
@@ -342,6 +342,47 @@ paths)
   [[ "$(sqlite3 "$tmp/here/rel.sqlite" 'SELECT COUNT(*) FROM starts')" == 6 ]] ||
     fail "jobs/mpirun-local.sh did not write --db rel.sqlite where it was called: $(ls "$tmp/here")"
   [[ "$(sqlite3 "$tmp/here/rel.sqlite" 'SELECT ranks FROM runs')" == 2 ]] || fail "jobs/mpirun-local.sh did not run 2 ranks"
+  ;;
+script)
+  # jobs/mpirun-local.sh reads like one process: a bad option is one line and
+  # exit 2 (no Open MPI banner); Ctrl-C (SIGINT to the script's process group,
+  # as a terminal sends it) stops every rank with the starts in hand
+  # committed, exit 3, and a line naming the script that resumes the run.
+  script="$source_dir/jobs/mpirun-local.sh"
+  real_loopfarm="$(realpath "$loopfarm")"
+  cd "$tmp"
+  set +e
+  LOOPFARM="$real_loopfarm" NP=2 "$script" "$job" --starts x 2>"$tmp/err"
+  code=$?
+  set -e
+  [[ $code -eq 2 ]] || fail "a bad option through the script exited with $code, not 2"
+  [[ "$(cat "$tmp/err")" == 'loopfarm run: --starts: "x" is not an integer' ]] ||
+    fail "a bad option through the script printed more than rank 0's line: $(head -c 300 "$tmp/err")"
+  sed -i 's/^starts = 40$/starts = 20000/' "$job"
+  set +e
+  # In a group of its own with SIGINT at its default, as a terminal's
+  # foreground job (a background job of a script starts with SIGINT ignored).
+  LOOPFARM="$real_loopfarm" NP=2 setsid env --default-signal=INT "$script" "$job" --db stopped.sqlite --progress none \
+    2>"$tmp/err" &
+  pid=$!
+  for ((i = 0; i < 300; ++i)); do
+    n="$(sqlite3 stopped.sqlite 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
+    [[ "${n:-0}" -gt 0 ]] && break
+    sleep 0.1
+  done
+  kill -INT -- "-$pid"
+  wait "$pid"
+  code=$?
+  set -e
+  [[ $code -eq 3 ]] || fail "Ctrl-C to the script exited with $code, not 3: $(tail -2 "$tmp/err")"
+  [[ "$(sqlite3 stopped.sqlite 'SELECT status FROM runs')" == stopped ]] || fail "the run is not 'stopped'"
+  done_before="$(sqlite3 stopped.sqlite 'SELECT COUNT(*) FROM starts')"
+  ((done_before > 0 && done_before < 20000)) || fail "$done_before starts committed at the stop"
+  resume="$(grep -o 'jobs/mpirun-local.sh: stopped early; resume with: .*' "$tmp/err" | sed 's/.*resume with: //')"
+  [[ "$resume" == "NP=2 $script $job --db stopped.sqlite --progress none" ]] || fail "the resume line is '$resume'"
+  LOOPFARM="$real_loopfarm" NP=2 "$script" "$job" --db stopped.sqlite --progress none 2>"$tmp/err" ||
+    fail "the resume exited with $?"
+  [[ "$(sqlite3 stopped.sqlite 'SELECT COUNT(*) FROM starts')" == 20000 ]] || fail "the resumed run lacks starts"
   ;;
 *)
   fail "unknown case"

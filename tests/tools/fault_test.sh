@@ -350,7 +350,7 @@ kill | term)
       elif [[ "$signal" == TERM && "$victim" != mpirun && "$moment" =~ ^[0-9]+$ && "$delivered" == yes ]]; then
         # A rank that gets SIGTERM while the run is under way stops it.
         ((code == 3)) || fail "fault $faults: SIGTERM to rank $victim: mpirun exited with $code, not 3"
-        grep -q "resume with: loopfarm run" "$tmp/faulted.err" || fail "fault $faults: no resume line"
+        grep -q "resume with: mpirun -np 2 loopfarm run" "$tmp/faulted.err" || fail "fault $faults: no resume line"
         [[ "$status" == stopped ]] || fail "fault $faults: exit 3 but the run is '$status', not stopped"
       fi
     done
