@@ -180,10 +180,12 @@ std::int64_t ResultsDatabase::candidate_count() const {
   return q.step() ? q.integer(0) : 0;
 }
 
-std::vector<CandidateRow> ResultsDatabase::candidates(const CandidateFilter& filter) const {
-  const Impl& m = impl();
+namespace {
+
+// The columns a CandidateRow is read from, in read_candidate_row's order.
+std::string candidate_row_columns() {
   std::string sql =
-      "SELECT candidate_id, family, setup, detail, E_mean, E_max, hits, first_run, first_start, local_dimension, "
+      "candidate_id, family, setup, detail, E_mean, E_max, hits, first_run, first_start, local_dimension, "
       "free_parameters, rigid_residual, family_residual, bennett_residual, planar_residual, spherical_residual, "
       "trivial_residual, full_turn, range_lo_deg, range_hi_deg, joints";
   for (const char* kind : {"a%d", "alpha%d_deg", "d%d"}) {
@@ -193,50 +195,103 @@ std::vector<CandidateRow> ResultsDatabase::candidates(const CandidateFilter& fil
       sql += std::string(", ") + column;
     }
   }
-  sql += " FROM candidates WHERE 1";
+  return sql;
+}
+
+// Reads candidate_row_columns() from column `c` on; returns the next column.
+int read_candidate_row(const Query& q, int c, CandidateRow& r) {
+  r.id = q.integer(c++);
+  r.family = q.text(c++);
+  r.setup = q.text(c++);
+  r.detail = q.text(c++);
+  r.E_mean = q.real(c++);
+  r.E_max = q.real(c++);
+  r.hits = q.integer(c++);
+  r.first_run = q.integer(c++);
+  r.first_start = q.integer(c++);
+  r.local_dimension = static_cast<int>(q.integer(c++));
+  r.free_parameters = static_cast<int>(q.integer(c++));
+  r.rigid_residual = q.real(c++);
+  r.family_residual = q.real(c++);
+  r.bennett_residual = q.real(c++);
+  r.planar_residual = q.real(c++);
+  r.spherical_residual = q.real(c++);
+  r.trivial_residual = q.real(c++);
+  r.full_turn = q.integer(c++) != 0;
+  r.range_lo_deg = q.real(c++);
+  r.range_hi_deg = q.real(c++);
+  r.joints = static_cast<int>(q.integer(c++));
+  for (std::vector<double>* v : {&r.a, &r.alpha_deg, &r.d}) {
+    for (int i = 0; i < kMaxJoints; ++i, ++c) {
+      if (i < r.joints) v->push_back(q.real(c));
+    }
+  }
+  return c;
+}
+
+// " WHERE ..." of a filter's conditions; its parameters are ?1 (family), ?2
+// (max_energy) and ?3 (first_run), bound by bind_candidate_filter.
+std::string candidate_filter_sql(const CandidateFilter& filter) {
+  std::string sql = " WHERE 1";
   if (!filter.family.empty()) sql += " AND family = ?1";
   if (filter.max_energy) sql += " AND E_mean <= ?2";
   if (filter.first_run) sql += " AND first_run = ?3";
-  sql += " ORDER BY family <> 'unclassified', E_mean, candidate_id LIMIT ?4 OFFSET ?5";
-  Query q(m.path, m.db(), sql);
+  return sql;
+}
+
+void bind_candidate_filter(Query& q, const CandidateFilter& filter) {
   if (!filter.family.empty()) q.bind(1, filter.family);
   if (filter.max_energy) q.bind(2, *filter.max_energy);
   if (filter.first_run) q.bind(3, *filter.first_run);
+}
+
+}  // namespace
+
+std::int64_t ResultsDatabase::candidate_count(const CandidateFilter& filter) const {
+  const Impl& m = impl();
+  Query q(m.path, m.db(), "SELECT COUNT(*) FROM candidates" + candidate_filter_sql(filter));
+  bind_candidate_filter(q, filter);
+  return q.step() ? q.integer(0) : 0;
+}
+
+std::optional<CandidateIdRange> ResultsDatabase::candidate_id_range() const {
+  const Impl& m = impl();
+  Query q(m.path, m.db(), "SELECT MIN(candidate_id), MAX(candidate_id) FROM candidates");
+  if (!q.step() || q.null(0)) return std::nullopt;
+  return CandidateIdRange{q.integer(0), q.integer(1)};
+}
+
+std::vector<CandidateRow> ResultsDatabase::candidates(const CandidateFilter& filter) const {
+  const Impl& m = impl();
+  // candidate_id last: equal energies come in one order, the same every time.
+  Query q(m.path, m.db(),
+          "SELECT " + candidate_row_columns() + " FROM candidates" + candidate_filter_sql(filter) +
+              " ORDER BY family <> 'unclassified', E_mean, candidate_id LIMIT ?4 OFFSET ?5");
+  bind_candidate_filter(q, filter);
   q.bind(4, filter.limit < 0 ? std::int64_t{-1} : filter.limit);
   q.bind(5, filter.offset < 0 ? std::int64_t{0} : filter.offset);
   std::vector<CandidateRow> rows;
   while (q.step()) {
     CandidateRow r;
-    int c = 0;
-    r.id = q.integer(c++);
-    r.family = q.text(c++);
-    r.setup = q.text(c++);
-    r.detail = q.text(c++);
-    r.E_mean = q.real(c++);
-    r.E_max = q.real(c++);
-    r.hits = q.integer(c++);
-    r.first_run = q.integer(c++);
-    r.first_start = q.integer(c++);
-    r.local_dimension = static_cast<int>(q.integer(c++));
-    r.free_parameters = static_cast<int>(q.integer(c++));
-    r.rigid_residual = q.real(c++);
-    r.family_residual = q.real(c++);
-    r.bennett_residual = q.real(c++);
-    r.planar_residual = q.real(c++);
-    r.spherical_residual = q.real(c++);
-    r.trivial_residual = q.real(c++);
-    r.full_turn = q.integer(c++) != 0;
-    r.range_lo_deg = q.real(c++);
-    r.range_hi_deg = q.real(c++);
-    r.joints = static_cast<int>(q.integer(c++));
-    for (std::vector<double>* v : {&r.a, &r.alpha_deg, &r.d}) {
-      for (int i = 0; i < kMaxJoints; ++i, ++c) {
-        if (i < r.joints) v->push_back(q.real(c));
-      }
-    }
+    read_candidate_row(q, 0, r);
     rows.push_back(std::move(r));
   }
   return rows;
+}
+
+std::optional<CandidateDetails> ResultsDatabase::candidate(std::int64_t candidate_id) const {
+  const Impl& m = impl();
+  Query q(m.path, m.db(),
+          "SELECT " + candidate_row_columns() +
+              ", canonical_key, singular_values, grid_cell FROM candidates WHERE candidate_id = ?1");
+  q.bind(1, candidate_id);
+  if (!q.step()) return std::nullopt;
+  CandidateDetails out;
+  int c = read_candidate_row(q, 0, out.row);
+  out.canonical_key = q.text(c++);
+  out.singular_values = q.text(c++);
+  out.grid_cell = q.text(c++);
+  return out;
 }
 
 ResultsDatabase::Snapshot ResultsDatabase::snapshot() const {

@@ -878,6 +878,87 @@ TEST_F(ResultsDatabaseTest, TypedQueriesAgreeWithPlainSql) {
   }
 }
 
+// A selection's count, the id range and one candidate whole, against plain SQL.
+TEST_F(ResultsDatabaseTest, OneCandidateWholeAndTheCountOfASelection) {
+  const std::string path = file("r.sqlite");
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  EXPECT_FALSE(db.candidate_id_range().has_value());
+  EXPECT_FALSE(db.candidate(1).has_value());
+  const std::int64_t first = db.open_run(identity()).run_id;
+  StartRecord planar = verified_start(0, geometry_deg({1, 2, 1, 2}, {0, 0, 0, 0}, {0, 0, 0, 0}), "p", 2e-30);
+  planar.candidate.family = "planar";
+  db.commit(first, {verified_start(1, bennett_canonical(), "k", 3e-20), planar,
+                    verified_start(2, shifted(bennett_canonical(), 1e-3), "k2", 5e-21), plain_start(3, 0.5)});
+  const std::int64_t second = db.open_run(identity("other job", 7), true).run_id;
+  db.commit(second, {verified_start(0, shifted(bennett_canonical(), 2e-3), "k3", 1e-22)});
+
+  const std::optional<CandidateIdRange> ids = db.candidate_id_range();
+  ASSERT_TRUE(ids.has_value());
+  EXPECT_EQ(std::to_string(ids->first), value(db, "SELECT MIN(candidate_id) FROM candidates"));
+  EXPECT_EQ(std::to_string(ids->last), value(db, "SELECT MAX(candidate_id) FROM candidates"));
+
+  // The count ignores limit and offset and applies every condition.
+  CandidateFilter filter;
+  filter.limit = 1;
+  filter.offset = 2;
+  EXPECT_EQ(db.candidate_count(filter), count(db, "candidates"));
+  filter.family = "bennett";
+  EXPECT_EQ(db.candidate_count(filter), 3);
+  filter.max_energy = 1e-20;
+  EXPECT_EQ(db.candidate_count(filter), 2);
+  filter.first_run = second;
+  EXPECT_EQ(db.candidate_count(filter), 1);
+  filter.family = "spherical";
+  EXPECT_EQ(db.candidate_count(filter), 0);
+
+  // One candidate: the row the list reads, and the store's own columns.
+  for (std::int64_t id = ids->first; id <= ids->last; ++id) {
+    const std::optional<CandidateDetails> c = db.candidate(id);
+    ASSERT_TRUE(c.has_value()) << id;
+    const std::string where = " FROM candidates WHERE candidate_id = " + std::to_string(id);
+    EXPECT_EQ(c->row.id, id);
+    EXPECT_EQ(c->row.family, value(db, "SELECT family" + where));
+    EXPECT_EQ(c->row.E_mean, real(db, "SELECT E_mean" + where));
+    EXPECT_EQ(c->row.first_run, std::stoll(value(db, "SELECT first_run" + where)));
+    EXPECT_EQ(c->canonical_key, value(db, "SELECT canonical_key" + where));
+    EXPECT_EQ(c->singular_values, value(db, "SELECT singular_values" + where));
+    EXPECT_EQ(c->grid_cell, value(db, "SELECT grid_cell" + where));
+    ASSERT_EQ(c->row.a.size(), 4u);
+    EXPECT_EQ(c->row.alpha_deg[1], real(db, "SELECT alpha2_deg" + where));
+    EXPECT_EQ(c->row.d[3], real(db, "SELECT d4" + where));
+  }
+  EXPECT_FALSE(db.candidate(ids->last + 1).has_value());
+  EXPECT_FALSE(db.candidate(0).has_value());
+  EXPECT_FALSE(db.candidate(-5).has_value());
+}
+
+// Candidates of equal energy come in id order, the same at every read.
+TEST_F(ResultsDatabaseTest, EqualEnergiesAreOrderedById) {
+  const std::string path = file("r.sqlite");
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  const std::int64_t run = db.open_run(identity()).run_id;
+  std::vector<StartRecord> records;
+  for (int i = 0; i < 6; ++i) {
+    records.push_back(verified_start(static_cast<std::uint64_t>(i), shifted(bennett_canonical(), 1e-3 * i),
+                                     "tie" + std::to_string(i), i % 2 ? 1e-20 : 1e-21));
+  }
+  db.commit(run, records);
+  std::vector<long long> ids;
+  for (const CandidateRow& r : db.candidates({})) ids.push_back(r.id);
+  const std::vector<std::vector<std::string>> expected =
+      rows(db, "SELECT candidate_id FROM candidates ORDER BY E_mean, candidate_id");
+  ASSERT_EQ(ids.size(), expected.size());
+  for (size_t i = 0; i < ids.size(); ++i) EXPECT_EQ(std::to_string(ids[i]), expected[i][0]);
+  // Three at each energy: within each, ascending ids.
+  const std::vector<CandidateRow> listed = db.candidates({});
+  for (size_t i = 1; i < listed.size(); ++i) {
+    if (listed[i - 1].E_mean == listed[i].E_mean) {
+      EXPECT_LT(listed[i - 1].id, listed[i].id);
+    }
+  }
+  EXPECT_EQ(listed.front().E_mean, 1e-21);
+}
+
 // A snapshot sees one committed state while a writer goes on committing.
 TEST_F(ResultsDatabaseTest, ASnapshotSeesOneState) {
   const std::string path = file("r.sqlite");

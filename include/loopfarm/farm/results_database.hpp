@@ -178,6 +178,22 @@ struct CandidateRow {
   std::vector<double> a, alpha_deg, d;
 };
 
+// One row of `candidates` whole: the reader's row and the columns only the
+// store itself needs (the key and grid cell it de-duplicates by, and the
+// local-dimension analysis's singular values as the stored JSON array text).
+struct CandidateDetails {
+  CandidateRow row;
+  std::string canonical_key;
+  std::string singular_values;
+  std::string grid_cell;
+};
+
+// The smallest and largest candidate_id of a database.
+struct CandidateIdRange {
+  std::int64_t first = 0;
+  std::int64_t last = 0;
+};
+
 // Which candidates, in the report's order: unclassified first (a possible new
 // family, or a defect for 4R), then by E_mean from zero upwards, then by id.
 struct CandidateFilter {
@@ -260,7 +276,13 @@ class ResultsDatabase {
   std::vector<FamilyCount> family_counts(std::optional<std::int64_t> first_run = {}) const;
   EnergyHistogram energy_histogram(std::optional<std::int64_t> run_id = {}) const;
   std::int64_t candidate_count() const;
+  // How many candidates `filter` selects, its limit and offset aside.
+  std::int64_t candidate_count(const CandidateFilter& filter) const;
+  // Empty when the database holds no candidate.
+  std::optional<CandidateIdRange> candidate_id_range() const;
   std::vector<CandidateRow> candidates(const CandidateFilter& filter) const;
+  // The candidate with this id; empty when there is none.
+  std::optional<CandidateDetails> candidate(std::int64_t candidate_id) const;
 
   // Merges the databases `inputs`, each holding one run of the same job (its
   // text apart from the [output] table) and seed, into a new database `output`
