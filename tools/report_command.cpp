@@ -23,7 +23,7 @@
 #include "cli_support.hpp"
 #include "loopfarm/core/assembly.hpp"
 #include "loopfarm/core/cycle.hpp"
-#include "loopfarm/farm/joint_axes.hpp"
+#include "loopfarm/farm/candidate_pose.hpp"
 #include "loopfarm/farm/results_database.hpp"
 #include "loopfarm/search/classify.hpp"
 #include "plot.hpp"
@@ -107,15 +107,16 @@ std::string grouped(long long n) {
   return (n < 0 ? "-" : "") + digits;
 }
 
-// The stored geometry's length scale, sqrt(mean(a_i^2 + d_i^2)) (1 for the
-// canonical geometry; 1 when every length is zero).
+// The stored geometry's length scale (core's length_scale: 1 for the
+// canonical geometry); 1 when it is not a positive number (a damaged row).
 double scale_of(const CandidateRow& r) {
-  double sum = 0.0;
-  for (double v : r.a) sum += std::isfinite(v) ? v * v : 0.0;
-  for (double v : r.d) sum += std::isfinite(v) ? v * v : 0.0;
-  const double scale = r.joints > 0 ? std::sqrt(sum / r.joints) : 0.0;
-  return scale > 0.0 ? scale : 1.0;
+  const double scale = length_scale(candidate_geometry(r));
+  return std::isfinite(scale) && scale > 0.0 ? scale : 1.0;
 }
+
+// The joints whose geometry the row holds: `joints` as stored, within what
+// was read (a damaged row may claim more than kMaxJoints, or fewer than 0).
+int stored_joints(const CandidateRow& r) { return std::clamp(r.joints, 0, static_cast<int>(r.a.size())); }
 
 const double kAngleRoundOffDeg = kRoundOff * kDegreesPerRadian;
 
@@ -310,7 +311,7 @@ std::vector<Field> fields(const CandidateRow& r, int joints) {
 
 void print_csv(const std::vector<CandidateRow>& rows) {
   int joints = 4;
-  for (const CandidateRow& r : rows) joints = std::max(joints, r.joints);
+  for (const CandidateRow& r : rows) joints = std::max(joints, stored_joints(r));
   const std::vector<Field> header = fields(CandidateRow{}, joints);
   for (size_t i = 0; i < header.size(); ++i) std::printf("%s%s", i ? "," : "", header[i].name.c_str());
   std::printf("\n");
@@ -330,7 +331,7 @@ std::string json_object(const std::vector<Field>& f) {
 void print_json(const std::vector<CandidateRow>& rows) {
   std::printf("[");
   for (size_t k = 0; k < rows.size(); ++k) {
-    std::printf("%s\n%s", k ? "," : "", json_object(fields(rows[k], rows[k].joints)).c_str());
+    std::printf("%s\n%s", k ? "," : "", json_object(fields(rows[k], stored_joints(rows[k]))).c_str());
   }
   std::printf("%s]\n", rows.empty() ? "" : "\n");
 }
@@ -373,7 +374,7 @@ std::string singular_values_json(const std::string& stored) {
 }
 
 std::vector<Field> detail_fields(const CandidateDetails& c) {
-  std::vector<Field> f = fields(c.row, c.row.joints);
+  std::vector<Field> f = fields(c.row, stored_joints(c.row));
   f.push_back({"canonical_key", csv_text(c.canonical_key), json_string(c.canonical_key), c.canonical_key});
   f.push_back(
       {"singular_values", csv_text(c.singular_values), singular_values_json(c.singular_values), c.singular_values});
@@ -413,7 +414,7 @@ std::vector<Field> axis_fields(const std::optional<CandidatePose>& pose, int joi
     }
     return std::move(f.list());
   }
-  const JointAxis& axis = pose->axes[static_cast<size_t>(joint)];
+  const Axis& axis = pose->axes[static_cast<size_t>(joint)];
   f.number("theta_deg", pose->theta[joint] * kDegreesPerRadian, kAngleRoundOffDeg);
   const char* xyz = "xyz";
   for (int i = 0; i < 3; ++i) f.number(std::string("point_") + xyz[i], axis.point[i], length);
@@ -430,7 +431,7 @@ void print_candidate_text(const CandidateDetails& c, const std::optional<Candida
   for (const Field& x : f) width = std::max(width, x.name.size());
   // The geometry columns follow as a table, one row per joint.
   std::set<std::string> geometry;
-  for (const Field& x : fields(CandidateRow{}, r.joints)) geometry.insert(x.name);
+  for (const Field& x : fields(CandidateRow{}, stored_joints(r))) geometry.insert(x.name);
   for (const Field& x : fields(CandidateRow{}, 0)) geometry.erase(x.name);
   for (const Field& x : f) {
     if (!geometry.count(x.name)) std::printf("  %-*s %s\n", static_cast<int>(width), x.name.c_str(), x.text.c_str());
@@ -456,7 +457,7 @@ void print_candidate_text(const CandidateDetails& c, const std::optional<Candida
                                      {"point (x, y, z)", {}},
                                      {"direction (x, y, z)", {}}};
   const double length = kRoundOff * scale_of(r);
-  for (int j = 0; j < r.joints; ++j) {
+  for (int j = 0; j < stored_joints(r); ++j) {
     const size_t i = static_cast<size_t>(j);
     columns[0].cells.push_back(std::to_string(j + 1));
     columns[1].cells.push_back(shown(r.a[i], length, 6));
@@ -482,7 +483,7 @@ void print_candidate_markdown(const CandidateDetails& c, const std::optional<Can
   std::printf("\n| joint | theta [deg] | point x | point y | point z | direction x | direction y | direction z |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   const double length = kRoundOff * scale_of(r);
-  for (int j = 0; j < r.joints; ++j) {
+  for (int j = 0; j < stored_joints(r); ++j) {
     const std::vector<Field> a = axis_fields(pose, j, length);
     std::printf("|");
     for (const Field& x : a) std::printf(" %s |", x.text.c_str());
@@ -496,7 +497,7 @@ void print_candidate_csv(const CandidateDetails& c, const std::optional<Candidat
                          const std::string& missing) {
   const std::vector<Field> common = detail_fields(c);
   const std::vector<Field> at = pose_fields(pose, missing);
-  for (int j = 0; j < c.row.joints; ++j) {
+  for (int j = 0; j < stored_joints(c.row); ++j) {
     std::vector<Field> row = common;
     row.insert(row.end(), at.begin(), at.end());
     const std::vector<Field> a = axis_fields(pose, j, 0.0);
@@ -517,7 +518,7 @@ void print_candidate_json(const CandidateDetails& c, const std::optional<Candida
   std::string pose_json = json_object(pose_fields(pose, missing));
   out += ",\"pose\":" + pose_json;
   std::string axes = "[";
-  for (int j = 0; j < c.row.joints; ++j) {
+  for (int j = 0; j < stored_joints(c.row); ++j) {
     const std::vector<Field> a = axis_fields(pose, j, 0.0);
     // Without a pose the axis is null, not a triple of nulls.
     const std::string point = pose ? "[" + a[2].json + "," + a[3].json + "," + a[4].json + "]" : "null";

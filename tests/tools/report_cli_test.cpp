@@ -514,5 +514,37 @@ TEST_F(ReportCli, APoseOutsideARockersRangeOrOfALoopThatDoesNotMove) {
   expect_refused({"--candidate", "2", "--summary"}, {"--candidate"});
 }
 
+// Rows a damaged or hand-edited file may hold (a joint count beyond what is
+// stored, a NULL length) are shown as they are, never crashed on.
+TEST_F(ReportCli, ARowThatIsNoLoopIsShownNotCrashedOn) {
+  const fs::path copy = dir_ / "edited.sqlite";
+  fs::copy_file(database_, copy);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(copy.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "PRAGMA journal_mode = DELETE; UPDATE candidates SET joints = 99 WHERE candidate_id = 2; "
+                         "UPDATE candidates SET a2 = NULL WHERE candidate_id = 1; "
+                         "UPDATE candidates SET joints = -3 WHERE candidate_id = 4;",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  for (const std::string format : {"table", "csv", "json", "markdown"}) {
+    const testing::CommandResult list = run_command(kExecutable, "report", {copy.string(), "--format", format});
+    EXPECT_EQ(list.exit_code, 0) << format << ": " << list.err;
+    for (const char* id : {"1", "2", "4"}) {
+      const testing::CommandResult r =
+          run_command(kExecutable, "report", {copy.string(), "--candidate", id, "--format", format});
+      EXPECT_EQ(r.exit_code, 0) << format << " " << id << ": " << r.err;
+      EXPECT_NE(r.err.find("no pose"), std::string::npos) << format << " " << id << ": " << r.err;
+      if (format == "json") {
+        EXPECT_TRUE(json_valid(r.out)) << r.out;
+      }
+    }
+  }
+  const testing::CommandResult r = run_command(kExecutable, "report", {copy.string(), "--format", "json"});
+  ASSERT_TRUE(json_valid(r.out));
+  EXPECT_EQ(json_length(r.out), kCandidates);
+}
+
 }  // namespace
 }  // namespace loopfarm

@@ -1,6 +1,6 @@
 // A stored linkage as lines in space, for CAD and scripts: the axis of every
 // joint (a point on it and its unit direction) in the base frame, at a closed
-// pose of the rigid loop on its motion.
+// pose of the rigid loop on its motion (core's joint_axes at that pose).
 //
 // Frames are those of the closure (loop.hpp): frame k is T_1 ... T_k, whose z
 // axis is joint k's axis (0-based); frame 0 is the base frame, so joint 1's
@@ -13,20 +13,11 @@
 #include <optional>
 #include <vector>
 
+#include "loopfarm/core/constructions.hpp"
 #include "loopfarm/core/loop.hpp"
 #include "loopfarm/farm/results_database.hpp"
 
 namespace loopfarm {
-
-struct JointAxis {
-  Vector3 point;      // frame k's origin, in the geometry's length unit
-  Vector3 direction;  // unit
-};
-
-// The axes of `geometry` at the joint angles `theta` (one per joint, in joint
-// order). The loop need not close at theta: the axes are those of the open
-// chain T_1 ... T_k.
-std::vector<JointAxis> joint_axes(const LoopGeometry& geometry, const JointVector& theta);
 
 // The canonical geometry a candidates row stores (length scale 1, twists in
 // degrees converted to radians).
@@ -40,7 +31,7 @@ struct CandidatePose {
   bool full_turn = false;         // on that motion joint 1 turns fully
   double range_lo_deg = 0.0;      // joint 1's range on that motion, unwrapped
   double range_hi_deg = 0.0;
-  std::vector<JointAxis> axes;
+  std::vector<Axis> axes;  // core's joint_axes at theta
 };
 
 // The pose loopfarm verify and loopfarm motion start from: on the motion

@@ -1,5 +1,5 @@
-// Joint axes of a stored linkage at a closed pose (joint_axes.hpp).
-#include "loopfarm/farm/joint_axes.hpp"
+// A closed pose of a stored linkage and its joint axes there (candidate_pose.hpp).
+#include "loopfarm/farm/candidate_pose.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,17 +14,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegreesPerRadian = 180.0 / kPi;
 
 }  // namespace
-
-std::vector<JointAxis> joint_axes(const LoopGeometry& geometry, const JointVector& theta) {
-  std::vector<JointAxis> axes;
-  const int n = geometry.joints();
-  axes.reserve(static_cast<size_t>(n));
-  for (int k = 0; k < n; ++k) {
-    const Eigen::Isometry3d frame = forward_transform(geometry, theta, k);
-    axes.push_back({frame.translation(), frame.linear().col(2).normalized()});
-  }
-  return axes;
-}
 
 LoopGeometry candidate_geometry(const CandidateRow& row) {
   return LoopGeometry::from_degrees(std::span<const double>(row.a), std::span<const double>(row.alpha_deg),

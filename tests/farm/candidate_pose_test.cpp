@@ -3,7 +3,7 @@
 // consecutive axis lines from their common normal (a_i and alpha_i), the
 // offsets d_i between the feet of the normals, the planar loop's points as a
 // polygon with the link lengths as sides, and the pose's input angle.
-#include "loopfarm/farm/joint_axes.hpp"
+#include "loopfarm/farm/candidate_pose.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -29,7 +29,7 @@ struct CommonNormal {
   double length = 0.0;
 };
 
-CommonNormal common_normal(const JointAxis& l1, const JointAxis& l2) {
+CommonNormal common_normal(const Axis& l1, const Axis& l2) {
   const Vector3 w = l1.point - l2.point;
   const double b = l1.direction.dot(l2.direction);
   const double d1 = l1.direction.dot(w);
@@ -53,12 +53,12 @@ CommonNormal common_normal(const JointAxis& l1, const JointAxis& l2) {
 // Every axis a unit vector; consecutive lines (the last to the first too) a_k
 // apart at the twist alpha_k (in [0, pi]), with the normal's foot on line k+1
 // at that line's point and d_k between the feet on line k.
-void expect_lines_of(const LoopGeometry& g, const std::vector<JointAxis>& axes, double tolerance) {
+void expect_lines_of(const LoopGeometry& g, const std::vector<Axis>& axes, double tolerance) {
   const int n = g.joints();
   ASSERT_EQ(static_cast<int>(axes.size()), n);
   for (int k = 0; k < n; ++k) {
-    const JointAxis& here = axes[static_cast<size_t>(k)];
-    const JointAxis& next = axes[static_cast<size_t>((k + 1) % n)];
+    const Axis& here = axes[static_cast<size_t>(k)];
+    const Axis& next = axes[static_cast<size_t>((k + 1) % n)];
     EXPECT_NEAR(here.direction.norm(), 1.0, 1e-12) << "axis " << k + 1;
     const double angle = std::acos(std::clamp(here.direction.dot(next.direction), -1.0, 1.0));
     EXPECT_NEAR(angle, std::abs(g.alpha[k]), tolerance) << "twist between axes " << k + 1 << " and " << k + 2;
@@ -71,16 +71,16 @@ void expect_lines_of(const LoopGeometry& g, const std::vector<JointAxis>& axes, 
   }
 }
 
-TEST(JointAxes, AtZeroAnglesTheFirstLinkIsAlongXAndTwistedAboutIt) {
+TEST(CandidatePose, AtZeroAnglesTheFirstLinkIsAlongXAndTwistedAboutIt) {
   const LoopGeometry g = geometry_deg({2, 3, 4, 5}, {30, 0, 0, 0}, {0.5, 0, 0, 0});
-  const std::vector<JointAxis> axes = joint_axes(g, JointVector::Zero(4));
+  const std::vector<Axis> axes = joint_axes(g, JointVector::Zero(4));
   EXPECT_TRUE(axes[0].point.isZero(0.0));
   EXPECT_TRUE(axes[0].direction.isApprox(Vector3(0, 0, 1)));
   EXPECT_TRUE(axes[1].point.isApprox(Vector3(2, 0, 0.5)));
   EXPECT_TRUE(axes[1].direction.isApprox(Vector3(0, -std::sin(30 * kDeg), std::cos(30 * kDeg))));
 }
 
-TEST(JointAxes, PlanarFourBarAxesAreParallelToZThroughAPolygonOfTheLinkLengths) {
+TEST(CandidatePose, PlanarFourBarAxesAreParallelToZThroughAPolygonOfTheLinkLengths) {
   // Grashof, shortest link next to joint 1: joint 1 turns fully.
   const LoopGeometry g = geometry_deg({1, 3, 2.5, 3.2}, {0, 0, 0, 0}, {0, 0, 0, 0});
   const std::optional<CandidatePose> pose = candidate_pose(g);
@@ -90,10 +90,10 @@ TEST(JointAxes, PlanarFourBarAxesAreParallelToZThroughAPolygonOfTheLinkLengths) 
   EXPECT_NEAR(pose->theta[0], 0.0, 1e-12);
   EXPECT_LT(pose->closure_residual, 1e-9);
   for (int k = 0; k < 4; ++k) {
-    const JointAxis& axis = pose->axes[static_cast<size_t>(k)];
+    const Axis& axis = pose->axes[static_cast<size_t>(k)];
     EXPECT_NEAR(axis.direction.z(), 1.0, 1e-12) << "axis " << k + 1;
     EXPECT_NEAR(axis.point.z(), 0.0, 1e-12) << "axis " << k + 1;
-    const JointAxis& next = pose->axes[static_cast<size_t>((k + 1) % 4)];
+    const Axis& next = pose->axes[static_cast<size_t>((k + 1) % 4)];
     EXPECT_NEAR((next.point - axis.point).norm(), g.a[k], 1e-9) << "side " << k + 1;
   }
   // Joint 1 at 0: link 1 leaves the origin along x.
@@ -110,7 +110,7 @@ TEST(JointAxes, PlanarFourBarAxesAreParallelToZThroughAPolygonOfTheLinkLengths) 
   expect_lines_of(g, turned->axes, 1e-9);
 }
 
-TEST(JointAxes, BennettAxesAreATwistApartAndALinkLengthApartAlongTheirCommonNormal) {
+TEST(CandidatePose, BennettAxesAreATwistApartAndALinkLengthApartAlongTheirCommonNormal) {
   const double s = std::sqrt(10.0);  // the length scale of a = 2, 4, 2, 4: stored canonically
   const LoopGeometry g = geometry_deg({2 / s, 4 / s, 2 / s, 4 / s}, {30, 90, 30, 90}, {0, 0, 0, 0});
   for (const double input : {0.0, 75.0, -140.0}) {
@@ -124,12 +124,12 @@ TEST(JointAxes, BennettAxesAreATwistApartAndALinkLengthApartAlongTheirCommonNorm
   }
 }
 
-TEST(JointAxes, OffsetsLieAlongTheAxesBetweenTheFeetOfTheNormals) {
+TEST(CandidatePose, OffsetsLieAlongTheAxesBetweenTheFeetOfTheNormals) {
   // An open chain at arbitrary angles: offsets and lengths hold link by link.
   const LoopGeometry g = geometry_deg({1, 2, 1.5, 0.7}, {40, 70, 20, 100}, {0.3, -0.5, 0.2, 0.9});
   JointVector theta(4);
   theta << 0.3, -1.1, 2.0, 0.4;
-  const std::vector<JointAxis> axes = joint_axes(g, theta);
+  const std::vector<Axis> axes = joint_axes(g, theta);
   // Links 1 to 3: the fourth returns to the base only where the loop closes.
   for (int k = 0; k < 3; ++k) {
     const CommonNormal normal = common_normal(axes[static_cast<size_t>(k)], axes[static_cast<size_t>(k + 1)]);
@@ -140,14 +140,14 @@ TEST(JointAxes, OffsetsLieAlongTheAxesBetweenTheFeetOfTheNormals) {
   }
 }
 
-TEST(JointAxes, ARigidLoopHasNoPoseAndAGeometryThatIsNoLoopIsRefused) {
+TEST(CandidatePose, ARigidLoopHasNoPoseAndAGeometryThatIsNoLoopIsRefused) {
   EXPECT_FALSE(candidate_pose(geometry_deg({1, 2, 3, 2.5}, {20, 70, 40, 110}, {0.1, -0.3, 0.2, 0})).has_value());
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(candidate_pose(geometry_deg({1, nan, 1, 2}, {0, 0, 0, 0}, {0, 0, 0, 0})), std::invalid_argument);
   EXPECT_THROW(candidate_pose(geometry_deg({1, 2, 1}, {0, 0, 0}, {0, 0, 0})), std::invalid_argument);
 }
 
-TEST(JointAxes, CandidateGeometryConvertsTwistsToRadians) {
+TEST(CandidatePose, CandidateGeometryConvertsTwistsToRadians) {
   CandidateRow row;
   row.joints = 4;
   row.a = {0.5, 1, 0.5, 1};
