@@ -138,12 +138,22 @@ MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* p
     bool forced = false;
   };
   std::vector<Seed> seeds;
+  // Traces dropped because they repeat a known circuit: the curve they
+  // followed is traced already, so a later seed on them is not traced again,
+  // as a seed on a known circuit is not. On a near miss (a loop that closes
+  // to about the tolerance along a curve, not to round-off) the walk creeps
+  // and ends too long, covering only part of its curve; every scan seed
+  // beyond its ends was traced 50,000 points again and dropped.
+  std::vector<Circuit> repeated;
+  const auto on_traced_curve = [&](const JointVector& x) {
+    const auto near = [&](const Circuit& c) { return c.points.size() >= 2 && distance_to_circuit(x, c) <= kOnCircuit; };
+    return std::any_of(out.circuits.begin(), out.circuits.end(), near) ||
+           std::any_of(repeated.begin(), repeated.end(), near);
+  };
   auto take = [&](const Seed& seed, bool given) {
     if (static_cast<int>(out.circuits.size()) >= kMaxCircuits) return;
     if (!seed.forced) {
-      for (const Circuit& c : out.circuits) {
-        if (c.points.size() >= 2 && distance_to_circuit(seed.x, c) <= kOnCircuit) return;
-      }
+      if (on_traced_curve(seed.x)) return;
       for (const JointVector& p : out.isolated_poses) {
         if (same_pose(p, seed.x, kSamePose)) return;
       }
@@ -164,7 +174,10 @@ MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* p
       out.isolated_poses.push_back(t.circuit.points.front());
       return;
     }
-    if (!given && repeats(t.circuit, out.circuits)) return;
+    if (!given && repeats(t.circuit, out.circuits)) {
+      repeated.push_back(std::move(t.circuit));
+      return;
+    }
     if (given) out.given_circuit = static_cast<int>(out.circuits.size());
     out.circuits.push_back(std::move(t.circuit));
     for (JointVector& b : t.branch_seeds) seeds.push_back({std::move(b), true});

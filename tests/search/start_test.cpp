@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "loopfarm/core/constructions.hpp"
 #include "loopfarm/core/motion.hpp"
 #include "loopfarm/core/sample_loops.hpp"
 #include "loopfarm/search/classify.hpp"
@@ -204,6 +205,61 @@ TEST(AnalyseZero, ACircuitNearASingularPoseIsTracedAgainInStepsOfOneDegree) {
     EXPECT_EQ(a.verification.range_hi, expected.range_hi);
     EXPECT_EQ(a.classification.family, Family::planar);
   }
+}
+
+// A movable loop whose given pose does not close (off its circuit, as an
+// elastic pose at theta0 in a gap of the input's range is) is analysed from
+// every circuit and verified: a Bennett loop and a trihedral Bricard loop,
+// each from a pose 0.3 rad off its motion in every joint.
+TEST(AnalyseZero, AMovableLoopWhosePoseIsOffItsCircuitIsVerifiedFromEveryCircuit) {
+  const LoopGeometry bennett = bennett_loop(1.0, rad(40), rad(70));
+  TrihedralBricard parameters;
+  parameters.sign_pattern = 0;
+  const std::optional<PosedLoop> bricard = trihedral_bricard(parameters, 0.3);
+  ASSERT_TRUE(bricard.has_value());
+  const struct {
+    LoopGeometry geometry;
+    JointVector on_motion;
+    Family family;
+  } loops[] = {{bennett, bennett_angles(bennett, rad(50)), Family::bennett},
+               {bricard->geometry, bricard->theta, Family::bricard_trihedral}};
+  for (const auto& loop : loops) {
+    const JointVector off = loop.on_motion + JointVector::Constant(loop.on_motion.size(), 0.3);
+    VerificationOptions through_pose;
+    through_pose.all_circuits = false;
+    ASSERT_FALSE(verify_motion(loop.geometry, off, through_pose).assembled);
+    const CandidateAnalysis a = analyse_zero(loop.geometry, off, Eigen::MatrixXd::Zero(1, 1), 0.0, StartOptions{});
+    EXPECT_TRUE(a.verification.verified) << to_string(loop.family);
+    EXPECT_EQ(a.classification.family, loop.family);
+  }
+}
+
+// A near miss of the generic 6R job (start 42: its cycle energy 2e-27, the
+// rigid loop closing to about the tolerance along a curve, not to round-off)
+// is not verified. Its walk creeps and ends too long, covering part of the
+// curve; the scan's seeds beyond its ends lie on the first trace that repeats
+// it, and are not traced again: one circuit is kept. Independently, the
+// circuit traced from an assembly at each of four inputs over the turn does
+// not move.
+TEST(AnalyseZero, ANearMissIsNotVerifiedAndItsCurveIsNotTracedAgainFromEverySeed) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/generic-6r.toml");
+  const StartSummary s = run_start(job, 42);
+  ASSERT_TRUE(s.zero);
+  const VerificationSummary& v = s.candidate.verification;
+  EXPECT_FALSE(v.verified);
+  ASSERT_EQ(v.motion.circuits.size(), 1u);
+  EXPECT_EQ(v.motion.circuits.front().end, CircuitEnd::too_long);
+  const VerificationOptions options;
+  const MotionOptions motion = options.motion();
+  int traced = 0;
+  for (double input : {0.0, 90.0, 180.0, 270.0}) {
+    for (const JointVector& pose : find_assemblies(s.final_geometry, rad(input), motion)) {
+      const Circuit c = trace_circuit(s.final_geometry, pose, motion);
+      EXPECT_FALSE(c.moves(options.input_joint, options.min_input_travel, options.residual_tolerance)) << input;
+      ++traced;
+    }
+  }
+  EXPECT_GT(traced, 0);
 }
 
 // Zeros of the rocker job whose circuit cannot be followed from the search's
