@@ -905,12 +905,12 @@ Subcommand add_report_command(CLI::App& parent) {
       "report", "List the distinct zero-energy linkages of a results database, from zero energy upwards.");
   app->footer(
       "Examples:\n"
-      "  loopfarm report jobs/default.sqlite\n"
-      "  loopfarm report jobs/default.sqlite --family bennett --format csv > bennett.csv   # every Bennett row\n"
-      "  loopfarm report jobs/default.sqlite --candidate 17 --format json   # one candidate and its joint axes\n"
-      "  loopfarm report jobs/default.sqlite --summary --format json\n"
-      "  loopfarm report jobs/default.sqlite --summary --plot docs/default\n"
-      "  loopfarm report jobs/goldberg-5r.sqlite --atlas docs/research/atlas\n"
+      "  loopfarm report default.sqlite\n"
+      "  loopfarm report default.sqlite --family bennett --format csv > bennett.csv   # every Bennett row\n"
+      "  loopfarm report default.sqlite --candidate 17 --format json   # one candidate and its joint axes\n"
+      "  loopfarm report default.sqlite --summary --format json\n"
+      "  loopfarm report default.sqlite --summary --plot docs/default\n"
+      "  loopfarm report goldberg-5r.sqlite --atlas docs/research/atlas\n"
       "Order: unclassified candidates (possible new families) first, then by E_mean from zero upwards, ties by id.\n"
       "The table fits 120 columns (--wide: every column) and prints geometry round-off as 0 (|x| < 1e-9 L for\n"
       "lengths, L the loop's length scale; |x| < 1e-9 rad for angles); csv and json keep every stored digit.\n"
