@@ -21,7 +21,7 @@ fail() {
 }
 command -v gnuplot >/dev/null || { echo "atlas_test: skipped, no gnuplot"; exit 77; }
 
-sed -e 's/^starts = .*/starts = 40/' -e 's/^database = .*/database = "a.sqlite"/' \
+sed -e 's/^starts = .*/starts = 40/' -e "s|^database = .*|database = \"$tmp/a.sqlite\"|" \
   "$source_dir/jobs/goldberg-5r.toml" >"$tmp/job.toml"
 "$loopfarm" run "$tmp/job.toml" --progress none >"$tmp/run.log" 2>&1 || fail "the run exited with $?: $(tail -1 "$tmp/run.log")"
 db="$tmp/a.sqlite"
