@@ -364,9 +364,15 @@ kill | term)
     dump_mapped "$tmp/straight.sqlite" "$tmp/straight.mapped"
     dump_mapped "$db" "$tmp/faulted.mapped"
     same "$tmp/straight.mapped" "$tmp/faulted.mapped" "campaign $campaign: the resumed run differs from the uninterrupted one"
-    if [[ "$case_name" == kill ]]; then
-      # SIGKILL leaves no time for the out-of-order commit of a stop: the
-      # committed starts are a prefix every time, so candidate ids match too.
+    stopped_sessions="$(sqlite3 -readonly "$db" "SELECT COUNT(*) FROM sessions WHERE status = 'stopped'")"
+    if [[ "$case_name" == kill && "$stopped_sessions" != 0 ]]; then
+      # SIGKILL to rank 1 makes mpirun send rank 0 SIGTERM before its SIGKILL:
+      # a rank 0 quick enough commits the records it holds, gaps and all, as
+      # any stop does, and candidate ids may then follow another order.
+      say "campaign $campaign: $stopped_sessions sessions stopped by mpirun's SIGTERM; candidates compared by content only"
+    elif [[ "$case_name" == kill ]]; then
+      # With every session killed outright the committed starts are a prefix
+      # every time, so candidate ids match too.
       dump "$tmp/straight.sqlite" "$tmp/straight.txt"
       dump "$db" "$tmp/faulted.txt"
       same "$tmp/straight.txt" "$tmp/faulted.txt" "campaign $campaign: candidate ids differ after SIGKILL and resume"
