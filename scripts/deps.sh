@@ -17,6 +17,7 @@ packages=(
   libgtest-dev         # the tests
   libbenchmark-dev     # the benchmarks in bench/
   libcli11-dev         # the command line
+  nlohmann-json3-dev   # JSON output of the command line
   libtomlplusplus-dev  # geometry and job files
   librandom123-dev     # counter-based random streams, one per start
   gnuplot-nox          # plots (loopfarm energy --plot, reports)
