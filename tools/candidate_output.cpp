@@ -1,10 +1,12 @@
 #include "candidate_output.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <vector>
 
 #include "cli_support.hpp"
 #include "geometry_input.hpp"
+#include "loopfarm/search/canonical.hpp"
 #include "motion_output.hpp"
 
 namespace loopfarm::cli {
@@ -18,13 +20,21 @@ std::string readable(double value) {
   return buffer;
 }
 
-std::string json_array(const JointVector& values, double factor) {
-  std::string out = "[";
+nlohmann::ordered_json json_array(const JointVector& values, double factor) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (int i = 0; i < values.size(); ++i) out.push_back(values[i] * factor);
+  return out;
+}
+
+// Values times `factor` for people: 6 significant digits, and round-off of a
+// zero (|v| < 1e-9 at length scale 1, or in radians) as 0.
+std::string rounded_text(const JointVector& values, double factor) {
+  std::string out;
   for (int i = 0; i < values.size(); ++i) {
-    if (i) out += ',';
-    out += json_number(values[i] * factor);
+    const double v = std::abs(values[i]) < 1e-9 ? 0.0 : values[i] * factor;
+    out += (i ? ", " : "") + readable(v);
   }
-  return out + "]";
+  return out;
 }
 
 }  // namespace
@@ -39,12 +49,15 @@ std::string degrees_text(const JointVector& radians) {
   return format_list(degrees);
 }
 
-std::string geometry_json(const LoopGeometry& g) {
-  return "{\"a\":" + json_array(g.a, 1.0) + ",\"alpha_deg\":" + json_array(g.alpha, kDegreesPerRadian) +
-         ",\"d\":" + json_array(g.d, 1.0) + "}";
+nlohmann::ordered_json geometry_json(const LoopGeometry& g) {
+  nlohmann::ordered_json geometry;
+  geometry["a"] = json_array(g.a, 1.0);
+  geometry["alpha_deg"] = json_array(g.alpha, kDegreesPerRadian);
+  geometry["d"] = json_array(g.d, 1.0);
+  return geometry;
 }
 
-std::string degrees_json(const JointVector& radians) { return json_array(radians, kDegreesPerRadian); }
+nlohmann::ordered_json degrees_json(const JointVector& radians) { return json_array(radians, kDegreesPerRadian); }
 
 void print_candidate(const CandidateAnalysis& c) {
   const VerificationSummary& v = c.verification;
@@ -86,6 +99,14 @@ void print_candidate(const CandidateAnalysis& c) {
   for (const FamilyCheck& check : k.checks) {
     std::printf("  %-21s residual %s\n", to_string(check.family), readable(check.residual).c_str());
   }
+  // The key is for de-duplication (radians, the smallest representation);
+  // people read the same loop in its conventional form, in degrees.
+  if (c.canonical.geometry.joints() > 0) {
+    const LoopGeometry shown = conventional_form(c.canonical.geometry).geometry;
+    std::printf("canonical form          a = %s; alpha_deg = %s; d = %s (length scale 1)\n",
+                rounded_text(shown.a, 1.0).c_str(), rounded_text(shown.alpha, kDegreesPerRadian).c_str(),
+                rounded_text(shown.d, 1.0).c_str());
+  }
   std::printf("canonical key           %s\n", c.canonical.key.c_str());
 }
 
@@ -96,56 +117,45 @@ void print_local_dimension(const LocalDimension& d) {
   std::printf(")\n");
 }
 
-std::string candidate_json_fields(const CandidateAnalysis& c, bool analysed) {
-  std::string json;
-  if (!analysed) {
-    return ",\"family\":null,\"family_conditions_hold\":null,\"setup\":null,\"verified\":false,"
-           "\"assembled\":null,\"on_motion\":null,\"rigid_residual\":null,\"full_turn\":null,"
-           "\"input_range_deg\":null,\"circuit\":null,\"circuits\":null,\"family_residuals\":null,"
-           "\"canonical_key\":null,\"local_dimension\":null,\"singular_values\":null";
-  }
+void add_candidate_json(nlohmann::ordered_json& out, const CandidateAnalysis& c, bool analysed) {
+  const char* fields[] = {"family",    "family_conditions_hold", "setup",         "verified",        "assembled",
+                          "on_motion", "rigid_residual",         "full_turn",     "input_range_deg", "circuit",
+                          "circuits",  "family_residuals",       "canonical_key", "local_dimension", "singular_values"};
+  for (const char* field : fields) out[field] = nullptr;
+  out["verified"] = false;
+  if (!analysed) return;
   const VerificationSummary& v = c.verification;
   const Family family = c.classification.family;
   // A family is claimed only for a verified loop; otherwise its conditions
   // holding is said in a field of its own.
   const bool claimed = v.verified || family == Family::unclassified;
-  json += ",\"family\":" + (claimed ? json_string(to_string(family)) : std::string("null"));
-  json += ",\"family_conditions_hold\":" + (claimed ? std::string("null") : json_string(to_string(family)));
-  json += ",\"setup\":" + json_string(to_string(c.classification.setup));
-  json += ",\"verified\":" + std::string(v.verified ? "true" : "false");
-  json += ",\"assembled\":" + std::string(v.motion.given_pose.size() == 0 ? "null" : v.assembled ? "true" : "false");
-  json += ",\"on_motion\":" + std::string(v.motion.given_pose.size() == 0 ? "null" : v.on_motion ? "true" : "false");
-  json += ",\"rigid_residual\":" + json_number(v.worst_residual);
+  if (claimed) {
+    out["family"] = to_string(family);
+  } else {
+    out["family_conditions_hold"] = to_string(family);
+  }
+  out["setup"] = to_string(c.classification.setup);
+  out["verified"] = v.verified;
+  if (v.motion.given_pose.size() != 0) {
+    out["assembled"] = v.assembled;
+    out["on_motion"] = v.on_motion;
+  }
+  out["rigid_residual"] = v.worst_residual;
   if (v.circuit >= 0) {
-    json += ",\"full_turn\":" + std::string(v.full_turn ? "true" : "false");
-    json += ",\"input_range_deg\":[" + json_number(v.range_lo * kDegreesPerRadian) + "," +
-            json_number(v.range_hi * kDegreesPerRadian) + "]";
-    json += ",\"circuit\":" + std::to_string(v.circuit + 1);
-  } else {
-    json += ",\"full_turn\":null,\"input_range_deg\":null,\"circuit\":null";
+    out["full_turn"] = v.full_turn;
+    out["input_range_deg"] = {v.range_lo * kDegreesPerRadian, v.range_hi * kDegreesPerRadian};
+    out["circuit"] = v.circuit + 1;
   }
-  json += ",\"circuits\":" + circuits_json(v.motion, v.motion.input_joint);
-  json += ",\"family_residuals\":{";
-  bool first = true;
-  for (const FamilyCheck& check : c.classification.checks) {
-    if (!first) json += ',';
-    json += json_string(to_string(check.family)) + ":" + json_number(check.residual);
-    first = false;
-  }
-  json += "}";
-  json += ",\"canonical_key\":" + json_string(c.canonical.key);
+  out["circuits"] = circuits_json(v.motion, v.motion.input_joint);
+  nlohmann::ordered_json residuals = nlohmann::ordered_json::object();
+  for (const FamilyCheck& check : c.classification.checks) residuals[to_string(check.family)] = check.residual;
+  out["family_residuals"] = residuals;
+  out["canonical_key"] = c.canonical.key;
   if (v.verified && c.local_dimension.parameters > 0) {
-    json += ",\"local_dimension\":" + std::to_string(c.local_dimension.dimension);
-    json += ",\"singular_values\":[";
-    for (int i = 0; i < c.local_dimension.singular_values.size(); ++i) {
-      if (i) json += ',';
-      json += json_number(c.local_dimension.singular_values[i]);
-    }
-    json += "]";
-  } else {
-    json += ",\"local_dimension\":null,\"singular_values\":null";
+    out["local_dimension"] = c.local_dimension.dimension;
+    const Eigen::VectorXd& values = c.local_dimension.singular_values;
+    out["singular_values"] = std::vector<double>(values.data(), values.data() + values.size());
   }
-  return json;
 }
 
 }  // namespace loopfarm::cli

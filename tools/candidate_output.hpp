@@ -5,6 +5,8 @@
 
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "loopfarm/search/start.hpp"
 
 namespace loopfarm::cli {
@@ -15,22 +17,22 @@ void print_candidate(const CandidateAnalysis& candidate);
 // The local dimension line (only meaningful at a zero of the cycle energy).
 void print_local_dimension(const LocalDimension& dimension);
 
-// The JSON fields (without braces, each preceded by a comma): family, setup,
+// Adds the JSON fields to `object`, in this order: family, setup,
 // verified, rigid_residual, circuits, family_residuals, local_dimension, and
 // more. A family is named only for a verified loop (else
 // family_conditions_hold names it); local_dimension and singular_values are
 // null unless the loop is verified. With `analysed` false the fields are
 // present and null (or false), so that every object has the same keys.
-std::string candidate_json_fields(const CandidateAnalysis& candidate, bool analysed);
+void add_candidate_json(nlohmann::ordered_json& object, const CandidateAnalysis& candidate, bool analysed);
 
 // "2, 4, 2, 4" for a geometry's a, alpha (degrees) and d.
 std::string lengths_text(const JointVector& values);
 std::string degrees_text(const JointVector& radians);
 
 // [theta1_deg, ...]
-std::string degrees_json(const JointVector& radians);
+nlohmann::ordered_json degrees_json(const JointVector& radians);
 
 // {"a":[...],"alpha_deg":[...],"d":[...]}
-std::string geometry_json(const LoopGeometry& geometry);
+nlohmann::ordered_json geometry_json(const LoopGeometry& geometry);
 
 }  // namespace loopfarm::cli

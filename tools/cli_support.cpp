@@ -156,27 +156,6 @@ std::string join_significant(const std::vector<double>& values, int digits, std:
   return out;
 }
 
-std::string json_number(double value) { return std::isfinite(value) ? format_double(value) : "null"; }
-
-std::string json_string(std::string_view text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (u < 0x20) {
-      char buffer[8];
-      std::snprintf(buffer, sizeof buffer, "\\u%04x", u);
-      out += buffer;
-    } else {
-      out += c;
-    }
-  }
-  out += '"';
-  return out;
-}
-
 // ---------------------------------------------------------------------------
 
 namespace {
@@ -207,14 +186,56 @@ std::FILE* create_unique(const std::string& prefix, const std::string& suffix, s
   return stream;
 }
 
+// Whether `path`, or a link on the way from it to a file, names something in
+// /dev or /proc. /dev/stdout is a link to /proc/self/fd/1, which is a link to
+// whatever standard output is: a regular file when the shell redirects it,
+// which a rename onto /dev/stdout's resolved path would replace.
+bool reaches_a_device_path(std::filesystem::path path) {
+  std::error_code ec;
+  for (int hop = 0; hop < 40; ++hop) {
+    const std::filesystem::path absolute = std::filesystem::absolute(path, ec).lexically_normal();
+    if (ec) return false;
+    const std::string text = absolute.string();
+    if (text.rfind("/dev/", 0) == 0 || text.rfind("/proc/", 0) == 0) return true;
+    if (!std::filesystem::is_symlink(std::filesystem::symlink_status(absolute, ec))) return false;
+    const std::filesystem::path next = std::filesystem::read_symlink(absolute, ec);
+    if (ec) return false;
+    path = next.is_absolute() ? next : absolute.parent_path() / next;
+  }
+  return true;  // a loop of links: not a file to write
+}
+
 }  // namespace
 
 PendingOutput::PendingOutput(std::filesystem::path target, std::string flag)
     : target_(std::move(target)), flag_(std::move(flag)) {
   if (target_.empty()) throw UsageError(flag_, "empty file name");
+  if (is_standard_output(target_.string())) {
+    to_standard_output_ = true;
+    std::error_code ec;
+    std::filesystem::path directory = std::filesystem::temp_directory_path(ec);
+    if (ec) directory = "/tmp";
+    stream_ = create_unique((directory / "loopfarm-stdout-").string(), "", temporary_);
+    if (stream_ == nullptr) {
+      throw EnvironmentError("cannot create a temporary file in " + quote_text(directory.string()) + ": " +
+                             std::strerror(errno));
+    }
+    return;
+  }
   std::error_code ec;
-  if (std::filesystem::is_directory(target_, ec)) {
+  const std::filesystem::file_status status = std::filesystem::status(target_, ec);
+  if (std::filesystem::is_directory(status)) {
     throw UsageError(flag_, "cannot write " + quote_text(target_.string()) + ": it is a directory");
+  }
+  if ((std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) ||
+      reaches_a_device_path(target_)) {
+    throw UsageError(flag_, "will not write over " + quote_text(target_.string()) +
+                                ": it is not a regular file (a device, a pipe, a socket or a descriptor such as "
+                                "/dev/stdout); give '-' for standard output");
+  }
+  if (std::filesystem::is_symlink(std::filesystem::symlink_status(target_, ec))) {
+    const std::filesystem::path resolved = std::filesystem::canonical(target_, ec);
+    if (!ec) target_ = resolved;
   }
   // The temporary file goes into the target's own directory so that the final
   // rename cannot cross file systems.
@@ -252,6 +273,21 @@ void PendingOutput::close() {
 
 void PendingOutput::commit() {
   close();
+  if (to_standard_output_) {
+    std::FILE* in = std::fopen(temporary_.c_str(), "rb");
+    if (in == nullptr) throw EnvironmentError("cannot read back " + quote_text(temporary_.string()));
+    char buffer[1 << 16];
+    size_t got = 0;
+    bool failed = false;
+    while (!failed && (got = std::fread(buffer, 1, sizeof buffer, in)) > 0) {
+      failed = std::fwrite(buffer, 1, got, stdout) != got;
+    }
+    failed = failed || std::ferror(in) != 0;
+    std::fclose(in);
+    if (failed || std::fflush(stdout) != 0) throw EnvironmentError(flag_ + ": cannot write to standard output");
+    committed_ = false;  // the temporary file is removed by the destructor
+    return;
+  }
   std::error_code ec;
   std::filesystem::rename(temporary_, target_, ec);
   if (ec) throw UsageError(flag_, "cannot write " + quote_text(target_.string()) + ": " + ec.message());

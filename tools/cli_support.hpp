@@ -1,6 +1,6 @@
 // Pieces every loopfarm subcommand shares: the error kinds that decide the
 // exit code, strict parsing of numbers and comma-separated lists, number
-// formatting for CSV and JSON, and output files that appear only when the
+// formatting for CSV, and output files that appear only when the
 // whole command succeeded.
 #pragma once
 
@@ -66,19 +66,21 @@ std::string format_significant(double value, int digits);
 // The values so formatted, joined by `separator`.
 std::string join_significant(const std::vector<double>& values, int digits, std::string_view separator);
 
-// A JSON number (%.17g), or null when the value is NaN or infinite, since JSON
-// has no tokens for those.
-std::string json_number(double value);
-
-// A JSON string literal with the required escapes.
-std::string json_string(std::string_view text);
-
 // An output file that is written in full or not at all. The constructor
 // creates a temporary file next to the target, which both proves the target
 // can be written before any work is done and lets commit() replace the target
 // in one rename, so a command that fails half-way leaves a previous file at
 // the target untouched. The destructor removes the temporary file unless it
 // was committed.
+//
+// The target "-" is standard output: the data go to a temporary file in the
+// system's temporary directory, which commit() copies to standard output, so
+// that a failed command prints nothing there either. A target that exists and
+// is not a regular file (a device, a pipe, a socket, a directory), or that is
+// or leads through /dev or /proc (/dev/stdout leads to whatever file the shell
+// redirected standard output to), is refused: the final rename would replace
+// it. A symbolic link to a regular file elsewhere is followed, so the file it
+// names is replaced, not the link.
 class PendingOutput {
  public:
   // `flag` names the option the path came from, for error messages.
@@ -88,6 +90,7 @@ class PendingOutput {
   PendingOutput& operator=(const PendingOutput&) = delete;
 
   const std::filesystem::path& target() const { return target_; }
+  bool to_standard_output() const { return to_standard_output_; }
   const std::filesystem::path& temporary() const { return temporary_; }
   // The open temporary file, for writing; nullptr after close().
   std::FILE* stream() const { return stream_; }
@@ -105,7 +108,11 @@ class PendingOutput {
   std::filesystem::path temporary_;
   std::FILE* stream_ = nullptr;
   bool committed_ = false;
+  bool to_standard_output_ = false;
 };
+
+// True when an output option's value sends its file to standard output.
+inline bool is_standard_output(const std::string& path) { return path == "-"; }
 
 // A temporary file in the system's temporary directory, removed when the
 // object goes away (gnuplot's data and script).

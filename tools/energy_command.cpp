@@ -17,6 +17,7 @@
 #include "loopfarm/core/cycle_start.hpp"
 #include "loopfarm/core/equilibrium.hpp"
 #include "loopfarm/core/loop.hpp"
+#include "output_format.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -38,7 +39,7 @@ struct EnergyArguments {
   std::string torsion_ratio = "1";
   std::string range_deg = "auto";
   std::string csv, plot;
-  bool json = false;
+  FormatChoice format;
   bool log = false;
 
   CLI::Option* csv_option = nullptr;
@@ -55,7 +56,6 @@ struct EnergyRequest {
   Compliance compliance = Compliance::paper;
   double torsion_ratio = 1.0;
   std::optional<double> range_deg;  // [deg]; empty: auto (choose_cycle_start)
-  bool json = false;
   bool log = false;
 };
 
@@ -74,10 +74,6 @@ EnergyRequest read_request(const EnergyArguments& args) {
   }
   request.samples = static_cast<int>(samples);
 
-  if (args.compliance != "paper" && args.compliance != "full") {
-    throw UsageError("--compliance", "got " + quote_text(args.compliance) +
-                                         "; expected paper (springy a and alpha) or full (a, alpha and d)");
-  }
   request.compliance = compliance_from_string(args.compliance);
 
   request.torsion_ratio = parse_number(args.torsion_ratio, "--torsion-ratio");
@@ -93,7 +89,6 @@ EnergyRequest read_request(const EnergyArguments& args) {
     request.range_deg = range;
   }
 
-  request.json = args.json;
   request.log = args.log;
   return request;
 }
@@ -163,45 +158,41 @@ struct EnergyResult {
   DegreeDisplay degrees;
 };
 
-void print_json(const EnergyRequest& request, const LoopModel& model, const EnergyResult& result) {
+nlohmann::ordered_json summary_record(const EnergyRequest& request, const LoopModel& model,
+                                      const EnergyResult& result) {
   const CycleSummary& c = result.cycle;
-  std::string json = "{";
-  json += "\"E_mean\":" + json_number(c.E_mean);
-  json += ",\"E_max\":" + json_number(c.E_max);
-  json += ",\"samples\":" + std::to_string(c.samples.size());
-  json += ",\"failed_samples\":" + std::to_string(c.failed_samples);
-  json += ",\"branch_jumps\":" + std::to_string(c.branch_jumps);
-  json += ",\"refinements\":" + std::to_string(c.refinements);
-  json += ",\"iterations\":" + std::to_string(c.total_iterations);
-  json += ",\"max_closure_residual\":" + json_number(c.max_closure_residual);
-  json += ",\"theta0_deg\":" + json_number(request.theta0_deg);
-  json += ",\"theta_deg\":[";
-  for (int i = 0; i < model.joints(); ++i) {
-    if (i > 0) json += ',';
-    json += json_number(result.degrees.joint_deg(result.start.assembly.state.theta, i));
-  }
-  json += "]";
+  nlohmann::ordered_json record;
+  record["E_mean"] = c.E_mean;
+  record["E_max"] = c.E_max;
+  record["samples"] = c.samples.size();
+  record["failed_samples"] = c.failed_samples;
+  record["branch_jumps"] = c.branch_jumps;
+  record["refinements"] = c.refinements;
+  record["iterations"] = c.total_iterations;
+  record["max_closure_residual"] = c.max_closure_residual;
+  record["theta0_deg"] = request.theta0_deg;
+  nlohmann::ordered_json theta = nlohmann::ordered_json::array();
+  for (int i = 0; i < model.joints(); ++i)
+    theta.push_back(result.degrees.joint_deg(result.start.assembly.state.theta, i));
+  record["theta_deg"] = theta;
   const CycleStart& start = result.start;
   const int input = model.options().input_joint;
-  json += ",\"range_deg\":" + json_number(request.range_deg.value_or(start.range * kDegreesPerRadian));
-  json += ",\"on_motion\":" + std::string(start.motion ? "true" : "false");
+  record["range_deg"] = request.range_deg.value_or(start.range * kDegreesPerRadian);
+  record["on_motion"] = start.motion.has_value();
+  record["full_turn"] = nullptr;
+  record["input_range_deg"] = nullptr;
   if (start.motion) {
     const bool full_turn = start.motion->circuit.input_range(input).crank();
-    json += ",\"full_turn\":" + std::string(full_turn ? "true" : "false");
-    if (full_turn) {
-      json += ",\"input_range_deg\":null";
-    } else {
+    record["full_turn"] = full_turn;
+    if (!full_turn) {
       const std::array<double, 2> r = input_range_deg(start, input, result.degrees.theta0);
-      json += ",\"input_range_deg\":[" + json_number(r[0]) + "," + json_number(r[1]) + "]";
+      record["input_range_deg"] = {r[0], r[1]};
     }
-  } else {
-    json += ",\"full_turn\":null,\"input_range_deg\":null";
   }
-  json += ",\"length_scale\":" + json_number(model.length_scale());
-  json += ",\"compliance\":" + json_string(to_string(request.compliance));
-  json += ",\"seconds\":" + json_number(result.seconds);
-  json += "}\n";
-  std::fputs(json.c_str(), stdout);
+  record["length_scale"] = model.length_scale();
+  record["compliance"] = to_string(request.compliance);
+  record["seconds"] = result.seconds;
+  return record;
 }
 
 std::string readable(double value) {
@@ -272,7 +263,8 @@ int run_energy(const EnergyArguments& args) {
   //    input costs nothing and leaves no file behind.
   const EnergyRequest request = read_request(args);
 
-  if (given(args.csv_option) && given(args.plot_option)) {
+  const bool file_on_stdout = file_takes_standard_output({{"--csv", args.csv}, {"--plot", args.plot}}, args.format);
+  if (given(args.csv_option) && given(args.plot_option) && !file_on_stdout) {
     std::error_code ec1, ec2;
     const auto csv_path = std::filesystem::weakly_canonical(args.csv, ec1);
     const auto plot_path = std::filesystem::weakly_canonical(args.plot, ec2);
@@ -334,10 +326,11 @@ int run_energy(const EnergyArguments& args) {
   if (csv) csv->commit();
   if (png) png->commit();
 
-  if (request.json) {
-    print_json(request, model, result);
-  } else {
+  if (file_on_stdout) return kExitSuccess;
+  if (args.format.format == OutputFormat::text) {
     print_summary(request, model, result);
+  } else {
+    write_record(stdout, summary_record(request, model, result), args.format.format);
   }
   return kExitSuccess;
 }
@@ -368,6 +361,7 @@ Subcommand add_energy_command(CLI::App& parent) {
   app->add_option("--compliance", args->compliance,
                   "springy parameters: paper (a and alpha, the paper's model) or full (a, alpha and d)")
       ->type_name("paper|full")
+      ->check(CLI::IsMember({"paper", "full"}))
       ->capture_default_str();
   app->add_option("--torsion-ratio", args->torsion_ratio, "torsion stiffness k_t / (k_a L^2), > 0")
       ->type_name("X")
@@ -379,12 +373,15 @@ Subcommand add_energy_command(CLI::App& parent) {
       ->type_name("R")
       ->capture_default_str();
 
-  app->add_flag("--json", args->json, "print one JSON object instead of the summary");
-  args->csv_option =
-      app->add_option("--csv", args->csv, "write the energy curve, one row per sample")->type_name("FILE");
-  args->plot_option =
-      app->add_option("--plot", args->plot, "draw energy against input angle into a PNG (needs gnuplot)")
-          ->type_name("FILE.png");
+  add_format_option(*app, args->format,
+                    {OutputFormat::text, OutputFormat::json, OutputFormat::csv, OutputFormat::markdown},
+                    "print the summary as");
+  args->csv_option = app->add_option("--csv", args->csv, "write the energy curve, one row per sample ('-': stdout)")
+                         ->type_name("FILE");
+  args->plot_option = app->add_option("--plot", args->plot,
+                                      "draw energy against input angle (needs gnuplot); FILE's extension "
+                                      "picks the format: .png, .svg or .pdf ('-': PNG on stdout)")
+                          ->type_name("FILE");
   app->add_flag("--log", args->log, "logarithmic energy axis in --plot")->needs(args->plot_option);
 
   return {app, [args] { return run_energy(*args); }};

@@ -1,7 +1,9 @@
 #include "groundtruth_command.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -11,6 +13,7 @@
 #include "candidate_output.hpp"
 #include "cli_support.hpp"
 #include "loopfarm/study/ground_truth.hpp"
+#include "output_format.hpp"
 
 namespace loopfarm::cli {
 namespace {
@@ -23,8 +26,9 @@ struct GroundTruthArguments {
   std::string per_family = "8";
   std::string generic = "8";
   std::string perturbations = "1e-2,1e-3,1e-4,1e-5,1e-6,1e-7,1e-8";
-  std::string format = "csv";
-  std::string out;
+  FormatChoice format;
+  std::string csv;
+  std::string out;  // replaced by --csv; refused with a message that says so
 };
 
 long long count_option(const std::string& text, const std::string& flag) {
@@ -68,45 +72,27 @@ GroundTruthOptions read_options(const GroundTruthArguments& args) {
   return options;
 }
 
-// One column: its name, its CSV text and its JSON text.
-struct Field {
-  std::string name;
-  std::string csv;
-  std::string json;
-};
-
-std::vector<Field> fields(const GroundTruthCase& c) {
-  std::vector<Field> f;
-  auto text = [&](const std::string& name, const std::string& value) {
-    // Ids, families and parameter names never hold commas or quotes.
-    f.push_back({name, value, json_string(value)});
-  };
-  auto flag = [&](const std::string& name, bool value) {
-    f.push_back({name, value ? "1" : "0", value ? "true" : "false"});
-  };
-  auto number = [&](const std::string& name, double value) {
-    f.push_back({name, std::isfinite(value) ? format_double(value) : "", json_number(value)});
-  };
-  text("id", c.id);
-  text("family", to_string(c.family));
-  text("setup", to_string(c.setup));
-  flag("movable", c.movable);
-  flag("full_turn", c.full_turn);
-  // Empty (CSV) or null (JSON) for a case that is not a perturbation.
+// The case's own columns, the same in every format: null for a case that is
+// not a perturbation.
+nlohmann::ordered_json case_fields(const GroundTruthCase& c) {
+  nlohmann::ordered_json f;
+  f["id"] = c.id;
+  f["family"] = to_string(c.family);
+  f["setup"] = to_string(c.setup);
+  f["movable"] = c.movable;
+  f["full_turn"] = c.full_turn;
   const bool perturbed = !c.parent.empty();
-  f.push_back({"parent", c.parent, perturbed ? json_string(c.parent) : "null"});
-  f.push_back({"perturbed_parameter", c.perturbed_parameter, perturbed ? json_string(c.perturbed_parameter) : "null"});
-  f.push_back({"relative_perturbation", perturbed ? format_double(c.relative_perturbation) : "",
-               perturbed ? json_number(c.relative_perturbation) : "null"});
-  number("pose_residual", c.pose_residual);
+  f["parent"] = perturbed ? nlohmann::ordered_json(c.parent) : nullptr;
+  f["perturbed_parameter"] = perturbed ? nlohmann::ordered_json(c.perturbed_parameter) : nullptr;
+  f["relative_perturbation"] = perturbed ? nlohmann::ordered_json(c.relative_perturbation) : nullptr;
+  f["pose_residual"] = c.pose_residual;
   return f;
 }
 
-// Per-joint columns a1..an, alpha1_deg.., d1.., theta1_deg.. (CSV only; JSON
-// has them as arrays).
-std::vector<Field> joint_columns(const GroundTruthCase& c) {
-  std::vector<Field> f;
-  const int n = c.geometry.joints();
+// For tables (csv, markdown): the geometry and pose as columns a1..an,
+// alpha1_deg.., d1.., theta1_deg...
+nlohmann::ordered_json table_record(const GroundTruthCase& c) {
+  nlohmann::ordered_json f = case_fields(c);
   struct Kind {
     const char* name;
     const JointVector* values;
@@ -117,74 +103,76 @@ std::vector<Field> joint_columns(const GroundTruthCase& c) {
                         {"d%d", &c.geometry.d, 1.0},
                         {"theta%d_deg", &c.pose, kDegreesPerRadian}};
   for (const Kind& kind : kinds) {
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < c.geometry.joints(); ++i) {
       char name[24];
       std::snprintf(name, sizeof name, kind.name, i + 1);
-      f.push_back({name, format_double((*kind.values)[i] * kind.factor), ""});
+      f[name] = (*kind.values)[i] * kind.factor;
     }
   }
   return f;
 }
 
-std::string csv_text(const std::vector<GroundTruthCase>& cases) {
-  std::string out;
-  // Every case has 4 joints; the header comes from an empty 4R case.
-  GroundTruthCase header_case;
-  header_case.geometry.a = header_case.geometry.alpha = header_case.geometry.d = header_case.pose =
-      JointVector::Zero(4);
-  std::vector<Field> header = fields(header_case);
-  for (Field& column : joint_columns(header_case)) header.push_back(std::move(column));
-  for (size_t i = 0; i < header.size(); ++i) out += (i ? "," : "") + header[i].name;
-  out += '\n';
-  for (const GroundTruthCase& c : cases) {
-    std::vector<Field> row = fields(c);
-    for (Field& column : joint_columns(c)) row.push_back(std::move(column));
-    for (size_t i = 0; i < row.size(); ++i) out += (i ? "," : "") + row[i].csv;
-    out += '\n';
-  }
-  return out;
+// For JSON: the geometry as an object of arrays and the pose as an array.
+nlohmann::ordered_json json_record(const GroundTruthCase& c) {
+  nlohmann::ordered_json f = case_fields(c);
+  f["geometry"] = geometry_json(c.geometry);
+  f["theta_deg"] = degrees_json(c.pose);
+  return f;
 }
 
-std::string json_text(const std::vector<GroundTruthCase>& cases) {
-  std::string out = "[";
-  for (size_t k = 0; k < cases.size(); ++k) {
-    const GroundTruthCase& c = cases[k];
-    out += k ? ",\n{" : "\n{";
-    const std::vector<Field> f = fields(c);
-    for (size_t i = 0; i < f.size(); ++i) out += (i ? ",\"" : "\"") + f[i].name + "\":" + f[i].json;
-    out += ",\"geometry\":" + geometry_json(c.geometry);
-    out += ",\"theta_deg\":[";
-    for (int i = 0; i < c.pose.size(); ++i) {
-      // Appended piecewise: GCC 12 warns (-Wrestrict, falsely) on "," + string here.
-      if (i > 0) out += ',';
-      out += json_number(c.pose[i] * kDegreesPerRadian);
-    }
-    out += "]}";
+// --format text: what the set holds, per family and setup.
+void print_counts(const std::vector<GroundTruthCase>& cases) {
+  std::map<std::pair<std::string, std::string>, std::array<int, 2>> counts;  // [rigid, movable]
+  for (const GroundTruthCase& c : cases) ++counts[{to_string(c.family), to_string(c.setup)}][c.movable ? 1 : 0];
+  int movable = 0;
+  for (const GroundTruthCase& c : cases) movable += c.movable ? 1 : 0;
+  std::printf("ground truth: %zu cases, %d movable, %zu rigid\n", cases.size(), movable,
+              cases.size() - static_cast<size_t>(movable));
+  std::printf("  %-14s %-14s %8s %8s\n", "family", "setup", "movable", "rigid");
+  for (const auto& [key, count] : counts) {
+    std::printf("  %-14s %-14s %8d %8d\n", key.first.c_str(), key.second.c_str(), count[1], count[0]);
   }
-  out += cases.empty() ? "]\n" : "\n]\n";
-  return out;
+  std::printf("(--format csv, json or markdown prints every case; --csv FILE writes them as CSV)\n");
 }
 
 int run_groundtruth(const GroundTruthArguments& args) {
-  if (args.format != "csv" && args.format != "json") {
-    throw UsageError("--format", "got " + quote_text(args.format) + "; expected csv or json");
+  if (!args.out.empty()) {
+    throw UsageError("--out", "was replaced: --csv FILE writes the CSV file, --format json prints JSON");
   }
   const GroundTruthOptions options = read_options(args);
+  const bool file_on_stdout = file_takes_standard_output({{"--csv", args.csv}}, args.format);
   // Opened before the work: an unwritable target fails at once.
-  std::optional<PendingOutput> output;
-  if (!args.out.empty()) output.emplace(args.out, "--out");
+  std::optional<PendingOutput> csv;
+  if (!args.csv.empty()) csv.emplace(args.csv, "--csv");
 
   const std::vector<GroundTruthCase> cases = generate_ground_truth(options);
-  const std::string text = args.format == "csv" ? csv_text(cases) : json_text(cases);
-  if (output) {
-    std::fputs(text.c_str(), output->stream());
-    output->commit();
-    int movable = 0;
-    for (const GroundTruthCase& c : cases) movable += c.movable ? 1 : 0;
-    std::fprintf(stderr, "loopfarm groundtruth: wrote %zu cases (%d movable, %zu rigid) to %s\n", cases.size(), movable,
-                 cases.size() - static_cast<size_t>(movable), args.out.c_str());
-  } else {
-    std::fputs(text.c_str(), stdout);
+  std::vector<nlohmann::ordered_json> table;
+  for (const GroundTruthCase& c : cases) table.push_back(table_record(c));
+  if (csv) {
+    write_records(csv->stream(), table, OutputFormat::csv);
+    csv->commit();
+    if (!file_on_stdout) {
+      int movable = 0;
+      for (const GroundTruthCase& c : cases) movable += c.movable ? 1 : 0;
+      std::fprintf(stderr, "loopfarm groundtruth: wrote %zu cases (%d movable, %zu rigid) to %s\n", cases.size(),
+                   movable, cases.size() - static_cast<size_t>(movable), args.csv.c_str());
+    }
+  }
+  if (file_on_stdout) return kExitSuccess;
+  switch (args.format.format) {
+    case OutputFormat::text:
+      if (!csv) print_counts(cases);
+      break;
+    case OutputFormat::json: {
+      std::vector<nlohmann::ordered_json> records;
+      for (const GroundTruthCase& c : cases) records.push_back(json_record(c));
+      write_records(stdout, records, OutputFormat::json);
+      break;
+    }
+    case OutputFormat::csv:
+    case OutputFormat::markdown:
+      write_records(stdout, table, args.format.format);
+      break;
   }
   return kExitSuccess;
 }
@@ -200,9 +188,9 @@ Subcommand add_groundtruth_command(CLI::App& parent) {
       "random loops), labelled. docs/quality/ground-truth.md describes it.");
   app->footer(
       "Examples:\n"
-      "  loopfarm groundtruth --out ground-truth.csv\n"
-      "  loopfarm groundtruth --seed 7 --per-family 32 --generic 64 --format json --out gt.json\n"
-      "  loopfarm groundtruth --per-family 2 --perturbations 1e-3,1e-6 --generic 0\n"
+      "  loopfarm groundtruth --csv ground-truth.csv\n"
+      "  loopfarm groundtruth --seed 7 --per-family 32 --generic 64 --format json > gt.json\n"
+      "  loopfarm groundtruth --per-family 2 --perturbations 1e-3,1e-6 --generic 0 --format markdown\n"
       "The same options always give the same set, bit for bit.\n"
       "Exit codes: 0 done, 1 failure, 2 bad input.\n");
   app->add_option("--seed", args->seed, "seed of the random draws (>= 0)")->type_name("S")->capture_default_str();
@@ -215,8 +203,12 @@ Subcommand add_groundtruth_command(CLI::App& parent) {
                   "relative sizes each movable case is perturbed by, each in (0, 1), or none")
       ->type_name("LIST")
       ->capture_default_str();
-  app->add_option("--format", args->format, "csv or json")->type_name("FMT")->capture_default_str();
-  app->add_option("--out", args->out, "write to FILE (atomically) instead of standard output")->type_name("FILE");
+  add_format_option(*app, args->format,
+                    {OutputFormat::text, OutputFormat::csv, OutputFormat::json, OutputFormat::markdown},
+                    "print the set (text: its counts; the others: every case) as");
+  app->add_option("--csv", args->csv, "write every case to FILE as CSV, whole or not at all ('-': stdout)")
+      ->type_name("FILE");
+  app->add_option("--out", args->out, "replaced by --csv FILE")->group("");
   return {app, [args] { return run_groundtruth(*args); }};
 }
 

@@ -12,6 +12,7 @@
 
 #include "cli_support.hpp"
 #include "loopfarm/farm/results_database.hpp"
+#include "output_format.hpp"
 
 namespace loopfarm::cli {
 namespace {
@@ -19,6 +20,7 @@ namespace {
 struct MergeArguments {
   std::string output;
   std::vector<std::string> inputs;
+  FormatChoice format;
 };
 
 int run_merge(const MergeArguments& args) {
@@ -30,6 +32,19 @@ int run_merge(const MergeArguments& args) {
     // that differ) or OUT already there: bad input, and nothing was written.
     if (error.cause() == DatabaseError::Cause::refused) throw UsageError("database", error.what());
     throw EnvironmentError(error.what());
+  }
+  if (args.format.format == OutputFormat::json) {
+    nlohmann::ordered_json record;
+    record["database"] = args.output;
+    record["inputs"] = summary.inputs;
+    record["starts"] = summary.starts;
+    record["overlapping_starts"] = summary.overlapping_starts;
+    record["target"] = summary.target;
+    record["complete"] = summary.complete;
+    record["verified"] = summary.verified;
+    record["candidates"] = summary.candidates;
+    write_record(stdout, record, OutputFormat::json);
+    return kExitSuccess;
   }
   std::fprintf(stderr,
                "loopfarm merge: %" PRId64 " databases into %s: %" PRIu64 " starts (%" PRIu64
@@ -67,6 +82,8 @@ Subcommand add_merge_command(CLI::App& parent) {
   app->add_option("IN", args->inputs, "databases written by loopfarm run (one run each)")
       ->required()
       ->type_name("IN.sqlite...");
+  add_format_option(*app, args->format, {OutputFormat::text, OutputFormat::json},
+                    "what it did: text (lines on stderr) or json (one object on stdout), as");
   return {app, [args] { return run_merge(*args); }};
 }
 

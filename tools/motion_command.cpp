@@ -11,6 +11,7 @@
 #include "geometry_options.hpp"
 #include "loopfarm/search/verify.hpp"
 #include "motion_output.hpp"
+#include "output_format.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -25,7 +26,7 @@ struct MotionArguments {
   std::string csv, plot;
   CLI::Option* csv_option = nullptr;
   CLI::Option* plot_option = nullptr;
-  bool json = false;
+  FormatChoice format;
 };
 
 int run_motion(const MotionArguments& args) {
@@ -37,9 +38,8 @@ int run_motion(const MotionArguments& args) {
   if (steps < 64 || steps > 1000000) {
     throw UsageError("--steps", "got " + std::to_string(steps) + "; must be in [64, 1000000]");
   }
-  const bool csv_to_stdout = given(args.csv_option) && args.csv == "-";
-  if (csv_to_stdout && args.json) throw UsageError("--csv", "'-' (standard output) cannot go with --json; give a file");
-  if (given(args.csv_option) && given(args.plot_option) && !csv_to_stdout) {
+  const bool file_on_stdout = file_takes_standard_output({{"--csv", args.csv}, {"--plot", args.plot}}, args.format);
+  if (given(args.csv_option) && given(args.plot_option) && !file_on_stdout) {
     std::error_code ec1, ec2;
     const auto csv_path = std::filesystem::weakly_canonical(args.csv, ec1);
     const auto plot_path = std::filesystem::weakly_canonical(args.plot, ec2);
@@ -51,7 +51,7 @@ int run_motion(const MotionArguments& args) {
   if (given(args.plot_option)) gnuplot = require_gnuplot("--plot");
   std::optional<PendingOutput> csv;
   std::optional<PendingOutput> png;
-  if (given(args.csv_option) && !csv_to_stdout) csv.emplace(args.csv, "--csv");
+  if (given(args.csv_option)) csv.emplace(args.csv, "--csv");
   if (given(args.plot_option)) png.emplace(args.plot, "--plot");
 
   const LoopGeometry& geometry = request.geometry;
@@ -80,19 +80,17 @@ int run_motion(const MotionArguments& args) {
     std::fprintf(stderr, "loopfarm motion: the loop has no circuit; %s not written\n", args.plot.c_str());
   }
 
-  if (csv_to_stdout) {
-    write_circuits_csv(v.motion, stdout);
-    return status;
-  }
-  if (args.json) {
-    std::string json = "{\"geometry\":" + geometry_json(geometry);
-    json += ",\"verified\":" + std::string(v.verified ? "true" : "false");
-    json += ",\"circuit\":" + (v.circuit >= 0 ? std::to_string(v.circuit + 1) : std::string("null"));
-    json += ",\"isolated_poses\":" + std::to_string(v.motion.isolated_poses.size());
-    json += ",\"least_residual\":" + json_number(v.motion.least_residual);
-    json += ",\"note\":" + json_string(v.limit);
-    json += ",\"circuits\":" + circuits_json(v.motion, v.motion.input_joint) + "}\n";
-    std::fputs(json.c_str(), stdout);
+  if (file_on_stdout) return status;
+  if (args.format.format != OutputFormat::text) {
+    nlohmann::ordered_json record;
+    record["geometry"] = geometry_json(geometry);
+    record["verified"] = v.verified;
+    record["circuit"] = v.circuit >= 0 ? nlohmann::ordered_json(v.circuit + 1) : nlohmann::ordered_json(nullptr);
+    record["isolated_poses"] = v.motion.isolated_poses.size();
+    record["least_residual"] = v.motion.least_residual;
+    record["note"] = v.limit;
+    record["circuits"] = circuits_json(v.motion, v.motion.input_joint);
+    write_record(stdout, record, args.format.format);
     return status;
   }
   std::printf("loop (%dR)\n", geometry.joints());
@@ -136,9 +134,12 @@ Subcommand add_motion_command(CLI::App& parent) {
                                      "arclength), one row a point; '-' for standard output")
                          ->type_name("FILE");
   args->plot_option = app->add_option("--plot", args->plot,
-                                      "draw the joint angles against input and arclength into a PNG (needs gnuplot)")
+                                      "draw the joint angles against input and arclength (needs gnuplot); FILE's "
+                                      "extension picks the format: .png, .svg or .pdf ('-': PNG on stdout)")
                           ->type_name("FILE");
-  app->add_flag("--json", args->json, "print one JSON object instead of the summary");
+  add_format_option(*app, args->format,
+                    {OutputFormat::text, OutputFormat::json, OutputFormat::csv, OutputFormat::markdown},
+                    "print the verdict and circuits as");
   return {app, [args] { return run_motion(*args); }};
 }
 

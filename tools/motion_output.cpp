@@ -26,15 +26,6 @@ std::string degrees_list(const JointVector& radians) {
   return out;
 }
 
-std::string degrees_array(const JointVector& radians) {
-  std::string out = "[";
-  for (int i = 0; i < radians.size(); ++i) {
-    if (i) out += ',';
-    out += json_number(radians[i] * kDegreesPerRadian);
-  }
-  return out + "]";
-}
-
 std::string range_text(const JointRange& r) {
   if (r.crank()) return "crank (" + std::to_string(std::abs(r.turns)) + (std::abs(r.turns) == 1 ? " turn)" : " turns)");
   return "rocker [" + readable(r.lo * kDegreesPerRadian) + ", " + readable(r.hi * kDegreesPerRadian) + "]";
@@ -82,48 +73,61 @@ void print_circuits(const MotionAnalysis& m, int input, int reported) {
   }
 }
 
-std::string circuits_json(const MotionAnalysis& m, int input) {
-  std::string json = "[";
+nlohmann::ordered_json circuits_json(const MotionAnalysis& m, int input) {
+  using nlohmann::ordered_json;
+  auto degrees = [](const JointVector& theta) {
+    ordered_json out = ordered_json::array();
+    for (int i = 0; i < theta.size(); ++i) out.push_back(theta[i] * kDegreesPerRadian);
+    return out;
+  };
+  ordered_json circuits = ordered_json::array();
   for (size_t i = 0; i < m.circuits.size(); ++i) {
     const Circuit& c = m.circuits[i];
-    if (i) json += ',';
     const JointRange& r = c.input_range(input);
-    json += "{\"end\":" + json_string(to_string(c.end));
-    json += ",\"closed\":" + std::string(c.closed() ? "true" : "false");
-    json += ",\"through_given_pose\":" + std::string(static_cast<int>(i) == m.given_circuit ? "true" : "false");
-    json += ",\"freedoms\":" + std::to_string(c.freedoms);
-    json += ",\"held_joints\":[";
-    for (size_t k = 0; k < c.held_joints.size(); ++k) json += (k ? "," : "") + std::to_string(c.held_joints[k] + 1);
-    json += "],\"points\":" + std::to_string(c.points.size());
-    json += ",\"arclength_rad\":" + json_number(c.length);
-    json += ",\"worst_residual\":" + json_number(c.worst_residual);
-    json += ",\"least_singular_ratio\":" + json_number(c.least_singular_ratio);
-    json += ",\"full_turn\":" + std::string(r.crank() ? "true" : "false");
-    json += ",\"input_range_deg\":[" + json_number(r.lo * kDegreesPerRadian) + "," +
-            json_number(r.hi * kDegreesPerRadian) + "]";
-    json += ",\"joints\":[";
-    for (size_t j = 0; j < c.ranges.size(); ++j) {
-      const JointRange& k = c.ranges[j];
-      if (j) json += ',';
-      json += "{\"range_deg\":[" + json_number(k.lo * kDegreesPerRadian) + "," + json_number(k.hi * kDegreesPerRadian) +
-              "],\"crank\":" + (k.crank() ? "true" : "false") + ",\"turns\":" + std::to_string(k.turns) + "}";
+    ordered_json circuit;
+    circuit["end"] = to_string(c.end);
+    circuit["closed"] = c.closed();
+    circuit["through_given_pose"] = static_cast<int>(i) == m.given_circuit;
+    circuit["freedoms"] = c.freedoms;
+    ordered_json held = ordered_json::array();
+    for (const int joint : c.held_joints) held.push_back(joint + 1);
+    circuit["held_joints"] = held;
+    circuit["points"] = c.points.size();
+    circuit["arclength_rad"] = c.length;
+    circuit["worst_residual"] = c.worst_residual;
+    circuit["least_singular_ratio"] = c.least_singular_ratio;
+    circuit["full_turn"] = r.crank();
+    circuit["input_range_deg"] = {r.lo * kDegreesPerRadian, r.hi * kDegreesPerRadian};
+    ordered_json joints = ordered_json::array();
+    for (const JointRange& k : c.ranges) {
+      ordered_json joint;
+      joint["range_deg"] = {k.lo * kDegreesPerRadian, k.hi * kDegreesPerRadian};
+      joint["crank"] = k.crank();
+      joint["turns"] = k.turns;
+      joints.push_back(joint);
     }
-    json += "],\"dead_points\":[";
-    bool first = true;
+    circuit["joints"] = joints;
+    ordered_json dead_points = ordered_json::array();
     for (const JointExtreme& e : c.extremes) {
       if (e.joint != input) continue;
-      json += std::string(first ? "" : ",") + "{\"input_deg\":" + json_number(e.theta[input] * kDegreesPerRadian) +
-              ",\"maximum\":" + (e.maximum ? "true" : "false") + ",\"theta_deg\":" + degrees_array(e.theta) + "}";
-      first = false;
+      ordered_json point;
+      point["input_deg"] = e.theta[input] * kDegreesPerRadian;
+      point["maximum"] = e.maximum;
+      point["theta_deg"] = degrees(e.theta);
+      dead_points.push_back(point);
     }
-    json += "],\"bifurcations\":[";
-    for (size_t b = 0; b < c.bifurcations.size(); ++b) {
-      json += std::string(b ? "," : "") + "{\"branches\":" + std::to_string(c.bifurcations[b].branches) +
-              ",\"theta_deg\":" + degrees_array(c.bifurcations[b].theta) + "}";
+    circuit["dead_points"] = dead_points;
+    ordered_json bifurcations = ordered_json::array();
+    for (const Bifurcation& b : c.bifurcations) {
+      ordered_json point;
+      point["branches"] = b.branches;
+      point["theta_deg"] = degrees(b.theta);
+      bifurcations.push_back(point);
     }
-    json += "]}";
+    circuit["bifurcations"] = bifurcations;
+    circuits.push_back(circuit);
   }
-  return json + "]";
+  return circuits;
 }
 
 void write_circuits_csv(const MotionAnalysis& m, std::FILE* out) {

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "loopfarm/core/motion.hpp"
 
 namespace loopfarm::cli {
@@ -15,7 +17,7 @@ namespace loopfarm::cli {
 void print_circuits(const MotionAnalysis& motion, int input_joint, int reported);
 
 // [{...}, ...]: one object per circuit (see docs/guide/motion.md for the keys).
-std::string circuits_json(const MotionAnalysis& motion, int input_joint);
+nlohmann::ordered_json circuits_json(const MotionAnalysis& motion, int input_joint);
 
 // One row a point: circuit, point, arclength_rad, then theta1_deg ...
 // thetan_deg (the input is theta of the input joint), with a header row.

@@ -25,7 +25,9 @@
 #include "loopfarm/core/cycle.hpp"
 #include "loopfarm/farm/candidate_pose.hpp"
 #include "loopfarm/farm/results_database.hpp"
+#include "loopfarm/search/canonical.hpp"
 #include "loopfarm/search/classify.hpp"
+#include "output_format.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -62,7 +64,7 @@ struct ReportArguments {
   std::string family;
   std::string max_energy;
   std::string limit;  // empty: not given (the table's default; every row otherwise)
-  std::string format = "table";
+  FormatChoice format;
   std::string run;
   std::string candidate;
   std::string input_deg;
@@ -120,7 +122,28 @@ int stored_joints(const CandidateRow& r) { return std::clamp(r.joints, 0, static
 
 const double kAngleRoundOffDeg = kRoundOff * kDegreesPerRadian;
 
-std::string geometry_text(const CandidateRow& r, int digits) {
+// The row's geometry in its conventional form (positive twists where the
+// loop's representations allow, canonical.hpp), for what people read: the
+// text table and Markdown. The stored canonical values stay in csv, json and
+// the database. A row whose geometry is not a loop (damage) is shown as stored.
+CandidateRow conventional(const CandidateRow& r) {
+  CandidateRow shown = r;
+  try {
+    const LoopGeometry g = conventional_form(candidate_geometry(r)).geometry;
+    const double scale = scale_of(r);
+    for (int k = 0; k < g.joints() && k < static_cast<int>(shown.a.size()); ++k) {
+      const size_t i = static_cast<size_t>(k);
+      shown.a[i] = g.a[k] * scale;
+      shown.alpha_deg[i] = g.alpha[k] * kDegreesPerRadian;
+      shown.d[i] = g.d[k] * scale;
+    }
+  } catch (const std::invalid_argument&) {
+  }
+  return shown;
+}
+
+std::string geometry_text(const CandidateRow& stored, int digits) {
+  const CandidateRow r = conventional(stored);
   const double length = kRoundOff * scale_of(r);
   return "a=" + shown_list(r.a, length, digits) + " alpha=" + shown_list(r.alpha_deg, kAngleRoundOffDeg, digits) +
          " d=" + shown_list(r.d, length, digits);
@@ -214,7 +237,7 @@ void print_table(const std::vector<CandidateRow>& rows, bool wide) {
     column("family_res", [](const CandidateRow& r) { return g(r.family_residual, 2); });
   }
   column(wide ? "input range" : "input [deg]", [&](const CandidateRow& r) { return range_text(r, wide); });
-  column("geometry (canonical, L = 1; twists in deg)",
+  column("geometry (conventional form, L = 1; twists in deg)",
          [&](const CandidateRow& r) { return geometry_text(r, wide ? 6 : 3); });
   print_columns(columns, wide ? 0 : kTableColumns);
 }
@@ -224,7 +247,8 @@ void print_markdown(const std::vector<CandidateRow>& rows) {
       "| id | family | setup | E_mean | hits | first (run:start) | local dim | rigid residual | family residual "
       "| input range | a | alpha [deg] | d |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-  for (const CandidateRow& r : rows) {
+  for (const CandidateRow& stored : rows) {
+    const CandidateRow r = conventional(stored);
     const double length = kRoundOff * scale_of(r);
     std::printf("| %lld | %s | %s | %s | %lld | %lld:%lld | %d/%d | %s | %s | %s | %s | %s | %s |\n", r.id,
                 r.family.c_str(), r.setup.c_str(), g(r.E_mean).c_str(), r.hits, r.first_run, r.first_start,
@@ -239,7 +263,7 @@ void print_markdown(const std::vector<CandidateRow>& rows) {
 struct Field {
   std::string name;
   std::string csv;
-  std::string json;
+  nlohmann::ordered_json json;
   std::string text;
 };
 
@@ -253,15 +277,12 @@ std::string csv_text(const std::string& v) {
 class Fields {
  public:
   void number(const std::string& name, double v, double threshold = 0.0, int digits = 6) {
-    f_.push_back({name, std::isfinite(v) ? format_double(v) : "", json_number(v), shown(v, threshold, digits)});
+    f_.push_back({name, std::isfinite(v) ? format_double(v) : "",
+                  std::isfinite(v) ? nlohmann::ordered_json(v) : nullptr, shown(v, threshold, digits)});
   }
-  void integer(const std::string& name, long long v) {
-    f_.push_back({name, std::to_string(v), std::to_string(v), std::to_string(v)});
-  }
-  void text(const std::string& name, const std::string& v) { f_.push_back({name, csv_text(v), json_string(v), v}); }
-  void flag(const std::string& name, bool v) {
-    f_.push_back({name, v ? "1" : "0", v ? "true" : "false", v ? "yes" : "no"});
-  }
+  void integer(const std::string& name, long long v) { f_.push_back({name, std::to_string(v), v, std::to_string(v)}); }
+  void text(const std::string& name, const std::string& v) { f_.push_back({name, csv_text(v), v, v}); }
+  void flag(const std::string& name, bool v) { f_.push_back({name, v ? "1" : "0", v, v ? "yes" : "no"}); }
   void raw(Field field) { f_.push_back(std::move(field)); }
   std::vector<Field>& list() { return f_; }
 
@@ -322,63 +343,41 @@ void print_csv(const std::vector<CandidateRow>& rows) {
   }
 }
 
-std::string json_object(const std::vector<Field>& f) {
-  std::string out = "{";
-  for (size_t i = 0; i < f.size(); ++i) out += (i ? "," : "") + json_string(f[i].name) + ":" + f[i].json;
-  return out + "}";
+nlohmann::ordered_json json_object(const std::vector<Field>& f) {
+  nlohmann::ordered_json object = nlohmann::ordered_json::object();
+  for (const Field& field : f) object[field.name] = field.json;
+  return object;
 }
 
+// One JSON array, a candidate a line.
 void print_json(const std::vector<CandidateRow>& rows) {
   std::printf("[");
   for (size_t k = 0; k < rows.size(); ++k) {
-    std::printf("%s\n%s", k ? "," : "", json_object(fields(rows[k], stored_joints(rows[k]))).c_str());
+    std::printf("%s\n%s", k ? "," : "", json_object(fields(rows[k], stored_joints(rows[k]))).dump().c_str());
   }
   std::printf("%s]\n", rows.empty() ? "" : "\n");
-}
-
-// "a,b," as "a", "b", "".
-std::vector<std::string> split_text(const std::string& text, char separator) {
-  std::vector<std::string> parts(1);
-  for (char c : text) {
-    if (c == separator) {
-      parts.emplace_back();
-    } else {
-      parts.back() += c;
-    }
-  }
-  return parts;
 }
 
 // --- one candidate whole: --candidate ID ---------------------------------------
 
 // The stored singular_values text ("[2,0.5]") as a JSON array when it is one
-// list of numbers, else as the string it is.
-std::string singular_values_json(const std::string& stored) {
-  if (stored.size() >= 2 && stored.front() == '[' && stored.back() == ']') {
-    std::string out = "[";
-    bool numbers = true;
-    const std::string inner = stored.substr(1, stored.size() - 2);
-    if (!inner.empty()) {
-      for (const std::string& element : split_text(inner, ',')) {
-        out += out.size() > 1 ? "," : "";
-        try {
-          out += element == "null" ? "null" : json_number(parse_number(element, "singular_values"));
-        } catch (const UsageError&) {
-          numbers = false;
-        }
-      }
-    }
-    if (numbers) return out + "]";
+// list of numbers (or nulls), else as the string it is.
+nlohmann::ordered_json singular_values_json(const std::string& stored) {
+  const nlohmann::ordered_json parsed = nlohmann::ordered_json::parse(stored, nullptr, false);
+  if (parsed.is_array() && std::all_of(parsed.begin(), parsed.end(), [](const nlohmann::ordered_json& element) {
+        return element.is_number() || element.is_null();
+      })) {
+    return parsed;
   }
-  return json_string(stored);
+  return stored;
 }
 
 std::vector<Field> detail_fields(const CandidateDetails& c) {
   std::vector<Field> f = fields(c.row, stored_joints(c.row));
-  f.push_back({"canonical_key", csv_text(c.canonical_key), json_string(c.canonical_key), c.canonical_key});
+  f.push_back({"canonical_key", csv_text(c.canonical_key), c.canonical_key, c.canonical_key});
   f.push_back(
       {"singular_values", csv_text(c.singular_values), singular_values_json(c.singular_values), c.singular_values});
-  f.push_back({"grid_cell", csv_text(c.grid_cell), json_string(c.grid_cell), c.grid_cell});
+  f.push_back({"grid_cell", csv_text(c.grid_cell), c.grid_cell, c.grid_cell});
   return f;
 }
 
@@ -396,7 +395,7 @@ std::vector<Field> pose_fields(const std::optional<CandidatePose>& pose, const s
   } else {
     for (const char* name : {"input_joint", "input_deg", "input_full_turn", "input_range_lo_deg", "input_range_hi_deg",
                              "closure_residual"}) {
-      f.raw({name, "", "null", "-"});
+      f.raw({name, "", nullptr, "-"});
     }
     f.text("pose_note", missing);
   }
@@ -410,7 +409,7 @@ std::vector<Field> axis_fields(const std::optional<CandidatePose>& pose, int joi
   if (!pose) {
     for (const char* name :
          {"theta_deg", "point_x", "point_y", "point_z", "direction_x", "direction_y", "direction_z"}) {
-      f.raw({name, "", "null", "-"});
+      f.raw({name, "", nullptr, "-"});
     }
     return std::move(f.list());
   }
@@ -513,21 +512,22 @@ void print_candidate_csv(const CandidateDetails& c, const std::optional<Candidat
 
 void print_candidate_json(const CandidateDetails& c, const std::optional<CandidatePose>& pose,
                           const std::string& missing) {
-  std::string out = json_object(detail_fields(c));
-  out.pop_back();
-  std::string pose_json = json_object(pose_fields(pose, missing));
-  out += ",\"pose\":" + pose_json;
-  std::string axes = "[";
+  nlohmann::ordered_json out = json_object(detail_fields(c));
+  out["pose"] = json_object(pose_fields(pose, missing));
+  nlohmann::ordered_json axes = nlohmann::ordered_json::array();
   for (int j = 0; j < stored_joints(c.row); ++j) {
     const std::vector<Field> a = axis_fields(pose, j, 0.0);
+    nlohmann::ordered_json axis;
+    axis["joint"] = a[0].json;
+    axis["theta_deg"] = a[1].json;
     // Without a pose the axis is null, not a triple of nulls.
-    const std::string point = pose ? "[" + a[2].json + "," + a[3].json + "," + a[4].json + "]" : "null";
-    const std::string direction = pose ? "[" + a[5].json + "," + a[6].json + "," + a[7].json + "]" : "null";
-    axes += std::string(j ? "," : "") + "\n{\"joint\":" + a[0].json + ",\"theta_deg\":" + a[1].json +
-            ",\"point\":" + point + ",\"direction\":" + direction + "}";
+    axis["point"] = pose ? nlohmann::ordered_json{a[2].json, a[3].json, a[4].json} : nlohmann::ordered_json(nullptr);
+    axis["direction"] =
+        pose ? nlohmann::ordered_json{a[5].json, a[6].json, a[7].json} : nlohmann::ordered_json(nullptr);
+    axes.push_back(axis);
   }
-  out += ",\"axes\":" + axes + "]}";
-  std::printf("%s\n", out.c_str());
+  out["axes"] = axes;
+  std::printf("%s\n", out.dump().c_str());
 }
 
 // --- the summary ----------------------------------------------------------------
@@ -588,44 +588,51 @@ void print_summary(const ResultsDatabase& db, const SummaryData& s) {
   }
 }
 
-std::string json_integer(std::int64_t v) { return std::to_string(v); }
-
 void print_summary_json(const ResultsDatabase& db, const SummaryData& s, const std::optional<std::int64_t>& run) {
-  std::string out = "{\"database\":" + json_string(db.path()) + ",\"run\":" + (run ? json_integer(*run) : "null");
-  out += ",\"runs\":[";
-  for (size_t i = 0; i < s.runs.size(); ++i) {
-    const RunRow& r = s.runs[i];
-    out += std::string(i ? "," : "") + "\n{\"run_id\":" + json_integer(r.run_id) +
-           ",\"job_path\":" + json_string(r.job_path) + ",\"seed\":" + std::to_string(r.seed) +
-           ",\"slice\":" + (r.slice ? json_string(to_string(*r.slice)) : "null") +
-           ",\"joints\":" + std::to_string(r.joints) + ",\"starts\":" + json_integer(r.starts) +
-           ",\"starts_done\":" + json_integer(r.starts_done) + ",\"status\":" + json_string(r.status) +
-           ",\"ranks\":" + json_integer(r.ranks) + ",\"merged_inputs\":" + json_integer(r.merged_inputs) +
-           ",\"started_at\":" + json_string(r.started_at) + ",\"updated_at\":" + json_string(r.updated_at) + "}";
+  using nlohmann::ordered_json;
+  ordered_json out;
+  out["database"] = db.path();
+  out["run"] = run ? ordered_json(*run) : ordered_json(nullptr);
+  ordered_json runs = ordered_json::array();
+  for (const RunRow& r : s.runs) {
+    ordered_json row;
+    row["run_id"] = r.run_id;
+    row["job_path"] = r.job_path;
+    row["seed"] = r.seed;
+    row["slice"] = r.slice ? ordered_json(to_string(*r.slice)) : ordered_json(nullptr);
+    row["joints"] = r.joints;
+    row["starts"] = r.starts;
+    row["starts_done"] = r.starts_done;
+    row["status"] = r.status;
+    row["ranks"] = r.ranks;
+    row["merged_inputs"] = r.merged_inputs;
+    row["started_at"] = r.started_at;
+    row["updated_at"] = r.updated_at;
+    runs.push_back(row);
   }
+  out["runs"] = runs;
   const StartCounts& c = s.starts;
-  out += "],\n\"starts\":{\"starts\":" + json_integer(c.starts) + ",\"zero_minima\":" + json_integer(c.zeros) +
-         ",\"verified\":" + json_integer(c.verified) + ",\"mean_seconds\":" + json_number(c.mean_seconds) +
-         ",\"core_seconds\":" + json_number(c.total_seconds) + "},\n\"by_status\":[";
-  for (size_t i = 0; i < s.statuses.size(); ++i) {
-    out += std::string(i ? "," : "") + "{\"status\":" + json_string(s.statuses[i].status) +
-           ",\"starts\":" + json_integer(s.statuses[i].starts) + "}";
+  ordered_json starts;
+  starts["starts"] = c.starts;
+  starts["zero_minima"] = c.zeros;
+  starts["verified"] = c.verified;
+  starts["mean_seconds"] = c.mean_seconds;
+  starts["core_seconds"] = c.total_seconds;
+  out["starts"] = starts;
+  ordered_json statuses = ordered_json::array();
+  for (const auto& status : s.statuses) statuses.push_back({{"status", status.status}, {"starts", status.starts}});
+  out["by_status"] = statuses;
+  ordered_json families = ordered_json::array();
+  for (const auto& family : s.families) {
+    families.push_back({{"family", family.family}, {"candidates", family.candidates}, {"hits", family.hits}});
   }
-  out += "],\n\"families\":[";
-  for (size_t i = 0; i < s.families.size(); ++i) {
-    out += std::string(i ? "," : "") + "{\"family\":" + json_string(s.families[i].family) +
-           ",\"candidates\":" + json_integer(s.families[i].candidates) +
-           ",\"hits\":" + json_integer(s.families[i].hits) + "}";
-  }
-  out += "],\n\"histogram\":{\"decades\":[";
-  bool first = true;
+  out["families"] = families;
+  ordered_json decades = ordered_json::array();
   for (const auto& [decade, count] : s.histogram.decades) {
-    out += std::string(first ? "" : ",") + "{\"log10_E_mean\":" + std::to_string(decade) +
-           ",\"starts\":" + json_integer(count) + "}";
-    first = false;
+    decades.push_back({{"log10_E_mean", decade}, {"starts", count}});
   }
-  out += "],\"zeros\":" + json_integer(s.histogram.zeros) + ",\"missing\":" + json_integer(s.histogram.missing) + "}}";
-  std::printf("%s\n", out.c_str());
+  out["histogram"] = {{"decades", decades}, {"zeros", s.histogram.zeros}, {"missing", s.histogram.missing}};
+  std::printf("%s\n", out.dump().c_str());
 }
 
 void print_summary_markdown(const ResultsDatabase& db, const SummaryData& s) {
@@ -768,11 +775,11 @@ void show_candidate(const ResultsDatabase& db, const ReportArguments& args) {
                                         "] deg and does not reach " + args.input_deg + " deg");
   }
   if (!missing.empty()) std::fprintf(stderr, "loopfarm report: candidate %lld: no pose: %s\n", id, missing.c_str());
-  if (args.format == "csv") {
+  if (args.format.format == OutputFormat::csv) {
     print_candidate_csv(*details, pose, missing);
-  } else if (args.format == "json") {
+  } else if (args.format.format == OutputFormat::json) {
     print_candidate_json(*details, pose, missing);
-  } else if (args.format == "markdown") {
+  } else if (args.format.format == OutputFormat::markdown) {
     print_candidate_markdown(*details, pose, missing);
   } else {
     print_candidate_text(*details, pose, missing);
@@ -782,14 +789,14 @@ void show_candidate(const ResultsDatabase& db, const ReportArguments& args) {
 void list_candidates(const ResultsDatabase& db, const ReportArguments& args, const std::filesystem::path& gnuplot) {
   // Files and scripts get every row unless --limit says otherwise; the table
   // kTableDefaultLimit, and says how many it left out.
-  const bool table = args.format == "table";
+  const bool table = args.format.format == OutputFormat::text;
   const long long limit = !args.limit.empty() ? parse_integer(args.limit, "--limit") : (table ? kTableDefaultLimit : 0);
   const std::vector<CandidateRow> rows = read_candidates(db, args, limit);
-  if (args.format == "csv") {
+  if (args.format.format == OutputFormat::csv) {
     print_csv(rows);
-  } else if (args.format == "json") {
+  } else if (args.format.format == OutputFormat::json) {
     print_json(rows);
-  } else if (args.format == "markdown") {
+  } else if (args.format.format == OutputFormat::markdown) {
     print_markdown(rows);
   } else {
     print_table(rows, args.wide);
@@ -807,19 +814,17 @@ void list_candidates(const ResultsDatabase& db, const ReportArguments& args, con
 }
 
 int run_report(const ReportArguments& args) {
-  if (args.format != "table" && args.format != "csv" && args.format != "json" && args.format != "markdown") {
-    throw UsageError("--format", "got " + quote_text(args.format) + "; expected table, csv, json or markdown");
-  }
   if (!args.limit.empty() && parse_integer(args.limit, "--limit") < 0) {
     throw UsageError("--limit", "got " + args.limit + "; must be >= 0 (0: every candidate)");
   }
-  if (args.summary && args.format == "csv") {
+  if (args.summary && args.format.format == OutputFormat::csv) {
     throw UsageError("--format",
-                     "--summary has no csv form (its parts are tables of different columns); use table, "
+                     "--summary has no csv form (its parts are tables of different columns); use text, "
                      "json or markdown");
   }
-  if (args.wide && args.format != "table") {
-    throw UsageError("--wide", "widens the table only; --format " + args.format + " has every column already");
+  if (args.wide && args.format.format != OutputFormat::text) {
+    throw UsageError("--wide", std::string("widens the table only; --format ") + to_string(args.format.format) +
+                                   " has every column already");
   }
   if (!args.max_energy.empty()) (void)parse_number(args.max_energy, "--max-energy");
   if (!args.run.empty()) (void)parse_integer(args.run, "--run");
@@ -876,9 +881,9 @@ int run_report(const ReportArguments& args) {
       write_atlas(gnuplot, read_candidates(*db, args, 0), atlas_header(*db, args), atlas_dir);
     } else if (args.summary) {
       const SummaryData summary = read_summary(*db, run);
-      if (args.format == "json") {
+      if (args.format.format == OutputFormat::json) {
         print_summary_json(*db, summary, run);
-      } else if (args.format == "markdown") {
+      } else if (args.format.format == OutputFormat::markdown) {
         print_summary_markdown(*db, summary);
       } else {
         print_summary(*db, summary);
@@ -928,11 +933,13 @@ Subcommand add_report_command(CLI::App& parent) {
           ->type_name("N");
   CLI::Option* run =
       app->add_option("--run", args->run, "only what run ID found first (default: every run)")->type_name("ID");
-  app->add_option("--format", args->format, "table, csv, json or markdown")->type_name("FMT")->capture_default_str();
+  add_format_option(*app, args->format,
+                    {OutputFormat::text, OutputFormat::csv, OutputFormat::json, OutputFormat::markdown},
+                    "print the candidates (text: a table) as");
   app->add_flag("--wide", args->wide, "the table with every column, uncut (default: fits 120 columns)");
   CLI::Option* summary = app->add_flag(
       "--summary", args->summary,
-      "runs, counts per family and status, and the histogram of log10 of all minima (table, json or markdown)");
+      "runs, counts per family and status, and the histogram of log10 of all minima (text, json or markdown)");
   CLI::Option* candidate =
       app->add_option("--candidate", args->candidate,
                       "show candidate ID whole: every stored column and each joint's axis (a point and a unit "
@@ -955,7 +962,12 @@ Subcommand add_report_command(CLI::App& parent) {
                       "parameters, the local dimension against the known one, and a representative's cycle-energy "
                       "chart (PNG) and motion (SVG); --family, --run and --max-energy select, --limit does not apply")
           ->type_name("DIR");
-  atlas->excludes(summary)->excludes(plot)->excludes(limit)->excludes("--format")->excludes("--wide");
+  atlas->excludes(summary)
+      ->excludes(plot)
+      ->excludes(limit)
+      ->excludes("--format")
+      ->excludes("--json")
+      ->excludes("--wide");
   candidate->excludes(family)
       ->excludes(max_energy)
       ->excludes(limit)

@@ -23,6 +23,7 @@
 #include "loopfarm/farm/farm.hpp"
 #include "loopfarm/farm/results_database.hpp"
 #include "loopfarm/search/job.hpp"
+#include "output_format.hpp"
 
 // Under AddressSanitizer (scripts/test.sh --sanitize): the allocations Open MPI
 // keeps until exit are suppressed by library name (scripts/sanitizers/lsan.supp),
@@ -71,6 +72,8 @@ struct RunArguments {
   std::string chunk = "16";
   std::string progress = "auto";
   bool new_run = false;
+  bool quiet = false;
+  FormatChoice format;
 };
 
 // The job and the farm's options, as the arguments say.
@@ -116,7 +119,9 @@ RunRequest read_settings(const RunArguments& args) {
   const long long chunk = parse_integer(args.chunk, "--chunk");
   if (chunk < 1 || chunk > 100000) throw UsageError("--chunk", "got " + args.chunk + "; must be in [1, 100000]");
   s.farm.chunk = static_cast<int>(chunk);
-  if (args.progress == "auto") {
+  if (args.quiet) {
+    s.farm.progress = ProgressStyle::silent;
+  } else if (args.progress == "auto") {
     s.farm.progress = default_progress_style();
   } else if (args.progress == "bar") {
     s.farm.progress = ProgressStyle::bar;
@@ -216,17 +221,42 @@ int run_run_command(const RunArguments& args) {
     slice = " of slice " + to_string(*s.farm.slice) + " (start indices [" + std::to_string(range.first) + ", " +
             std::to_string(range.last) + ") of " + std::to_string(s.job.search.starts) + ")";
   }
-  std::fprintf(stderr, "loopfarm run: %ld of %ld starts%s committed to %s, %ld zero minima, %ld candidates\n",
-               summary.run.done, summary.run.total, slice.c_str(), database.c_str(), summary.run.zeros,
-               summary.run.candidates);
   const double wall = summary.run.wall_s;
-  std::fprintf(stderr,
-               "loopfarm run: this session %ld starts in %.1f s on %d ranks (%.3g starts/s); rank 0 coordination "
-               "%.3f s (%.2f%% of the wall time, %ld messages); peak memory per rank %.1f MB (rank 0) .. %.1f MB\n",
-               summary.run.done_here, wall, summary.ranks,
-               wall > 0 ? static_cast<double>(summary.run.done_here) / wall : 0.0, summary.run.coordination_s,
-               wall > 0 ? 100.0 * summary.run.coordination_s / wall : 0.0, summary.run.messages, summary.peak_mb_rank0,
-               summary.peak_mb_max);
+  if (args.format.format == OutputFormat::json) {
+    nlohmann::ordered_json record;
+    record["status"] = summary.status == FarmStatus::complete ? "complete" : "stopped";
+    record["database"] = database;
+    record["slice"] = s.farm.slice ? nlohmann::ordered_json(to_string(*s.farm.slice)) : nlohmann::ordered_json(nullptr);
+    record["starts_done"] = summary.run.done;
+    record["starts_total"] = summary.run.total;
+    record["zeros"] = summary.run.zeros;
+    record["candidates"] = summary.run.candidates;
+    record["session_starts"] = summary.run.done_here;
+    record["session_seconds"] = wall;
+    record["ranks"] = summary.ranks;
+    record["coordination_seconds"] = summary.run.coordination_s;
+    record["messages"] = summary.run.messages;
+    record["peak_mb_rank0"] = summary.peak_mb_rank0;
+    record["peak_mb_max"] = summary.peak_mb_max;
+    record["stop_signal"] = summary.status == FarmStatus::stopped
+                                ? nlohmann::ordered_json(signal_name(summary.stop_signal))
+                                : nlohmann::ordered_json(nullptr);
+    record["resume_command"] = summary.status == FarmStatus::stopped
+                                   ? nlohmann::ordered_json(resume_command(args, s, summary.ranks))
+                                   : nlohmann::ordered_json(nullptr);
+    write_record(stdout, record, OutputFormat::json);
+  } else if (!args.quiet) {
+    std::fprintf(stderr, "loopfarm run: %ld of %ld starts%s committed to %s, %ld zero minima, %ld candidates\n",
+                 summary.run.done, summary.run.total, slice.c_str(), database.c_str(), summary.run.zeros,
+                 summary.run.candidates);
+    std::fprintf(stderr,
+                 "loopfarm run: this session %ld starts in %.1f s on %d %s (%.3g starts/s); rank 0 coordination "
+                 "%.3f s (%.2f%% of the wall time, %ld messages); peak memory per rank %.1f MB (rank 0) .. %.1f MB\n",
+                 summary.run.done_here, wall, summary.ranks, summary.ranks == 1 ? "rank" : "ranks",
+                 wall > 0 ? static_cast<double>(summary.run.done_here) / wall : 0.0, summary.run.coordination_s,
+                 wall > 0 ? 100.0 * summary.run.coordination_s / wall : 0.0, summary.run.messages,
+                 summary.peak_mb_rank0, summary.peak_mb_max);
+  }
   if (summary.status == FarmStatus::stopped) {
     std::fprintf(stderr, "loopfarm run: stopped by %s; resume with: %s\n", signal_name(summary.stop_signal).c_str(),
                  resume_command(args, s, summary.ranks).c_str());
@@ -261,10 +291,17 @@ Subcommand add_run_command(CLI::App& parent) {
   app->add_option("--chunk", args->chunk, "start indices handed out per request")
       ->type_name("K")
       ->capture_default_str();
-  app->add_option("--progress", args->progress,
-                  "auto (a bar on a terminal, else a line within 2 s and then every 10 s), bar, log or none")
-      ->type_name("STYLE")
-      ->capture_default_str();
+  CLI::Option* progress =
+      app->add_option("--progress", args->progress,
+                      "auto (a bar on a terminal, else a line within 2 s and then every 10 s), bar, log or none")
+          ->type_name("STYLE")
+          ->check(CLI::IsMember({"auto", "bar", "log", "none"}))
+          ->capture_default_str();
+  app->add_flag("--quiet,-q", args->quiet,
+                "no progress and no summary on stderr: only errors and, when stopped, the line that resumes")
+      ->excludes(progress);
+  add_format_option(*app, args->format, {OutputFormat::text, OutputFormat::json},
+                    "the summary at the end: text (lines on stderr) or json (one object on stdout), as");
   return {app, [args] { return run_run_command(*args); }};
 }
 

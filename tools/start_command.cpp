@@ -10,6 +10,7 @@
 #include "cli_support.hpp"
 #include "loopfarm/search/job.hpp"
 #include "loopfarm/search/start.hpp"
+#include "output_format.hpp"
 
 namespace loopfarm::cli {
 namespace {
@@ -20,7 +21,7 @@ struct StartArguments {
   std::string count = "1";
   std::string algorithm;  // empty: the job's
   bool trace = false;
-  bool json = false;
+  FormatChoice format;
 };
 
 std::string readable(double value) {
@@ -62,27 +63,26 @@ void print_story(const Job& job, const StartSummary& s) {
   }
 }
 
-void print_json(const StartSummary& s) {
-  std::string json = "{";
-  json += "\"index\":" + std::to_string(s.index);
-  json += ",\"algorithm\":" + json_string(s.algorithm);
-  json += ",\"status\":" + json_string(to_string(s.status));
-  json += ",\"message\":" + json_string(s.message);
-  json += ",\"E_mean\":" + json_number(s.E_mean);
-  json += ",\"E_max\":" + json_number(s.E_max);
-  json += ",\"objective\":" + json_number(s.objective);
-  json += ",\"initial_E_mean\":" + json_number(s.initial_E_mean);
-  json += ",\"zero\":" + std::string(s.zero ? "true" : "false");
-  json += ",\"evaluations\":" + std::to_string(s.evaluations);
-  json += ",\"seconds\":" + json_number(s.seconds);
-  json += ",\"analysis_seconds\":" + json_number(s.analysis_seconds);
-  json += ",\"failed_samples\":" + std::to_string(s.failed_samples);
-  json += ",\"branch_jumps\":" + std::to_string(s.branch_jumps);
-  json += ",\"initial_geometry\":" + geometry_json(s.initial_geometry);
-  json += ",\"final_geometry\":" + geometry_json(s.final_geometry);
-  json += candidate_json_fields(s.candidate, s.zero);
-  json += "}\n";
-  std::fputs(json.c_str(), stdout);
+nlohmann::ordered_json start_record(const StartSummary& s) {
+  nlohmann::ordered_json record;
+  record["index"] = s.index;
+  record["algorithm"] = s.algorithm;
+  record["status"] = to_string(s.status);
+  record["message"] = s.message;
+  record["E_mean"] = s.E_mean;
+  record["E_max"] = s.E_max;
+  record["objective"] = s.objective;
+  record["initial_E_mean"] = s.initial_E_mean;
+  record["zero"] = s.zero;
+  record["evaluations"] = s.evaluations;
+  record["seconds"] = s.seconds;
+  record["analysis_seconds"] = s.analysis_seconds;
+  record["failed_samples"] = s.failed_samples;
+  record["branch_jumps"] = s.branch_jumps;
+  record["initial_geometry"] = geometry_json(s.initial_geometry);
+  record["final_geometry"] = geometry_json(s.final_geometry);
+  add_candidate_json(record, s.candidate, s.zero);
+  return record;
 }
 
 int run_start_command(const StartArguments& args) {
@@ -116,11 +116,11 @@ int run_start_command(const StartArguments& args) {
     throw UsageError("--count", "got " + std::to_string(count) + "; starts " + std::to_string(index) + " to " + last +
                                     " must lie in 0 to " + std::to_string(job.search.starts - 1));
   }
-  if (count > 1 && !args.json) throw UsageError("--count", "more than one start needs --json (one line per start)");
+  const OutputFormat format = args.format.format;
   StartOptions options;
   if (args.trace) {
-    // With --json the trace goes to stderr, so that stdout stays one JSON object.
-    std::FILE* out = args.json ? stderr : stdout;
+    // With a data format the trace goes to stderr, so that stdout holds the data alone.
+    std::FILE* out = format == OutputFormat::text ? stdout : stderr;
     std::fprintf(out, "%5s %6s %-23s %-23s %-12s %-12s %-10s %s\n", "iter", "evals", "objective", "E_mean", "|grad|",
                  "|step|", "damping", "accepted");
     options.trace = [out](const SearchTraceRow& row) {
@@ -128,14 +128,16 @@ int run_start_command(const StartArguments& args) {
                    row.value, row.E_mean, row.gradient_norm, row.step_norm, row.damping, row.accepted ? "yes" : "no");
     };
   }
+  RecordStream records(stdout, format);
   for (long long i = index; i < index + count; ++i) {
     const StartSummary summary = run_start(job, static_cast<std::uint64_t>(i), options);
-    if (args.json) {
-      print_json(summary);
-      std::fflush(stdout);  // a line per start as it finishes, for long runs piped elsewhere
-    } else {
+    if (format == OutputFormat::text) {
+      if (i > index) std::printf("\n");
       print_story(job, summary);
+    } else {
+      records.write(start_record(summary));
     }
+    std::fflush(stdout);  // each start as it finishes, for long runs piped elsewhere
   }
   return kExitSuccess;
 }
@@ -149,18 +151,22 @@ Subcommand add_start_command(CLI::App& parent) {
       "Run one start of a job: draw its geometry, minimise the cycle energy, and verify, classify and "
       "canonicalise the result if it reaches zero.");
   app->footer(
-      "Example:\n  loopfarm start jobs/paper-table1.toml --index 3 --trace\n"
+      "Examples:\n  loopfarm start jobs/paper-table1.toml --index 3 --trace\n"
+      "  loopfarm start jobs/default.toml --count 100 --format csv > starts.csv\n"
       "Exit codes: 0 done (whatever the start found), 1 failure, 2 bad input (job file, index).\n");
   app->add_option("JOB", args->job, "job file (TOML, see docs/guide/job-file.md)")->required()->type_name("JOB.toml");
   app->add_option("--index", args->index, "start index, 0 <= I < [search] starts")
       ->type_name("I")
       ->capture_default_str();
-  app->add_option("--count", args->count, "run starts I to I+N-1, one JSON line each (with --json)")
+  app->add_option("--count", args->count,
+                  "run starts I to I+N-1: a story each, or one JSON line, CSV row or Markdown row each")
       ->type_name("N")
       ->capture_default_str();
   app->add_option("--algorithm", args->algorithm, "override [optimizer] algorithm of the job")->type_name("NAME");
   app->add_flag("--trace", args->trace, "print every iteration of the local minimisation");
-  app->add_flag("--json", args->json, "print one JSON object instead of the story");
+  add_format_option(*app, args->format,
+                    {OutputFormat::text, OutputFormat::json, OutputFormat::csv, OutputFormat::markdown},
+                    "print each start as");
   return {app, [args] { return run_start_command(*args); }};
 }
 

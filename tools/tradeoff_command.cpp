@@ -12,6 +12,7 @@
 #include "cli_support.hpp"
 #include "loopfarm/search/job.hpp"
 #include "loopfarm/study/tradeoff.hpp"
+#include "output_format.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -34,6 +35,7 @@ struct TradeoffArguments {
   std::string reuse_nearby_cycles = "true,false";
   std::string analysis_steps = "64,128,360";
   std::string csv;
+  FormatChoice format;
   std::string plot;
   bool quiet = false;
 };
@@ -144,24 +146,32 @@ TradeoffOptions read_options(const TradeoffArguments& args) {
   return o;
 }
 
-std::string csv_text(const std::vector<TradeoffRow>& rows) {
-  std::string out =
-      "axis,value,median_seconds,p90_seconds,search_seconds,analysis_seconds,total_seconds,starts,zeros,"
-      "zero_fraction,verified,seconds_per_verified_zero,false_zeros,"
-      "worst_family_residual,movable_cases,missed_zeros,misanalysed,rigid_cases,rigid_read_as_zero,"
-      "smallest_told_apart,error_rate,pareto\n";
-  for (const TradeoffRow& r : rows) {
-    out += r.axis + "," + r.value + "," + format_double(r.median_seconds) + "," + format_double(r.p90_seconds) + "," +
-           format_double(r.search_seconds) + "," + format_double(r.analysis_seconds) + "," +
-           format_double(r.total_seconds) + "," + std::to_string(r.starts) + "," + std::to_string(r.zeros) + "," +
-           format_double(r.zero_fraction()) + "," + std::to_string(r.verified) + "," +
-           format_double(r.seconds_per_verified_zero()) + "," + std::to_string(r.false_zeros) + "," +
-           format_double(r.worst_family_residual) + "," + std::to_string(r.movable_cases) + "," +
-           std::to_string(r.missed_zeros) + "," + std::to_string(r.misanalysed) + "," + std::to_string(r.rigid_cases) +
-           "," + std::to_string(r.rigid_read_as_zero) + "," + format_double(r.smallest_told_apart) + "," +
-           format_double(r.error_rate()) + "," + (r.pareto ? "1" : "0") + "\n";
-  }
-  return out;
+// Every measure of one configuration: the CSV row, the JSON object.
+nlohmann::ordered_json row_record(const TradeoffRow& r) {
+  nlohmann::ordered_json f;
+  f["axis"] = r.axis;
+  f["value"] = r.value;
+  f["median_seconds"] = r.median_seconds;
+  f["p90_seconds"] = r.p90_seconds;
+  f["search_seconds"] = r.search_seconds;
+  f["analysis_seconds"] = r.analysis_seconds;
+  f["total_seconds"] = r.total_seconds;
+  f["starts"] = r.starts;
+  f["zeros"] = r.zeros;
+  f["zero_fraction"] = r.zero_fraction();
+  f["verified"] = r.verified;
+  f["seconds_per_verified_zero"] = r.seconds_per_verified_zero();
+  f["false_zeros"] = r.false_zeros;
+  f["worst_family_residual"] = r.worst_family_residual;
+  f["movable_cases"] = r.movable_cases;
+  f["missed_zeros"] = r.missed_zeros;
+  f["misanalysed"] = r.misanalysed;
+  f["rigid_cases"] = r.rigid_cases;
+  f["rigid_read_as_zero"] = r.rigid_read_as_zero;
+  f["smallest_told_apart"] = r.smallest_told_apart;
+  f["error_rate"] = r.error_rate();
+  f["pareto"] = r.pareto;
+  return f;
 }
 
 std::string name_of(const TradeoffRow& r) { return r.axis == "base" ? "base" : r.axis + "=" + r.value; }
@@ -267,6 +277,7 @@ int run_tradeoff_command(const TradeoffArguments& args) {
   }
   TradeoffOptions options = read_options(args);
   // Outputs are opened (and gnuplot found) before the work: a bad path fails at once.
+  const bool file_on_stdout = file_takes_standard_output({{"--csv", args.csv}, {"--plot", args.plot}}, args.format);
   std::optional<PendingOutput> csv;
   if (!args.csv.empty()) csv.emplace(args.csv, "--csv");
   std::optional<PendingOutput> plot;
@@ -280,9 +291,17 @@ int run_tradeoff_command(const TradeoffArguments& args) {
     };
   }
   const std::vector<TradeoffRow> rows = run_tradeoff(job, options);
-  print_table(rows);
+  std::vector<nlohmann::ordered_json> records;
+  for (const TradeoffRow& r : rows) records.push_back(row_record(r));
+  if (!file_on_stdout) {
+    if (args.format.format == OutputFormat::text) {
+      print_table(rows);
+    } else {
+      write_records(stdout, records, args.format.format);
+    }
+  }
   if (csv) {
-    std::fputs(csv_text(rows).c_str(), csv->stream());
+    write_records(csv->stream(), records, OutputFormat::csv);
     csv->commit();
   }
   if (plot) {
@@ -353,7 +372,11 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
                   "steps per turn of a zero's analysis tried (its largest step is 360/S deg)")
       ->type_name("LIST")
       ->capture_default_str();
-  app->add_option("--csv", args->csv, "write every measure of every configuration as CSV")->type_name("FILE");
+  add_format_option(*app, args->format,
+                    {OutputFormat::text, OutputFormat::csv, OutputFormat::json, OutputFormat::markdown},
+                    "print the configurations (text: a table of the main measures; the others: every measure) as");
+  app->add_option("--csv", args->csv, "write every measure of every configuration as CSV ('-': stdout)")
+      ->type_name("FILE");
   app->add_option("--plot", args->plot, "draw seconds per start against error rate as PNG")->type_name("FILE.png");
   app->add_flag("--quiet", args->quiet, "no progress lines on stderr");
   return {app, [args] { return run_tradeoff_command(*args); }};

@@ -12,6 +12,7 @@
 #include "loopfarm/core/assembly.hpp"
 #include "loopfarm/core/cycle.hpp"
 #include "loopfarm/search/start.hpp"
+#include "output_format.hpp"
 
 namespace loopfarm::cli {
 namespace {
@@ -23,7 +24,7 @@ struct VerifyArguments {
   std::string theta0_deg;
   std::string samples = "32";
   std::string steps = "720";
-  bool json = false;
+  FormatChoice format;
 };
 
 std::string readable(double value) {
@@ -85,25 +86,24 @@ int run_verify(const VerifyArguments& args) {
   const VerificationSummary& v = candidate.verification;
   const int status = v.verified ? kExitSuccess : kExitNotVerified;
 
-  if (args.json) {
-    std::string json = "{";
-    json += "\"geometry\":" + geometry_json(geometry);
-    if (window) {
-      json += ",\"theta0_deg\":" + json_number(window->theta0 * kDegreesPerRadian);
-      json += ",\"cycle_range_deg\":" + json_number(window->range * kDegreesPerRadian);
-      json += ",\"status\":" + json_string(to_string(assembly.status));
-      json += ",\"E_mean\":" + json_number(cycle.E_mean);
-      json += ",\"E_max\":" + json_number(cycle.E_max);
-      json += ",\"failed_samples\":" + std::to_string(cycle.failed_samples);
-      json += ",\"theta_deg\":" + degrees_json(window->pose);
-    } else {
-      json +=
-          ",\"theta0_deg\":null,\"cycle_range_deg\":null,\"status\":null,\"E_mean\":null,\"E_max\":null,"
-          "\"failed_samples\":null,\"theta_deg\":null";
+  if (args.format.format != OutputFormat::text) {
+    nlohmann::ordered_json record;
+    record["geometry"] = geometry_json(geometry);
+    for (const char* field :
+         {"theta0_deg", "cycle_range_deg", "status", "E_mean", "E_max", "failed_samples", "theta_deg"}) {
+      record[field] = nullptr;
     }
-    json += candidate_json_fields(candidate, true);
-    json += "}\n";
-    std::fputs(json.c_str(), stdout);
+    if (window) {
+      record["theta0_deg"] = window->theta0 * kDegreesPerRadian;
+      record["cycle_range_deg"] = window->range * kDegreesPerRadian;
+      record["status"] = to_string(assembly.status);
+      record["E_mean"] = cycle.E_mean;
+      record["E_max"] = cycle.E_max;
+      record["failed_samples"] = cycle.failed_samples;
+      record["theta_deg"] = degrees_json(window->pose);
+    }
+    add_candidate_json(record, candidate, true);
+    write_record(stdout, record, args.format.format);
     return status;
   }
   std::printf("loop (%dR)\n", n);
@@ -153,7 +153,9 @@ Subcommand add_verify_command(CLI::App& parent) {
   app->add_option("--steps", args->steps, "tracing: the largest step along a circuit is 360/S deg (>= 64)")
       ->type_name("S")
       ->capture_default_str();
-  app->add_flag("--json", args->json, "print one JSON object instead of the summary");
+  add_format_option(*app, args->format,
+                    {OutputFormat::text, OutputFormat::json, OutputFormat::csv, OutputFormat::markdown},
+                    "print the verdict as");
   return {app, [args] { return run_verify(*args); }};
 }
 

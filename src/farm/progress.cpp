@@ -103,7 +103,7 @@ void Progress::update(const ProgressCounts& counts, bool force) {
 }
 
 void Progress::update_at(const ProgressCounts& counts, double elapsed_s, bool force) {
-  if (style_ == ProgressStyle::none) return;
+  if (style_ == ProgressStyle::none || style_ == ProgressStyle::silent) return;
   // A bar shows at once; a log's first line comes within kFirstLog (a run
   // under mpirun shows it is alive), the next ones every interval_.
   const double gap = style_ == ProgressStyle::bar ? (shown_ ? kBarInterval : 0.0)
@@ -130,6 +130,7 @@ void Progress::finish() {
 }
 
 void Progress::message(const std::string& text) {
+  if (style_ == ProgressStyle::silent) return;
   finish();
   std::fprintf(out_, "loopfarm run: %s\n", text.c_str());
   std::fflush(out_);

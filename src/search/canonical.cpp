@@ -36,6 +36,25 @@ std::string decimal(long long quantum, int decimals, double tolerance) {
   return buffer;
 }
 
+// The representation of `unit` (length scale 1) whose rank(.) is smallest,
+// written into form's geometry and transformation; returns that rank.
+template <typename Rank>
+std::vector<long long> smallest_representation(const LoopGeometry& unit, Rank rank, CanonicalForm& form) {
+  std::vector<long long> best;
+  for (const detail::Representation& r : detail::representations(unit.joints())) {
+    const LoopGeometry candidate = detail::apply(r, unit);
+    std::vector<long long> order = rank(candidate);
+    if (best.empty() || order < best) {
+      best = std::move(order);
+      form.geometry = candidate;
+      form.shift = r.shift;
+      form.reversed = r.reversed;
+      form.flips = r.flips;
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance) {
@@ -44,19 +63,8 @@ CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance) {
   const int n = geometry.joints();
   CanonicalForm best;
   best.scale = length_scale(geometry);
-  const LoopGeometry unit = scaled(geometry, best.scale);
-  std::vector<long long> best_key;
-  for (const detail::Representation& r : detail::representations(n)) {
-    const LoopGeometry candidate = detail::apply(r, unit);
-    std::vector<long long> key = quantised(candidate, tolerance);
-    if (best_key.empty() || key < best_key) {
-      best_key = std::move(key);
-      best.geometry = candidate;
-      best.shift = r.shift;
-      best.reversed = r.reversed;
-      best.flips = r.flips;
-    }
-  }
+  const std::vector<long long> best_key = smallest_representation(
+      scaled(geometry, best.scale), [tolerance](const LoopGeometry& g) { return quantised(g, tolerance); }, best);
   const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(tolerance) - 1e-9)));
   std::string key = std::to_string(n) + "R";
   const char* names[] = {" a=", " alpha=", " d="};
@@ -68,6 +76,32 @@ CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance) {
     }
   }
   best.key = key;
+  return best;
+}
+
+CanonicalForm conventional_form(const LoopGeometry& geometry, double tolerance) {
+  CanonicalForm best = canonical_form(geometry, tolerance);
+  const int n = geometry.joints();
+  // (negative twists, negative offsets, quantised values): smallest wins. A
+  // twist a hair above -pi is pi, as the key reads it.
+  auto is_negative_twist = [tolerance](double alpha) { return alpha < -tolerance && alpha >= -kPi + tolerance; };
+  smallest_representation(
+      scaled(geometry, best.scale),
+      [&](const LoopGeometry& g) {
+        long long negative_twists = 0, negative_offsets = 0;
+        for (int k = 0; k < n; ++k) {
+          negative_twists += is_negative_twist(g.alpha[k]) ? 1 : 0;
+          negative_offsets += g.d[k] < -tolerance ? 1 : 0;
+        }
+        std::vector<long long> order{negative_twists, negative_offsets};
+        const std::vector<long long> values = quantised(g, tolerance);
+        order.insert(order.end(), values.begin(), values.end());
+        return order;
+      },
+      best);
+  for (int k = 0; k < n; ++k) {
+    if (best.geometry.alpha[k] < -kPi + tolerance) best.geometry.alpha[k] += 2 * kPi;
+  }
   return best;
 }
 

@@ -117,10 +117,20 @@ TEST(Progress, ALogShowsItsFirstLineWithinTwoSecondsThenEveryInterval) {
   EXPECT_EQ(out.text().rfind("loopfarm run: 1,234,567/10,000,000 starts (12.3%)", 0), 0u) << out.text();
 }
 
-TEST(Progress, NoneWritesNothing) {
+TEST(Progress, NoneWritesNoProgressButItsNotes) {
   Capture out;
   Progress progress(ProgressStyle::none, 0.0, out.file());
   progress.update_at(large_counts(), 5.0, true);
+  progress.finish();
+  progress.message("resuming run 1");
+  EXPECT_EQ(out.text(), "loopfarm run: resuming run 1\n");
+}
+
+TEST(Progress, SilentWritesNothing) {
+  Capture out;
+  Progress progress(ProgressStyle::silent, 0.0, out.file());
+  progress.update_at(large_counts(), 5.0, true);
+  progress.message("resuming run 1");
   progress.finish();
   EXPECT_EQ(out.text(), "");
 }

@@ -1,5 +1,7 @@
 #include "loopfarm/search/canonical.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <set>
 #include <stdexcept>
@@ -109,6 +111,58 @@ TEST(Canonical, IsIdempotentAndSnapsTheTwistCut) {
   c.d[2] = -0.0;
   EXPECT_EQ(canonical_form(c).key, canonical_form(a).key);
   EXPECT_EQ(canonical_form(a).key.find("-0,"), std::string::npos);
+}
+
+// The form people read: the same key and the same loop (it closes where the
+// input did, checked with loop.hpp's closure), with as few negative twists as
+// the loop's representations allow, whatever representation it was given in.
+TEST(Canonical, TheConventionalFormHasPositiveTwistsWhereTheLoopAllows) {
+  const LoopGeometry g = paper_bennett_loop();  // twists 30, 90, 30, 90 deg
+  const JointVector theta = bennett_angles(g, rad(77));
+  const CanonicalForm canonical = canonical_form(g);
+  int negative = 0;
+  for (int k = 0; k < 4; ++k) negative += canonical.geometry.alpha[k] < 0 ? 1 : 0;
+  EXPECT_GT(negative, 0) << "the key's representative has negative twists";
+  for (std::uint64_t k = 0; k < 10; ++k) {
+    const Rewritten r = rewrite(g, theta, k);
+    const CanonicalForm form = conventional_form(r.g);
+    EXPECT_EQ(form.key, canonical.key);
+    EXPECT_EQ(canonical_form(form.geometry).key, canonical.key);
+    for (int j = 0; j < 4; ++j) {
+      EXPECT_GT(form.geometry.alpha[j], 0.0) << j;
+      EXPECT_GE(form.geometry.d[j], 0.0) << j;
+    }
+    // The Bennett loop's own values: a/L and twists 30, 90, 30, 90 in some order.
+    std::vector<double> twists(form.geometry.alpha.data(), form.geometry.alpha.data() + 4);
+    std::sort(twists.begin(), twists.end());
+    EXPECT_NEAR(twists[0], rad(30), 1e-12);
+    EXPECT_NEAR(twists[1], rad(30), 1e-12);
+    EXPECT_NEAR(twists[2], rad(90), 1e-12);
+    EXPECT_NEAR(twists[3], rad(90), 1e-12);
+    EXPECT_LT(closure_residual(form.geometry, canonical_angles(form, r.theta)).norm(), 1e-12) << k;
+  }
+  // A generic loop may need some negative twists in every representation:
+  // the conventional form has no more than any other representation has.
+  for (int n = 4; n <= 7; ++n) {
+    for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+      const LoopGeometry loop = random_loop(n, 50 * n + seed);
+      const CanonicalForm form = conventional_form(loop);
+      EXPECT_EQ(form.key, canonical_form(loop).key);
+      auto negatives = [n](const LoopGeometry& x) {
+        int count = 0;
+        for (int j = 0; j < n; ++j) {
+          const double wrapped = std::remainder(x.alpha[j], 2.0 * 3.14159265358979323846);  // [-pi, pi]
+          count += wrapped < -1e-6 && wrapped > -3.14159265358979323846 + 1e-6 ? 1 : 0;
+        }
+        return count;
+      };
+      for (std::uint64_t k = 0; k < 24; ++k) {
+        const Rewritten r = rewrite(loop, random_angles(n, seed), k);
+        EXPECT_LE(negatives(form.geometry), negatives(conventional_form(r.g).geometry));
+        EXPECT_LE(negatives(form.geometry), negatives(r.g)) << n << " " << seed << " " << k;
+      }
+    }
+  }
 }
 
 TEST(Canonical, BadInputThrows) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "loopfarm/core/cycle.hpp"
 #include "loopfarm/core/cycle_start.hpp"
@@ -316,7 +317,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"start_index_beyond", {"start", kTable1, "--index", "200"}, {"loopfarm start: --index:", "0 to 199"}},
         BadInput{"start_index_text", {"start", kTable1, "--index", "two"}, {"loopfarm start: --index:", "\"two\""}},
         BadInput{"start_count_zero", {"start", kTable1, "--count", "0", "--json"}, {"--count:", "got 0"}},
-        BadInput{"start_count_without_json", {"start", kTable1, "--count", "3"}, {"--count:", "--json"}},
+        BadInput{"start_unknown_format", {"start", kTable1, "--format", "xml"}, {"--format:", "xml"}},
+        BadInput{"start_format_and_json", {"start", kTable1, "--format", "csv", "--json"}, {"--json", "--format"}},
         BadInput{
             "start_count_beyond", {"start", kTable1, "--index", "198", "--count", "5", "--json"}, {"--count:", "202"}},
         BadInput{"start_algorithm", {"start", kTable1, "--algorithm", "LD_NOPE"}, {"--algorithm:", "LD_NOPE"}},
@@ -658,6 +660,101 @@ TEST_F(CliTest, StartStoryAndTrace) {
   const Result json = run({"start", kTable1, "--index", "0", "--trace", "--json"});
   EXPECT_EQ(lines_of(json.out).size(), 1u);
   EXPECT_NE(json.err.find("iter"), std::string::npos);
+}
+
+// Every format of a command carries the same values: JSON parsed with
+// nlohmann against CSV split by hand and Markdown's field-value rows.
+TEST_F(CliTest, EveryFormatCarriesTheSameValues) {
+  const std::vector<std::string> bennett = {
+      "energy", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--theta-deg", "120,90,-120,-90", "--samples", "8"};
+  const Result json = run(with(bennett, {"--format", "json"}));
+  const Result alias = run(with(bennett, {"--json"}));
+  const Result csv = run(with(bennett, {"--format", "csv"}));
+  const Result markdown = run(with(bennett, {"--format", "markdown"}));
+  for (const Result* r : {&json, &alias, &csv, &markdown}) ASSERT_EQ(r->exit_code, 0) << r->err;
+  const nlohmann::json object = nlohmann::json::parse(json.out);
+  EXPECT_EQ(nlohmann::json::parse(alias.out).size(), object.size());
+  const auto csv_lines = lines_of(csv.out);
+  ASSERT_EQ(csv_lines.size(), 2u) << csv.out;
+  const auto names = split(csv_lines[0], ',');
+  const auto values = split(csv_lines[1], ',');
+  ASSERT_EQ(names.size(), values.size());
+  EXPECT_EQ(names.size(), object.size());
+  const auto markdown_lines = lines_of(markdown.out);
+  ASSERT_EQ(markdown_lines.size(), object.size() + 2) << markdown.out;
+  EXPECT_EQ(markdown_lines[0], "| field | value |");
+  for (size_t i = 0; i < names.size(); ++i) {
+    SCOPED_TRACE(names[i]);
+    ASSERT_TRUE(object.contains(names[i]));
+    const nlohmann::json& value = object[names[i]];
+    if (names[i] == "seconds") continue;  // the wall time of each run
+    if (value.is_number()) {
+      EXPECT_EQ(to_number(values[i]), value.get<double>());
+    } else if (value.is_string()) {
+      EXPECT_EQ(values[i], value.get<std::string>());
+    } else if (value.is_boolean()) {
+      EXPECT_EQ(values[i], value.get<bool>() ? "1" : "0");
+    } else if (value.is_null()) {
+      EXPECT_EQ(values[i], "");
+    }
+    EXPECT_EQ(markdown_lines[i + 2].rfind("| " + names[i] + " | ", 0), 0u);
+  }
+  EXPECT_EQ(object["samples"], 8);
+  EXPECT_LT(object["E_max"].get<double>(), 1e-20);
+
+  // --count N with csv: one header, a row per start, the index first.
+  const Result starts = run({"start", kTable1, "--index", "4", "--count", "3", "--format", "csv"});
+  ASSERT_EQ(starts.exit_code, 0) << starts.err;
+  const auto rows = lines_of(starts.out);
+  ASSERT_EQ(rows.size(), 4u) << starts.out;
+  EXPECT_EQ(rows[0].rfind("index,algorithm,status,", 0), 0u) << rows[0];
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(rows[static_cast<size_t>(i + 1)].rfind(std::to_string(4 + i) + ",", 0), 0u);
+  // Many stories, one after the other.
+  const Result stories = run({"start", kTable1, "--index", "4", "--count", "2"});
+  ASSERT_EQ(stories.exit_code, 0) << stories.err;
+  EXPECT_NE(stories.out.find("start 4 of"), std::string::npos);
+  EXPECT_NE(stories.out.find("start 5 of"), std::string::npos);
+
+  const Result verified = run({"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--format", "markdown"});
+  ASSERT_EQ(verified.exit_code, 0) << verified.err;
+  EXPECT_NE(verified.out.find("\n| verified | yes |\n"), std::string::npos) << verified.out;
+  EXPECT_NE(verified.out.find("\n| family | bennett |\n"), std::string::npos) << verified.out;
+}
+
+// '-' is standard output, with the same bytes the file gets; never with a
+// format that would share it, and never two outputs at once.
+TEST_F(CliTest, DashSendsAFileToStandardOutput) {
+  const std::vector<std::string> loop = {"energy", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--samples", "6"};
+  std::vector<std::string> to_file = loop, to_stdout = loop, both = loop, with_json = loop;
+  to_file.insert(to_file.end(), {"--csv", "{dir}/curve.csv"});
+  to_stdout.insert(to_stdout.end(), {"--csv", "-"});
+  const Result file = run(to_file);
+  const Result dash = run(to_stdout);
+  ASSERT_EQ(file.exit_code, 0) << file.err;
+  ASSERT_EQ(dash.exit_code, 0) << dash.err;
+  const std::string written = read_file(dir_ / "curve.csv");
+  EXPECT_EQ(lines_of(written).size(), 7u);
+  // The same curve (the wall time is not in it), and nothing else on stdout.
+  EXPECT_EQ(dash.out, written);
+  EXPECT_EQ(files(), std::vector<std::string>{"curve.csv"});
+  with_json.insert(with_json.end(), {"--csv", "-", "--json"});
+  const Result refused = run(with_json);
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_EQ(refused.out, "");
+  EXPECT_NE(refused.err.find("--csv:"), std::string::npos) << refused.err;
+  both.insert(both.end(), {"--csv", "-", "--plot", "-"});
+  const Result twice = run(both);
+  EXPECT_EQ(twice.exit_code, 2);
+  EXPECT_NE(twice.err.find("already taken by --csv"), std::string::npos) << twice.err;
+  // A device is never written over, nor the file the shell sent standard
+  // output to through /dev/stdout (this test's runner sends it to a file).
+  for (const char* device : {"/dev/null", "/dev/stdout"}) {
+    const Result refused_device = run(with(loop, {"--csv", device}));
+    EXPECT_EQ(refused_device.exit_code, 2) << device;
+    EXPECT_EQ(refused_device.out, "") << device;
+    EXPECT_NE(refused_device.err.find("not a regular file"), std::string::npos) << refused_device.err;
+  }
+  EXPECT_TRUE(fs::exists("/dev/null") && !fs::is_regular_file("/dev/null"));
 }
 
 TEST_F(CliTest, VerifyClassifiesMovableAndRigidLoops) {

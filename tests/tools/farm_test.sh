@@ -91,11 +91,22 @@ ranks)
 resume)
   # 15 starts, then the same job to 40: the same database as 40 at once.
   run1 --db "$tmp/whole.sqlite"
-  run1 --db "$tmp/parts.sqlite" --starts 15
+  # --quiet: nothing on stderr; --format json: the summary as one object on stdout.
+  "$loopfarm" run "$job" --db "$tmp/parts.sqlite" --starts 15 --quiet --format json >"$tmp/summary.json" 2>"$tmp/err" ||
+    fail "--quiet --format json exited with $?"
+  [[ ! -s "$tmp/err" ]] || fail "--quiet wrote to stderr: $(head -1 "$tmp/err")"
+  [[ "$(wc -l <"$tmp/summary.json")" -eq 1 ]] || fail "the JSON summary is not one line: $(cat "$tmp/summary.json")"
+  for field in '"status":"complete"' '"starts_done":15,"starts_total":15' '"ranks":1' '"resume_command":null}'; do
+    grep -qF "$field" "$tmp/summary.json" || fail "the JSON summary has no $field: $(cat "$tmp/summary.json")"
+  done
+  [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT COUNT(*) FROM starts')" == 15 ]] || fail "--quiet did not run 15 starts"
+  "$loopfarm" run "$job" --db "$tmp/parts.sqlite" --starts 15 --quiet 2>"$tmp/err" || fail "--quiet resume exited with $?"
+  [[ ! -s "$tmp/err" ]] || fail "--quiet wrote its resume note: $(head -1 "$tmp/err")"
   [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT COUNT(*) FROM starts')" == 15 ]] || fail "first part is not 15 starts"
   run2 --db "$tmp/parts.sqlite" --starts 40 2>"$tmp/err" || fail "resume exited with $?"
   grep -q "15 of 40 starts already committed" "$tmp/err" || fail "no resume message: $(head -1 "$tmp/err")"
-  [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT COUNT(*) FROM sessions')" == 2 ]] || fail "not 2 sessions"
+  # Three sessions: the first 15, the quiet call with nothing left, the rest.
+  [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT COUNT(*) FROM sessions')" == 3 ]] || fail "not 3 sessions"
   [[ "$(sqlite3 "$tmp/parts.sqlite" 'SELECT status FROM runs')" == complete ]] || fail "run not complete"
   # A third call has nothing left to do and changes no start.
   run1 --db "$tmp/parts.sqlite" || fail "a complete run's rerun exited with $?"

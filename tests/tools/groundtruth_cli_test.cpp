@@ -67,8 +67,13 @@ GroundTruthOptions options_of_the_runs() {
 const std::vector<std::string> kRunArguments = {"--seed",    "5", "--per-family",    "2",
                                                 "--generic", "3", "--perturbations", "1e-3,1e-6"};
 
+std::vector<std::string> with(std::vector<std::string> args, const std::vector<std::string>& more) {
+  args.insert(args.end(), more.begin(), more.end());
+  return args;
+}
+
 TEST_F(GroundTruthCli, CsvHasOneRowPerCaseWithTheLibrarysValues) {
-  const Result result = run(kRunArguments);
+  const Result result = run(with(kRunArguments, {"--format", "csv"}));
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_EQ(result.err, "");
   const std::vector<std::string> lines = lines_of(result.out);
@@ -106,11 +111,14 @@ TEST_F(GroundTruthCli, CsvHasOneRowPerCaseWithTheLibrarysValues) {
   }
 }
 
-TEST_F(GroundTruthCli, OutGetsTheSameBytesAsStandardOutputAndRunsAreIdentical) {
-  const Result to_stdout = run(kRunArguments);
+TEST_F(GroundTruthCli, CsvFileGetsTheSameBytesAsStandardOutputAndRunsAreIdentical) {
+  const Result to_stdout = run(with(kRunArguments, {"--format", "csv"}));
   ASSERT_EQ(to_stdout.exit_code, 0) << to_stdout.err;
-  std::vector<std::string> args = kRunArguments;
-  args.insert(args.end(), {"--out", "{dir}/set.csv"});
+  // --csv - is standard output, in place of the summary.
+  const Result dash = run(with(kRunArguments, {"--csv", "-"}));
+  ASSERT_EQ(dash.exit_code, 0) << dash.err;
+  EXPECT_EQ(dash.out, to_stdout.out);
+  std::vector<std::string> args = with(kRunArguments, {"--csv", "{dir}/set.csv"});
   const Result first = run(args);
   ASSERT_EQ(first.exit_code, 0) << first.err;
   EXPECT_EQ(first.out, "");
@@ -149,8 +157,29 @@ TEST_F(GroundTruthCli, JsonHasOneObjectPerCase) {
   }
 }
 
+TEST_F(GroundTruthCli, TextCountsTheCasesAndMarkdownListsThem) {
+  const std::vector<GroundTruthCase> cases = generate_ground_truth(options_of_the_runs());
+  size_t movable = 0;
+  for (const GroundTruthCase& c : cases) movable += c.movable ? 1 : 0;
+  const Result text = run(kRunArguments);
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("ground truth: " + std::to_string(cases.size()) + " cases, " + std::to_string(movable) +
+                          " movable, " + std::to_string(cases.size() - movable) + " rigid"),
+            std::string::npos)
+      << text.out;
+  const Result markdown = run(with(kRunArguments, {"--format", "markdown"}));
+  ASSERT_EQ(markdown.exit_code, 0) << markdown.err;
+  const std::vector<std::string> lines = lines_of(markdown.out);
+  ASSERT_EQ(lines.size(), cases.size() + 2);
+  EXPECT_EQ(lines[0].rfind("| id | family | setup | movable |", 0), 0u) << lines[0];
+  for (size_t i = 0; i < cases.size(); ++i) {
+    EXPECT_EQ(lines[i + 2].rfind("| " + cases[i].id + " | ", 0), 0u) << lines[i + 2];
+    EXPECT_NE(lines[i + 2].find(cases[i].movable ? " | yes | " : " | no | "), std::string::npos) << lines[i + 2];
+  }
+}
+
 TEST_F(GroundTruthCli, PerturbationsNoneGivesTheMovableCasesOnly) {
-  const Result result = run({"--per-family", "1", "--generic", "0", "--perturbations", "none"});
+  const Result result = run({"--per-family", "1", "--generic", "0", "--perturbations", "none", "--format", "csv"});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const std::vector<std::string> lines = lines_of(result.out);
   ASSERT_EQ(lines.size(), 1u + 5u);  // Bennett in both setups, planar, spherical, trivial
@@ -169,11 +198,11 @@ class GroundTruthCliBadOption : public GroundTruthCli, public ::testing::WithPar
 
 TEST_P(GroundTruthCliBadOption, ExitsWithCode2AndOneLineNamingTheFlag) {
   const BadOption& bad = GetParam();
-  // A previous file at the --out target must survive the failed run.
+  // A previous file at the --csv target must survive the failed run.
   const std::string sentinel = "id,family\nkept,bennett\n";
   std::ofstream(dir_ / "keep.csv") << sentinel;
   std::vector<std::string> args = bad.args;
-  if (bad.flag != "--out") args.insert(args.end(), {"--out", "{dir}/keep.csv"});
+  if (bad.flag != "--csv") args.insert(args.end(), {"--csv", "{dir}/keep.csv"});
 
   const Result result = run(args);
 
@@ -200,8 +229,11 @@ INSTANTIATE_TEST_SUITE_P(
                       BadOption{"PerturbationsAlike", {"--perturbations", "1e-3,1.0000000001e-3"}, "--perturbations"},
                       BadOption{"PerturbationNotANumber", {"--perturbations", "1e-3,x"}, "--perturbations"},
                       BadOption{"UnknownFormat", {"--format", "xml"}, "--format"},
-                      BadOption{"OutIsADirectory", {"--out", "{dir}"}, "--out"},
-                      BadOption{"OutInAMissingDirectory", {"--out", "{dir}/missing/set.csv"}, "--out"},
+                      BadOption{"CsvIsADirectory", {"--csv", "{dir}"}, "--csv"},
+                      BadOption{"CsvInAMissingDirectory", {"--csv", "{dir}/missing/set.csv"}, "--csv"},
+                      BadOption{"CsvIsADevice", {"--csv", "/dev/null"}, "--csv"},
+                      BadOption{"CsvDashWithFormat", {"--csv", "-", "--format", "json"}, "--csv"},
+                      BadOption{"OutWasReplaced", {"--out", "{dir}/set.csv"}, "--out"},
                       BadOption{"UnknownFlag", {"--samples", "3"}, "--samples"}),
     [](const ::testing::TestParamInfo<BadOption>& info) { return info.param.name; });
 

@@ -11,7 +11,9 @@
 
 namespace loopfarm {
 
-enum class ProgressStyle { bar, log, none };
+// none: no progress, but notes such as "resuming run 1" still show;
+// silent: nothing at all (loopfarm run --quiet).
+enum class ProgressStyle { bar, log, none, silent };
 
 // bar when stderr is a terminal and NO_COLOR/TERM=dumb do not say otherwise,
 // else log. ECOSYSTEM.md: under mpirun stdout is a pty even when redirected;

@@ -39,7 +39,18 @@ struct CanonicalForm {
 // tolerance that is not in (0, 1).
 CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance = 1e-6);
 
-// Joint angles of the input mapped to the canonical representation.
+// The representation a person reads, for display only (the key and the
+// de-duplication are canonical_form's): among every representation scaled to
+// length scale 1, the one with the fewest negative twists (alpha in (-pi, pi],
+// negative below -tolerance), then the fewest negative offsets (below
+// -tolerance), then the smallest quantised (a, alpha, d) as canonical_form
+// orders them. A Bennett loop, whose canonical twists are all negative, reads
+// with all of them positive. `key` is the canonical key, the same for both
+// forms. Throws as canonical_form does.
+CanonicalForm conventional_form(const LoopGeometry& geometry, double tolerance = 1e-6);
+
+// Joint angles of the input mapped to the canonical (or conventional)
+// representation.
 JointVector canonical_angles(const CanonicalForm& form, const JointVector& theta);
 
 }  // namespace loopfarm
