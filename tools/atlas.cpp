@@ -314,7 +314,8 @@ std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vec
   return svg;
 }
 
-int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows, const std::string& header,
+int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
+                const std::map<std::int64_t, double>& zero_thresholds, const std::string& header,
                 const std::filesystem::path& dir) {
   const std::vector<FamilyGroup> groups = group_by_family(rows);
   std::string md = "# Family atlas\n\n" + header + "\n";
@@ -327,7 +328,10 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
       "parameters, so a sub-space search (ties, zero offsets, symmetry) can find less than the family has and a "
       "point on a larger family more. The representative is a full-turn candidate if there is one, with the "
       "smallest rigid-closure residual; its cycle energy is recomputed from its canonical geometry (" +
-      std::to_string(kCycleSamples) + " samples, log axis) and its motion drawn at " + std::to_string(kFrames) +
+      std::to_string(kCycleSamples) +
+      " samples, log axis; energies below the zero threshold of the run that found it "
+      "are round-off of a zero and are drawn on the threshold's dashed line) and its motion drawn at " +
+      std::to_string(kFrames) +
       " input angles of that cycle (oblique view; dashed: joint axes, black: links, dots: joints). "
       "Unclassified candidates come first: a possible new family.\n\n";
   md +=
@@ -399,6 +403,17 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
     style.log_scale = true;
     style.theta0 = rep.theta0;
     style.theta0_deg = rep.theta0 * kDegreesPerRadian;
+    const auto threshold = zero_thresholds.find(r.first_run);
+    if (threshold != zero_thresholds.end() && threshold->second > 0.0) {
+      style.zero_threshold = threshold->second;
+      style.threshold_source = "run " + std::to_string(r.first_run) + "'s";
+    }
+    // The stored E_mean (what the report's table prints) and this curve's
+    // own, each named: the curve is recomputed from another pose.
+    style.notes = {"E_mean " + g(r.E_mean, 3) + " as stored (the report's value); this curve: E_mean " +
+                   g(rep.cycle.E_mean, 3) + ", E_max " + g(rep.cycle.E_max, 3) + " over " +
+                   std::to_string(kCycleSamples) + " samples"};
+    style.format = plot_format(png, "--atlas");
     plot_energy_curve(gnuplot, rep.cycle, style, png);
     std::vector<std::vector<double>> theta;
     std::vector<double> input_deg;

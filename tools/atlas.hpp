@@ -5,8 +5,10 @@
 // strip of frames of its motion (SVG, drawn from the forward kinematics).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,11 +29,12 @@ std::string atlas_stem(const std::string& family, int joints);
 
 // Writes DIR/atlas.md and, per family, STEM_cycle.png and STEM_motion.svg.
 // `rows` are every candidate selected (in the report's order: unclassified
-// first, then by energy); `header` is Markdown put under the title (the
-// database and its runs). Unclassified families come first, then by count.
-// Returns the number of families. Throws EnvironmentError when gnuplot fails
-// or a file cannot be written.
-int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows, const std::string& header,
+// first, then by energy); `zero_thresholds` each run's zero threshold by run
+// id (a cycle chart marks the threshold of the run that found its candidate);
+// `header` is Markdown put under the title (the database and its runs). Unclassified families come first, then by
+// count. Returns the number of families. Throws EnvironmentError when gnuplot fails or a file cannot be written.
+int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
+                const std::map<std::int64_t, double>& zero_thresholds, const std::string& header,
                 const std::filesystem::path& dir);
 
 // The SVG strip of frames (exposed for the atlas only; one row of `frames`

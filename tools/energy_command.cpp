@@ -18,6 +18,7 @@
 #include "loopfarm/core/equilibrium.hpp"
 #include "loopfarm/core/loop.hpp"
 #include "output_format.hpp"
+#include "loopfarm/search/job.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -272,6 +273,8 @@ int run_energy(const EnergyArguments& args) {
       throw UsageError("--plot", quote_text(args.plot) + " is also the --csv file; give two different files");
     }
   }
+  PlotFormat plot_format_wanted = PlotFormat::png;
+  if (given(args.plot_option)) plot_format_wanted = plot_format(args.plot, "--plot");
   std::filesystem::path gnuplot;
   if (given(args.plot_option)) gnuplot = require_gnuplot("--plot");
   std::optional<PendingOutput> csv;
@@ -320,8 +323,19 @@ int run_energy(const EnergyArguments& args) {
   }
   if (png) {
     png->close();  // gnuplot writes the temporary file itself
-    plot_energy_curve(gnuplot, result.cycle, {plot_title(request), request.log, request.theta0_deg, theta0},
-                      png->temporary());
+    EnergyPlotStyle style;
+    style.title = plot_title(request);
+    style.log_scale = request.log;
+    style.theta0_deg = request.theta0_deg;
+    style.theta0 = theta0;
+    // A job's default: what a search would call a zero.
+    style.zero_threshold = SearchSection{}.zero_threshold;
+    style.threshold_source = "a job's default";
+    style.notes = {"E_mean " + chart_number(result.cycle.E_mean) + ", E_max " + chart_number(result.cycle.E_max) +
+                   " over " + std::to_string(result.cycle.samples.size()) + " samples" +
+                   (result.cycle.E_max < style.zero_threshold ? ": below the zero threshold, a zero" : "")};
+    style.format = plot_format_wanted;
+    plot_energy_curve(gnuplot, result.cycle, style, png->temporary());
   }
   if (csv) csv->commit();
   if (png) png->commit();

@@ -47,6 +47,8 @@ int run_motion(const MotionArguments& args) {
       throw UsageError("--plot", quote_text(args.plot) + " is also the --csv file; give two different files");
     }
   }
+  PlotFormat plot_format_wanted = PlotFormat::png;
+  if (given(args.plot_option)) plot_format_wanted = plot_format(args.plot, "--plot");
   std::filesystem::path gnuplot;
   if (given(args.plot_option)) gnuplot = require_gnuplot("--plot");
   std::optional<PendingOutput> csv;
@@ -72,7 +74,7 @@ int run_motion(const MotionArguments& args) {
     plot_motion(gnuplot, v.motion,
                 "motion of the " + std::to_string(geometry.joints()) + "R loop a = " + lengths_text(geometry.a) +
                     ", alpha_deg = " + degrees_text(geometry.alpha) + ", d = " + lengths_text(geometry.d),
-                png->temporary());
+                plot_format_wanted, png->temporary());
   }
   if (csv) csv->commit();
   if (png && !v.motion.circuits.empty()) png->commit();

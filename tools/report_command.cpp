@@ -694,27 +694,26 @@ std::string candidate_ids_text(const ResultsDatabase& db) {
          grouped(db.candidate_count()) + " candidates)";
 }
 
-void plot_histogram(const std::filesystem::path& gnuplot, const EnergyHistogram& h, const std::filesystem::path& png) {
-  ScratchFile data(".dat");
-  for (const auto& [decade, count] : h.decades) {
-    std::fprintf(data.stream(), "%d %lld\n", decade, static_cast<long long>(count));
+// Each run's zero threshold, by run id.
+std::map<std::int64_t, double> run_thresholds(const ResultsDatabase& db) {
+  std::map<std::int64_t, double> thresholds;
+  for (const RunRow& r : db.runs()) thresholds[r.run_id] = r.zero_threshold;
+  return thresholds;
+}
+
+// The threshold the histogram marks: the run's, or the smallest of every
+// run's (merged runs share theirs); 0 without runs.
+double histogram_threshold(const ResultsDatabase& db, std::optional<std::int64_t> run) {
+  double threshold = 0.0;
+  for (const RunRow& r : db.runs()) {
+    if (run && r.run_id != *run) continue;
+    if (r.zero_threshold > 0.0 && (threshold == 0.0 || r.zero_threshold < threshold)) threshold = r.zero_threshold;
   }
-  data.close();
-  ScratchFile script(".gp");
-  std::fprintf(script.stream(),
-               "set terminal pngcairo size 900,500\nset output '%s'\nset title 'log10 of the cycle energy minimum, all "
-               "starts'\nset xlabel 'log10(E_mean), E / (k_a L^2)'\nset ylabel 'starts'\nset style fill solid 0.6\n"
-               "set boxwidth 0.9\nset grid ytics\nplot '%s' using ($1 + 0.5):2 with boxes notitle\n",
-               png.string().c_str(), data.path().string().c_str());
-  script.close();
-  const std::string command = "\"" + gnuplot.string() + "\" \"" + script.path().string() + "\" 2>/dev/null";
-  if (std::system(command.c_str()) != 0 || !std::filesystem::exists(png)) {
-    throw EnvironmentError("gnuplot failed to draw " + png.string());
-  }
+  return threshold;
 }
 
 void plot_candidates(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
-                     const std::filesystem::path& dir) {
+                     const std::map<std::int64_t, double>& thresholds, const std::filesystem::path& dir) {
   for (const CandidateRow& r : rows) {
     const LoopGeometry geometry = LoopGeometry::from_degrees(
         std::span<const double>(r.a), std::span<const double>(r.alpha_deg), std::span<const double>(r.d));
@@ -727,10 +726,22 @@ void plot_candidates(const std::filesystem::path& gnuplot, const std::vector<Can
     cycle_energy(model, workspace, 0.0, assembly.state, options, cycle);
     EnergyPlotStyle style;
     style.title = "candidate " + std::to_string(r.id) + " (" + r.family + "): cycle energy of the canonical geometry";
+    // The table's E_mean is the search's, stored with the candidate; this
+    // curve is recomputed (another start pose and sample count), so its
+    // mean differs by round-off or more: both are quoted, each named.
+    style.notes = {"E_mean " + g(r.E_mean) + " as stored (the table's value); this curve: E_mean " + g(cycle.E_mean) +
+                   ", E_max " + g(cycle.E_max) + " over 360 samples from theta_1 = 0"};
     style.log_scale = true;
+    const auto threshold = thresholds.find(r.first_run);
+    if (threshold != thresholds.end() && threshold->second > 0.0) {
+      style.zero_threshold = threshold->second;
+      style.threshold_source = "run " + std::to_string(r.first_run) + "'s";
+    }
     const std::filesystem::path png = dir / ("candidate_" + std::to_string(r.id) + "_cycle.png");
+    style.format = plot_format(png, "--plot");
     plot_energy_curve(gnuplot, cycle, style, png);
-    std::fprintf(stderr, "loopfarm report: wrote %s (E_mean %s)\n", png.string().c_str(), g(cycle.E_mean).c_str());
+    std::fprintf(stderr, "loopfarm report: wrote %s (E_mean %s stored, %s on the recomputed curve)\n",
+                 png.string().c_str(), g(r.E_mean).c_str(), g(cycle.E_mean).c_str());
   }
 }
 
@@ -809,7 +820,7 @@ void list_candidates(const ResultsDatabase& db, const ReportArguments& args, con
   }
   if (!args.plot.empty()) {
     plot_candidates(gnuplot, std::vector<CandidateRow>(rows.begin(), rows.begin() + std::min<size_t>(rows.size(), 10)),
-                    args.plot);
+                    run_thresholds(db), args.plot);
   }
 }
 
@@ -878,7 +889,7 @@ int run_report(const ReportArguments& args) {
     if (!args.candidate.empty()) {
       show_candidate(*db, args);
     } else if (!args.atlas.empty()) {
-      write_atlas(gnuplot, read_candidates(*db, args, 0), atlas_header(*db, args), atlas_dir);
+      write_atlas(gnuplot, read_candidates(*db, args, 0), run_thresholds(*db), atlas_header(*db, args), atlas_dir);
     } else if (args.summary) {
       const SummaryData summary = read_summary(*db, run);
       if (args.format.format == OutputFormat::json) {
@@ -893,7 +904,9 @@ int run_report(const ReportArguments& args) {
     }
     if (!args.plot.empty()) {
       const std::filesystem::path png = std::filesystem::path(args.plot) / "minima_histogram.png";
-      plot_histogram(gnuplot, db->energy_histogram(run), png);
+      const EnergyHistogram histogram = db->energy_histogram(run);
+      plot_minima_histogram(gnuplot, histogram.decades, histogram.zeros, histogram_threshold(*db, run),
+                            plot_format(png, "--plot"), png, "--plot");
       std::fprintf(stderr, "loopfarm report: wrote %s\n", png.string().c_str());
     }
   } catch (const DatabaseError& error) {

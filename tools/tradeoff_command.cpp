@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -194,17 +196,54 @@ void print_table(const std::vector<TradeoffRow>& rows) {
   }
 }
 
-// Two panels with one marker per configuration, each named in the key:
-// median seconds per start against error rate (the Pareto front joined), and
-// core-seconds per verified zero against error rate (what a discovery costs).
-// The error axis is logarithmic, with error-free configurations drawn on its
-// floor, labelled 0: most configurations make no error, and a linear axis
-// would pile them up on one line.
+// Three panels with one marker per configuration, each named in the key:
+// median seconds per start against error rate (the Pareto front joined),
+// core-seconds per verified zero against error rate (what a discovery
+// costs), and median seconds per start against the worst family residual of
+// the verified zeros, the accuracy that still tells apart the many
+// configurations of error rate 0. The error axis is logarithmic, with
+// error-free configurations drawn on its floor, labelled 0. A colour per
+// axis (colour-blind safe), a point shape per value on it; front members
+// filled and larger.
 constexpr double kErrorFloor = 0.01;  // [%]
 
-void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_name,
-                   const std::filesystem::path& png) {
+// The colour of an axis's markers: Okabe and Ito's palette, then Tol's
+// muted wine, olive and indigo, and grey.
+const char* axis_colour(const std::string& axis) {
+  static const std::pair<const char*, const char*> colours[] = {{"base", "#000000"},
+                                                                {"samples", "#0072b2"},
+                                                                {"range_deg", "#56b4e9"},
+                                                                {"closure_tolerance", "#009e73"},
+                                                                {"compliance", "#e69f00"},
+                                                                {"objective", "#882255"},
+                                                                {"algorithm", "#d55e00"},
+                                                                {"ftol_rel", "#cc79a7"},
+                                                                {"reuse_nearby_cycle", "#999933"},
+                                                                {"zero_threshold", "#332288"},
+                                                                {"analysis_steps", "#777777"}};
+  for (const auto& [name, colour] : colours) {
+    if (axis == name) return colour;
+  }
+  return "#777777";
+}
+
+void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_name, PlotFormat format,
+                   const std::filesystem::path& output) {
   const std::filesystem::path gnuplot = require_gnuplot("--plot");
+  // The residual axis: its floor holds verified zeros of residual 0, its top
+  // the configurations without a verified zero.
+  double lowest = std::numeric_limits<double>::infinity();
+  double highest = 0.0;
+  for (const TradeoffRow& r : rows) {
+    if (r.verified > 0 && r.worst_family_residual > 0.0) {
+      lowest = std::min(lowest, r.worst_family_residual);
+      highest = std::max(highest, r.worst_family_residual);
+    }
+  }
+  if (!(highest > 0.0)) lowest = highest = 1e-12;
+  const double residual_floor = std::pow(10.0, std::floor(std::log10(lowest)) - 1.0);
+  const double residual_none = std::pow(10.0, std::ceil(std::log10(highest)) + 1.0);
+
   ScratchFile data(".dat");
   ScratchFile front(".dat");
   std::vector<const TradeoffRow*> on_front;
@@ -213,8 +252,11 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
     // A configuration without a verified zero has no cost per zero: NaN,
     // which gnuplot leaves out of the second panel.
     const double per_zero = r.seconds_per_verified_zero();
-    std::fprintf(data.stream(), "%.17g %.17g %s\n", 1e3 * r.median_seconds, drawn_error(r),
-                 std::isfinite(per_zero) ? format_double(per_zero).c_str() : "NaN");
+    const double residual = r.verified == 0                 ? residual_none
+                            : r.worst_family_residual > 0.0 ? r.worst_family_residual
+                                                            : residual_floor;
+    std::fprintf(data.stream(), "%.17g %.17g %s %.17g\n", 1e3 * r.median_seconds, drawn_error(r),
+                 std::isfinite(per_zero) ? format_double(per_zero).c_str() : "NaN", residual);
     if (r.pareto) on_front.push_back(&r);
   }
   std::sort(on_front.begin(), on_front.end(),
@@ -226,46 +268,50 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
   const std::string d = data.path().string();
 
   // One plot element per configuration (row i of the data), so that the key
-  // names each; point types and colours cycle, front members filled larger.
-  auto markers = [&](int x_column) {
+  // names each: the axis's colour, a shape per value along the axis (open;
+  // filled on the front).
+  auto markers = [&](int x_column, int y_column) {
+    static const int kShapes[] = {4, 6, 8, 10, 12, 14};  // square, circle, triangles, diamond, pentagon
     std::string elements;
+    std::map<std::string, int> seen;
     for (size_t i = 0; i < rows.size(); ++i) {
-      const int point_type = rows[i].pareto ? 7 : static_cast<int>(4 + 2 * (i % 5));  // 4,6,8,10,12: open shapes
+      const int shape = kShapes[seen[rows[i].axis]++ % 6];
+      const int point_type = rows[i].pareto ? shape + 1 : shape;
       elements += ", \\\n  " + gnuplot_string(d) + " every ::" + std::to_string(i) + "::" + std::to_string(i) +
-                  " using " + std::to_string(x_column) + ":2 with points pt " + std::to_string(point_type) + " ps " +
-                  (rows[i].pareto ? "2.0" : "1.5") + " lc " + std::to_string(i % 8 + 1) + " title " +
+                  " using " + std::to_string(x_column) + ":" + std::to_string(y_column) + " with points pt " +
+                  std::to_string(point_type) + " ps " + (rows[i].pareto ? "2.2" : "1.6") + " lw 1.5 lc rgb '" +
+                  axis_colour(rows[i].axis) + "' title " +
                   gnuplot_string(name_of(rows[i]) + (rows[i].pareto ? " (front)" : "")) + " noenhanced";
     }
     return elements;
   };
   ScratchFile script(".gp");
   std::FILE* gp = script.stream();
-  std::fputs(
-      "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
-      "  set terminal pngcairo size 1600,760 enhanced font ',10'\n"
-      "} else {\n"
-      "  set terminal png size 1600,760 enhanced\n"
-      "}\n",
-      gp);
-  std::fprintf(gp, "set output %s\n", gnuplot_string(png.string()).c_str());
-  std::fprintf(gp, "set multiplot layout 1,2 title %s noenhanced\n",
+  std::fputs(gnuplot_terminal(format, 2100, 820, ",10").c_str(), gp);
+  std::fprintf(gp, "set output %s\n", gnuplot_string(output.string()).c_str());
+  std::fprintf(gp, "set multiplot layout 1,3 title %s noenhanced\n",
                gnuplot_string("Speed against accuracy: " + job_name + ", one marker per configuration").c_str());
-  std::fprintf(
-      gp,
-      "set ylabel 'error rate [%%] (false + missed zeros + rigid read as zero + misanalysed) / judged; 0 drawn at "
-      "%g'\n"
-      "set logscale xy\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\n"
-      "set key outside bottom center horizontal maxrows 6 font ',9' samplen 1\n"
-      "set offsets graph 0.05, graph 0.05, 0, 0\n"
-      "set xlabel 'median seconds of local minimisation per start [ms]'\n",
-      kErrorFloor, kErrorFloor / 2.0, kErrorFloor);
-  std::fprintf(gp, "plot %s using 1:2 with lines lw 2 lc rgb '#c0392b' title 'Pareto front'%s\n",
-               gnuplot_string(front.path().string()).c_str(), markers(1).c_str());
-  std::fputs("set xlabel 'core-seconds of search and analysis per verified zero [s]'\nset key off\n", gp);
-  std::fprintf(gp, "plot 1/0 notitle%s\n", markers(3).c_str());
+  std::fprintf(gp,
+               "set ylabel 'error rate [%%]: wrong answers / judged (0 drawn at %g)' noenhanced\n"
+               "set logscale xy\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\n"
+               "set key outside bottom center horizontal maxrows 7 font ',9' samplen 1\n"
+               "set offsets graph 0.05, graph 0.05, 0, 0\n"
+               "set xlabel 'median time of local minimisation per start [ms]' noenhanced\n",
+               kErrorFloor, kErrorFloor / 2.0, kErrorFloor);
+  std::fprintf(gp, "plot %s using 1:2 with lines lw 2 lc rgb '#444444' title 'Pareto front'%s\n",
+               gnuplot_string(front.path().string()).c_str(), markers(1, 2).c_str());
+  std::fputs("set xlabel 'core-seconds of search and analysis per verified zero [s]' noenhanced\nset key off\n", gp);
+  std::fprintf(gp, "plot 1/0 notitle%s\n", markers(3, 2).c_str());
+  std::fprintf(gp,
+               "set xlabel 'median time of local minimisation per start [ms]' noenhanced\n"
+               "set ylabel 'worst family residual of the verified zeros' noenhanced\n"
+               "set yrange [%.17g:%.17g]\nset format y '10^{%%L}'\n"
+               "set ytics add ('0' %.17g, 'no verified zero' %.17g)\n",
+               residual_floor / 3.0, residual_none * 3.0, residual_floor, residual_none);
+  std::fprintf(gp, "plot 1/0 notitle%s\n", markers(1, 4).c_str());
   std::fputs("unset multiplot\nunset output\n", gp);
   script.close();
-  render_gnuplot_script(gnuplot, script.path(), png, "--plot");
+  render_gnuplot_script(gnuplot, script.path(), output, "--plot");
 }
 
 int run_tradeoff_command(const TradeoffArguments& args) {
@@ -281,7 +327,9 @@ int run_tradeoff_command(const TradeoffArguments& args) {
   std::optional<PendingOutput> csv;
   if (!args.csv.empty()) csv.emplace(args.csv, "--csv");
   std::optional<PendingOutput> plot;
+  PlotFormat plot_format_wanted = PlotFormat::png;
   if (!args.plot.empty()) {
+    plot_format_wanted = plot_format(args.plot, "--plot");
     require_gnuplot("--plot");
     plot.emplace(args.plot, "--plot");
   }
@@ -306,7 +354,7 @@ int run_tradeoff_command(const TradeoffArguments& args) {
   }
   if (plot) {
     plot->close();
-    plot_tradeoff(rows, std::filesystem::path(args.job).filename().string(), plot->temporary());
+    plot_tradeoff(rows, std::filesystem::path(args.job).filename().string(), plot_format_wanted, plot->temporary());
     plot->commit();
   }
   return kExitSuccess;
@@ -377,7 +425,10 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
                     "print the configurations (text: a table of the main measures; the others: every measure) as");
   app->add_option("--csv", args->csv, "write every measure of every configuration as CSV ('-': stdout)")
       ->type_name("FILE");
-  app->add_option("--plot", args->plot, "draw seconds per start against error rate as PNG")->type_name("FILE.png");
+  app->add_option("--plot", args->plot,
+                  "draw seconds per start against error rate and family residual (needs gnuplot); the "
+                  "extension picks the format: .png, .svg or .pdf ('-': PNG on stdout)")
+      ->type_name("FILE");
   app->add_flag("--quiet", args->quiet, "no progress lines on stderr");
   return {app, [args] { return run_tradeoff_command(*args); }};
 }

@@ -91,7 +91,7 @@ std::vector<RunRow> ResultsDatabase::runs() const {
           : "NULL, NULL, 0 ";
   Query q(m.path, m.db(),
           "SELECT run_id, job_path, seed, starts, starts_done, status, ranks, joints, started_at, updated_at, " +
-              slices + "FROM runs ORDER BY run_id");
+              slices + ", zero_threshold FROM runs ORDER BY run_id");
   std::vector<RunRow> rows;
   while (q.step()) {
     RunRow r;
@@ -109,6 +109,7 @@ std::vector<RunRow> ResultsDatabase::runs() const {
       r.slice = StartSlice{static_cast<std::uint64_t>(q.integer(10)), static_cast<std::uint64_t>(q.integer(11))};
     }
     r.merged_inputs = q.integer(12);
+    r.zero_threshold = q.real(13);
     rows.push_back(std::move(r));
   }
   return rows;

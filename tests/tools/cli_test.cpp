@@ -573,6 +573,31 @@ TEST_F(CliTest, PlotWritesAPng) {
   EXPECT_EQ(files(), (std::vector<std::string>{"linear.png", "log.png", "zero.png"}));
 }
 
+TEST_F(CliTest, PlotExtensionPicksTheFormat) {
+  // Any extension but .png, .svg and .pdf is refused before any work, even
+  // without gnuplot, and leaves nothing behind.
+  for (const char* command : {"energy", "motion"}) {
+    const Result refused = run({command, "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--plot", "{dir}/curve.txt"},
+                               "PATH=" + (dir_ / "empty-path").string());
+    EXPECT_EQ(refused.exit_code, 2) << command << ": " << refused.err;
+    EXPECT_EQ(refused.out, "");
+    EXPECT_NE(refused.err.find("--plot: "), std::string::npos) << refused.err;
+    EXPECT_NE(refused.err.find("expected .png, .svg or .pdf"), std::string::npos) << refused.err;
+  }
+  EXPECT_TRUE(files().empty());
+  if (!have_gnuplot()) GTEST_SKIP() << "gnuplot is not installed";
+  const Result svg = run(with(kBennett, {"--theta-deg", "120,90,-120,-90", "--samples", "8", "--plot", "{dir}/e.svg"}));
+  ASSERT_EQ(svg.exit_code, 0) << svg.err;
+  const std::string svg_bytes = read_file(dir_ / "e.svg");
+  EXPECT_EQ(svg_bytes.substr(0, 5), "<?xml");
+  EXPECT_NE(svg_bytes.find("<svg"), std::string::npos);
+  if (std::system("gnuplot -e 'set terminal' 2>&1 | grep -q pdfcairo") == 0) {
+    const Result pdf = run({"motion", "--a", "1,2,1,2", "--alpha-deg", "0,0,0,0", "--plot", "{dir}/m.pdf"});
+    ASSERT_EQ(pdf.exit_code, 0) << pdf.err;
+    EXPECT_EQ(read_file(dir_ / "m.pdf").substr(0, 5), "%PDF-");
+  }
+}
+
 TEST_F(CliTest, PlotWithoutGnuplotFailsBeforeWritingAnything) {
   write_file(dir_ / "keep.csv", "sentinel\n");
   const Result result = run(with(kBennett, {"--csv", "{dir}/keep.csv", "--plot", "{dir}/out.png"}),

@@ -98,6 +98,7 @@ TEST_F(TradeoffCli, WritesOneCsvRowPerConfigurationAndAChart) {
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
   }
   EXPECT_GT(fs::file_size(dir_ / "t.png"), 1000u);
+  EXPECT_EQ(read_file(dir_ / "t.png").substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
   // A progress line on stderr per configuration, none with --quiet; the same table either way.
   EXPECT_NE(r.err.find("loopfarm tradeoff: 1/9 configurations measured (base)\n"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("loopfarm tradeoff: 9/9 configurations measured"), std::string::npos) << r.err;
@@ -129,6 +130,7 @@ TEST_F(TradeoffCli, BadOptionsExitWithCode2NamingTheFlagAndLeaveFilesAlone) {
       {{"{dir}/job.toml", "--analysis-steps", "63"}, "--analysis-steps"},
       {{"{dir}/missing.toml"}, "missing.toml"},
       {{"{dir}/job.toml", "--csv", "{dir}/no/such/dir/t.csv"}, "--csv"},
+      {{"{dir}/job.toml", "--plot", "{dir}/t.jpg"}, "--plot"},
   };
   for (const auto& [args, flag] : cases) {
     std::vector<std::string> with_output = args;

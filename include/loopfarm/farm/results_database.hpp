@@ -129,6 +129,7 @@ struct RunRow {
   std::string status;            // running, stopped, complete, failed
   std::int64_t ranks = 0;        // of the last session
   int joints = 0;
+  double zero_threshold = 0.0;         // the job's: E_mean below it is a zero
   std::string started_at, updated_at;  // ISO 8601 UTC
   std::optional<StartSlice> slice;     // none: every start of the job
   std::int64_t merged_inputs = 0;      // databases `loopfarm merge` made it of (0: run here)
