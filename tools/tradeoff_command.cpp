@@ -270,45 +270,65 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
   // One plot element per configuration (row i of the data), so that the key
   // names each: the axis's colour, a shape per value along the axis (open;
   // filled on the front).
-  auto markers = [&](int x_column, int y_column) {
+  // A marker style per configuration: the axis's colour, a shape per value
+  // along the axis (open; filled and larger on the front).
+  std::vector<std::string> styles;
+  std::map<std::string, int> seen;
+  for (const TradeoffRow& r : rows) {
     static const int kShapes[] = {4, 6, 8, 10, 12, 14};  // square, circle, triangles, diamond, pentagon
+    const int shape = kShapes[seen[r.axis]++ % 6];
+    styles.push_back("with points pt " + std::to_string(r.pareto ? shape + 1 : shape) + " ps " +
+                     (r.pareto ? "2.2" : "1.6") + " lw 1.5 lc rgb '" + axis_colour(r.axis) + "'");
+  }
+  // One plot element per configuration (row i of the data).
+  auto markers = [&](int x_column, int y_column) {
     std::string elements;
-    std::map<std::string, int> seen;
     for (size_t i = 0; i < rows.size(); ++i) {
-      const int shape = kShapes[seen[rows[i].axis]++ % 6];
-      const int point_type = rows[i].pareto ? shape + 1 : shape;
       elements += ", \\\n  " + gnuplot_string(d) + " every ::" + std::to_string(i) + "::" + std::to_string(i) +
-                  " using " + std::to_string(x_column) + ":" + std::to_string(y_column) + " with points pt " +
-                  std::to_string(point_type) + " ps " + (rows[i].pareto ? "2.2" : "1.6") + " lw 1.5 lc rgb '" +
-                  axis_colour(rows[i].axis) + "' title " +
-                  gnuplot_string(name_of(rows[i]) + (rows[i].pareto ? " (front)" : "")) + " noenhanced";
+                  " using " + std::to_string(x_column) + ":" + std::to_string(y_column) + " " + styles[i] + " notitle";
     }
     return elements;
   };
   ScratchFile script(".gp");
   std::FILE* gp = script.stream();
-  std::fputs(gnuplot_terminal(format, 2100, 820, ",10").c_str(), gp);
+  std::fputs(gnuplot_terminal(format, 2100, 900, ",10").c_str(), gp);
   std::fprintf(gp, "set output %s\n", gnuplot_string(output.string()).c_str());
-  std::fprintf(gp, "set multiplot layout 1,3 title %s noenhanced\n",
+  // The same frame for the three panels; the key is a band of its own below them.
+  std::fprintf(gp,
+               "set multiplot layout 1,3 title %s noenhanced margins screen 0.06, 0.99, 0.34, 0.93 spacing "
+               "screen 0.07\n",
                gnuplot_string("Speed against accuracy: " + job_name + ", one marker per configuration").c_str());
   std::fprintf(gp,
                "set ylabel 'error rate [%%]: wrong answers / judged (0 drawn at %g)' noenhanced\n"
-               "set logscale xy\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\n"
-               "set key outside bottom center horizontal maxrows 7 font ',9' samplen 1\n"
+               "set logscale xy\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\nset key off\n"
                "set offsets graph 0.05, graph 0.05, 0, 0\n"
                "set xlabel 'median time of local minimisation per start [ms]' noenhanced\n",
                kErrorFloor, kErrorFloor / 2.0, kErrorFloor);
-  std::fprintf(gp, "plot %s using 1:2 with lines lw 2 lc rgb '#444444' title 'Pareto front'%s\n",
+  std::fprintf(gp, "plot %s using 1:2 with lines lw 2 lc rgb '#444444' notitle%s\n",
                gnuplot_string(front.path().string()).c_str(), markers(1, 2).c_str());
-  std::fputs("set xlabel 'core-seconds of search and analysis per verified zero [s]' noenhanced\nset key off\n", gp);
+  std::fputs("set xlabel 'core-seconds of search and analysis per verified zero [s]' noenhanced\n", gp);
   std::fprintf(gp, "plot 1/0 notitle%s\n", markers(3, 2).c_str());
   std::fprintf(gp,
                "set xlabel 'median time of local minimisation per start [ms]' noenhanced\n"
-               "set ylabel 'worst family residual of the verified zeros' noenhanced\n"
+               "set ylabel 'worst family residual of the verified zeros (none: no verified zero)' noenhanced\n"
                "set yrange [%.17g:%.17g]\nset format y '10^{%%L}'\n"
-               "set ytics add ('0' %.17g, 'no verified zero' %.17g)\n",
+               "set ytics add ('0' %.17g, 'none' %.17g)\n",
                residual_floor / 3.0, residual_none * 3.0, residual_floor, residual_none);
   std::fprintf(gp, "plot 1/0 notitle%s\n", markers(1, 4).c_str());
+  // The key: an empty frame across the bottom holding one entry per
+  // configuration (gnuplot needs one real element: a line outside the range).
+  std::fputs(
+      "set origin 0, 0\nset size 1, 0.25\nunset border\nunset tics\nunset xlabel\nunset ylabel\nunset grid\n"
+      "unset logscale\nset offsets 0, 0, 0, 0\nset margins 0, 0, 0, 0\nset xrange [0:1]\nset yrange [0:1]\n"
+      "set key center center horizontal maxcols 6 font ',10' samplen 1 width 2\n",
+      gp);
+  std::string entries =
+      "plot 2 with lines notitle, \\\n  keyentry with lines lw 2 lc rgb '#444444' title 'Pareto front'";
+  for (size_t i = 0; i < rows.size(); ++i) {
+    entries += ", \\\n  keyentry " + styles[i] + " title " +
+               gnuplot_string(name_of(rows[i]) + (rows[i].pareto ? " (front)" : "")) + " noenhanced";
+  }
+  std::fputs((entries + "\n").c_str(), gp);
   std::fputs("unset multiplot\nunset output\n", gp);
   script.close();
   render_gnuplot_script(gnuplot, script.path(), output, "--plot");
