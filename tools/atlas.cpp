@@ -410,9 +410,9 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
     }
     // The stored E_mean (what the report's table prints) and this curve's
     // own, each named: the curve is recomputed from another pose.
-    style.notes = {"E_mean " + g(r.E_mean, 3) + " as stored (the report's value); this curve: E_mean " +
-                   g(rep.cycle.E_mean, 3) + ", E_max " + g(rep.cycle.E_max, 3) + " over " +
-                   std::to_string(kCycleSamples) + " samples"};
+    style.notes = {"E_mean " + g(r.E_mean, 3) + " as stored (the report's value)",
+                   "this curve: E_mean " + g(rep.cycle.E_mean, 3) + ", E_max " + g(rep.cycle.E_max, 3) + " over " +
+                       std::to_string(kCycleSamples) + " samples"};
     style.format = plot_format(png, "--atlas");
     plot_energy_curve(gnuplot, rep.cycle, style, png);
     std::vector<std::vector<double>> theta;

@@ -237,7 +237,7 @@ GnuplotInput energy_curve_gnuplot(const CycleSummary& summary, const EnergyPlotS
 
   const std::string data_name = gnuplot_string(data_path.string());
   std::string& gp = out.script;
-  gp += gnuplot_terminal(style.format, 960, style.notes.empty() ? 600 : 640);
+  gp += gnuplot_terminal(style.format, 960, 600 + 20 * static_cast<int>(style.notes.size()));
   gp += "set output " + gnuplot_string(output.string()) + "\n";
   gp += "set title " + gnuplot_lines(style.title, style.notes) + " noenhanced\n";
   gp += "set xlabel 'input angle theta_1 [deg]'\n";
@@ -326,10 +326,11 @@ GnuplotInput minima_histogram_gnuplot(const std::map<int, std::int64_t>& decades
   // Decade tics at the bars' edges; the zero bar has its own name.
   std::string tics;
   for (int d = lowest; d <= highest + 1; ++d) {
-    if (clamp && d <= zero_decade) continue;
+    // The zero bar's right edge is the threshold's dashed line: no tic there to crowd the bar's name.
+    if (clamp && d <= zero_decade + (zeros > 0 ? 1 : 0)) continue;
     tics += (tics.empty() ? "" : ", ") + std::string("'") + std::to_string(d) + "' " + std::to_string(d);
   }
-  if (zeros > 0) tics += (tics.empty() ? "" : ", ") + std::string("'zero' ") + std::to_string(zero_decade) + ".5";
+  if (zeros > 0) tics += (tics.empty() ? "" : ", ") + std::string("'zero' ") + script_number(zero_decade + 0.5);
   gp += "set xtics (" + tics + ")\n";
   if (clamp) {
     const double x = std::log10(zero_threshold);

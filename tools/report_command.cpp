@@ -729,8 +729,9 @@ void plot_candidates(const std::filesystem::path& gnuplot, const std::vector<Can
     // The table's E_mean is the search's, stored with the candidate; this
     // curve is recomputed (another start pose and sample count), so its
     // mean differs by round-off or more: both are quoted, each named.
-    style.notes = {"E_mean " + g(r.E_mean) + " as stored (the table's value); this curve: E_mean " + g(cycle.E_mean) +
-                   ", E_max " + g(cycle.E_max) + " over 360 samples from theta_1 = 0"};
+    style.notes = {
+        "E_mean " + g(r.E_mean) + " as stored (the table's value)",
+        "this curve: E_mean " + g(cycle.E_mean) + ", E_max " + g(cycle.E_max) + " over 360 samples from theta_1 = 0"};
     style.log_scale = true;
     const auto threshold = thresholds.find(r.first_run);
     if (threshold != thresholds.end() && threshold->second > 0.0) {

@@ -153,6 +153,8 @@ TEST(MinimaHistogram, DecadesBelowTheThresholdAreOneZeroBar) {
   EXPECT_EQ(input.data, "-12 4 0\n-5 3 0\n-13 15 1\n");
   EXPECT_NE(input.script.find("15 starts, 7 exactly 0"), std::string::npos) << input.script;
   EXPECT_EQ(lines_with(input.script, "set arrow from -12, graph 0").size(), 1u) << input.script;
+  // The zero bar's tic names it, at the bar's middle.
+  EXPECT_EQ(lines_with(input.script, "'zero' -12.5)").size(), 1u) << input.script;
   EXPECT_EQ(lines_with(input.script, "zero threshold 1e-12").size(), 1u) << input.script;
 }
 
