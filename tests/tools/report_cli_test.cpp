@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -257,6 +258,28 @@ TEST_F(ReportCli, FilesGetEveryRowAndTheTableFiftyWithACount) {
   EXPECT_EQ(r.out, "(no candidates match)\n");
   expect_refused({"--limit", "-1"}, {"--limit", "-1"});
   expect_refused({"--limit", "ten"}, {"--limit", "ten"});
+}
+
+// A candidate's chart quotes the stored E_mean exactly as the table prints it
+// (the chart's own curve is recomputed and has its own mean, named apart).
+TEST_F(ReportCli, ACandidateChartQuotesTheTablesEnergy) {
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) GTEST_SKIP() << "gnuplot is not installed";
+  const testing::CommandResult r = report({"--family", "planar", "--limit", "1", "--plot", "{dir}/charts"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_GE(lines.size(), 2u) << r.out;
+  std::istringstream row(lines[1]);
+  std::string id, family, energy;
+  row >> id >> family >> energy;
+  EXPECT_NE(r.err.find("candidate_" + id + "_cycle.png (E_mean " + energy + " stored, "), std::string::npos)
+      << lines[1] << "\n"
+      << r.err;
+  for (const std::string name : {"candidate_" + id + "_cycle.png", std::string("minima_histogram.png")}) {
+    std::ifstream in(dir_ / "charts" / name, std::ios::binary);
+    std::string magic(8, '\0');
+    in.read(magic.data(), 8);
+    EXPECT_EQ(magic, std::string("\x89PNG\r\n\x1a\n", 8)) << name;
+  }
 }
 
 TEST_F(ReportCli, SummaryFollowsTheFormat) {
