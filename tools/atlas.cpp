@@ -25,8 +25,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegreesPerRadian = 180.0 / kPi;
-constexpr int kFrames = 8;          // frames in the motion strip
-constexpr int kCycleSamples = 360;  // samples of the representative's cycle
+constexpr int kFrames = 8;  // frames in the motion strip
 
 // "1 hit", "2 hits".
 std::string count_of(long long count, const std::string& noun) {
@@ -37,13 +36,58 @@ std::string g(double v, int digits = 4) { return format_significant(v, digits); 
 
 std::string joined(const std::vector<double>& values, int digits) { return join_significant(values, digits, ", "); }
 
-// The candidates of one family (one joint count).
-struct FamilyGroup {
-  int joints = 0;
-  std::string family;
-  std::vector<const CandidateRow*> rows;
-  long long hits = 0;
+struct Spread {
+  double min = kNaN, median = kNaN, max = kNaN;
+  int count = 0;
 };
+
+Spread spread(std::vector<double> values) {
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }), values.end());
+  Spread s;
+  s.count = static_cast<int>(values.size());
+  if (values.empty()) return s;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  s.min = values.front();
+  s.max = values.back();
+  s.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  return s;
+}
+
+// What a found local dimension says against the known one.
+std::string dimension_reading(int found, std::optional<int> known, int free_parameters, int joints) {
+  if (!known) return "no single known dimension to compare with";
+  if (found == *known) return "as known";
+  if (found > *known) {
+    return "more than known: the point lies on a larger family of movable loops (or the zero set is not "
+           "regular there)";
+  }
+  if (free_parameters < 3 * joints) {
+    return "less than known: the search space (" + std::to_string(free_parameters) + " of " +
+           std::to_string(3 * joints) + " parameters) may hold only part of the family at this point";
+  }
+  return "less than known";
+}
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) throw EnvironmentError("--atlas: cannot write " + path.string());
+}
+
+}  // namespace
+
+std::optional<int> known_family_dimension(const std::string& family, int joints) {
+  const std::optional<Family> f = family_from_string(family);
+  return f ? family_dimension(*f, joints) : std::nullopt;
+}
+
+std::string atlas_stem(const std::string& family, int joints) {
+  std::string stem = std::to_string(joints) + "r_";
+  for (char c : family) stem += (std::isalnum(static_cast<unsigned char>(c)) || c == '_') ? c : '-';
+  return stem;
+}
 
 // Unclassified first (possible new families), then the most candidates, then by name.
 std::vector<FamilyGroup> group_by_family(const std::vector<CandidateRow>& rows) {
@@ -79,24 +123,6 @@ const CandidateRow& representative(const FamilyGroup& group) {
                             [&](const CandidateRow* x, const CandidateRow* y) { return rank(x) < rank(y); });
 }
 
-struct Spread {
-  double min = kNaN, median = kNaN, max = kNaN;
-  int count = 0;
-};
-
-Spread spread(std::vector<double> values) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }), values.end());
-  Spread s;
-  s.count = static_cast<int>(values.size());
-  if (values.empty()) return s;
-  std::sort(values.begin(), values.end());
-  const size_t n = values.size();
-  s.min = values.front();
-  s.max = values.back();
-  s.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-  return s;
-}
-
 // "4 (572), 5 (7)": the local dimensions found and how many candidates each.
 std::string dimension_counts(const FamilyGroup& group) {
   std::map<int, int> counts;
@@ -116,27 +142,6 @@ std::string free_parameter_counts(const FamilyGroup& group) {
   return out;
 }
 
-// What a found local dimension says against the known one.
-std::string dimension_reading(int found, std::optional<int> known, int free_parameters, int joints) {
-  if (!known) return "no single known dimension to compare with";
-  if (found == *known) return "as known";
-  if (found > *known) {
-    return "more than known: the point lies on a larger family of movable loops (or the zero set is not "
-           "regular there)";
-  }
-  if (free_parameters < 3 * joints) {
-    return "less than known: the search space (" + std::to_string(free_parameters) + " of " +
-           std::to_string(3 * joints) + " parameters) may hold only part of the family at this point";
-  }
-  return "less than known";
-}
-
-struct Representation {
-  CycleSummary cycle;
-  double theta0 = 0.0;  // [rad]
-  bool full_turn = true;
-};
-
 // The cycle energy of the representative's canonical geometry, as `loopfarm
 // energy` computes it (assembly at theta0, then the cycle): a full turn from 0,
 // or, for a loop whose verified motion does not turn fully, the verified range.
@@ -147,7 +152,7 @@ Representation compute_cycle(const CandidateRow& r) {
   EquilibriumWorkspace workspace(model);
   Representation out;
   CycleOptions options;
-  options.samples = kCycleSamples;
+  options.samples = kAtlasCycleSamples;
   const double span_deg = r.range_hi_deg - r.range_lo_deg;
   if (!r.full_turn && std::isfinite(span_deg) && span_deg > 0.0 && span_deg < 360.0) {
     out.full_turn = false;
@@ -159,8 +164,8 @@ Representation compute_cycle(const CandidateRow& r) {
   return out;
 }
 
-// kFrames samples of the cycle, evenly spaced in input angle, in input order.
-void pick_frames(const Representation& rep, std::vector<std::vector<double>>& theta, std::vector<double>& input_deg) {
+void pick_frames(const Representation& rep, int count, std::vector<std::vector<double>>& theta,
+                 std::vector<double>& input_deg) {
   std::vector<const CycleSample*> samples;
   for (const CycleSample& s : rep.cycle.samples) {
     if (s.status != SampleStatus::failed) samples.push_back(&s);
@@ -168,7 +173,7 @@ void pick_frames(const Representation& rep, std::vector<std::vector<double>>& th
   std::sort(samples.begin(), samples.end(),
             [](const CycleSample* x, const CycleSample* y) { return x->theta_in < y->theta_in; });
   if (samples.empty()) return;
-  const int frames = std::min<int>(kFrames, static_cast<int>(samples.size()));
+  const int frames = std::min<int>(count, static_cast<int>(samples.size()));
   for (int k = 0; k < frames; ++k) {
     // A full turn: k/frames of the turn; a range: both ends included.
     const double position =
@@ -180,24 +185,20 @@ void pick_frames(const Representation& rep, std::vector<std::vector<double>>& th
   }
 }
 
-void write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) throw EnvironmentError("--atlas: cannot write " + path.string());
-}
-
-}  // namespace
-
-std::optional<int> known_family_dimension(const std::string& family, int joints) {
-  const std::optional<Family> f = family_from_string(family);
-  return f ? family_dimension(*f, joints) : std::nullopt;
-}
-
-std::string atlas_stem(const std::string& family, int joints) {
-  std::string stem = std::to_string(joints) + "r_";
-  for (char c : family) stem += (std::isalnum(static_cast<unsigned char>(c)) || c == '_') ? c : '-';
-  return stem;
+std::vector<JointPlacement> joint_placements(const LoopGeometry& geometry, const std::vector<double>& theta) {
+  const int n = geometry.joints();
+  JointVector t(n);
+  for (int i = 0; i < n; ++i) t[i] = theta[static_cast<size_t>(i)];
+  std::vector<JointPlacement> joints;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Isometry3d f = forward_transform(geometry, t, i);
+    JointPlacement j;
+    j.o = f.translation();
+    j.z = f.linear().col(2);
+    j.p = j.o + geometry.d[i] * j.z;
+    joints.push_back(j);
+  }
+  return joints;
 }
 
 std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vector<double>>& theta,
@@ -209,27 +210,14 @@ std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vec
   const double az = 35.0 / kDegreesPerRadian, el = 25.0 / kDegreesPerRadian;
   const Eigen::Vector3d right(-std::sin(az), std::cos(az), 0.0);
   const Eigen::Vector3d up(-std::sin(el) * std::cos(az), -std::sin(el) * std::sin(az), std::cos(el));
-  constexpr double kAxisHalf = 0.45;  // drawn half-length of a joint axis beyond its link ends [L]
-
-  // Per frame and joint: the point where link i-1 meets axis i (O), the foot
-  // of link i's common normal on axis i (P = O + d_i z_i), and axis i's direction.
-  struct Joint {
-    Eigen::Vector3d o, p, z;
-  };
+  using Joint = JointPlacement;
   std::vector<std::vector<Joint>> frames;
   double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
   auto project = [&](const Eigen::Vector3d& v) { return std::make_pair(v.dot(right), -v.dot(up)); };
   for (const std::vector<double>& angles : theta) {
-    JointVector t(n);
-    for (int i = 0; i < n; ++i) t[i] = angles[static_cast<size_t>(i)];
-    std::vector<Joint> joints;
+    std::vector<Joint> joints = joint_placements(geometry, angles);
     for (int i = 0; i < n; ++i) {
-      const Eigen::Isometry3d f = forward_transform(geometry, t, i);
-      Joint j;
-      j.o = f.translation();
-      j.z = f.linear().col(2);
-      j.p = j.o + geometry.d[i] * j.z;
-      joints.push_back(j);
+      const Joint& j = joints[static_cast<size_t>(i)];
       const double lo = std::min(0.0, geometry.d[i]) - kAxisHalf, hi = std::max(0.0, geometry.d[i]) + kAxisHalf;
       for (const Eigen::Vector3d& v : {Eigen::Vector3d(j.o + lo * j.z), Eigen::Vector3d(j.o + hi * j.z)}) {
         const auto [x, y] = project(v);
@@ -328,7 +316,7 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
       "parameters, so a sub-space search (ties, zero offsets, symmetry) can find less than the family has and a "
       "point on a larger family more. The representative is a full-turn candidate if there is one, with the "
       "smallest rigid-closure residual; its cycle energy is recomputed from its canonical geometry (" +
-      std::to_string(kCycleSamples) +
+      std::to_string(kAtlasCycleSamples) +
       " samples, log axis; energies below the zero threshold of the run that found it "
       "are round-off of a zero and are drawn on the threshold's dashed line) and its motion drawn at " +
       std::to_string(kFrames) +
@@ -412,12 +400,12 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
     // own, each named: the curve is recomputed from another pose.
     style.notes = {"E_mean " + g(r.E_mean, 3) + " as stored (the report's value)",
                    "this curve: E_mean " + g(rep.cycle.E_mean, 3) + ", E_max " + g(rep.cycle.E_max, 3) + " over " +
-                       std::to_string(kCycleSamples) + " samples"};
+                       std::to_string(kAtlasCycleSamples) + " samples"};
     style.format = plot_format(png, "--atlas");
     plot_energy_curve(gnuplot, rep.cycle, style, png);
     std::vector<std::vector<double>> theta;
     std::vector<double> input_deg;
-    pick_frames(rep, theta, input_deg);
+    pick_frames(rep, kFrames, theta, input_deg);
     const std::filesystem::path svg = dir / (stem + "_motion.svg");
     write_text(svg, motion_strip_svg(r, theta, input_deg,
                                      group.family + " (" + std::to_string(group.joints) + "R), candidate " +

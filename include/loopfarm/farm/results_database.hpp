@@ -129,10 +129,11 @@ struct RunRow {
   std::string status;            // running, stopped, complete, failed
   std::int64_t ranks = 0;        // of the last session
   int joints = 0;
-  double zero_threshold = 0.0;         // the job's: E_mean below it is a zero
   std::string started_at, updated_at;  // ISO 8601 UTC
   std::optional<StartSlice> slice;     // none: every start of the job
   std::int64_t merged_inputs = 0;      // databases `loopfarm merge` made it of (0: run here)
+  // Its job's [search] zero_threshold: a start whose E_mean is at most this is a zero.
+  double zero_threshold = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Counts over the starts of one run, or of every run.
