@@ -21,6 +21,7 @@
 
 #include "atlas.hpp"
 #include "cli_support.hpp"
+#include "html_atlas.hpp"
 #include "loopfarm/core/assembly.hpp"
 #include "loopfarm/core/cycle.hpp"
 #include "loopfarm/farm/candidate_pose.hpp"
@@ -70,6 +71,7 @@ struct ReportArguments {
   std::string input_deg;
   std::string plot;
   std::string atlas;
+  std::string html;
   bool summary = false;
   bool wide = false;
 };
@@ -874,6 +876,9 @@ int run_report(const ReportArguments& args) {
       throw UsageError("--atlas", "cannot write into directory " + quote_text(args.atlas));
     }
   }
+  // Created before the database is opened: an unwritable path costs nothing.
+  std::optional<PendingOutput> html;
+  if (!args.html.empty()) html.emplace(args.html, "--html");
   std::optional<ResultsDatabase> db;
   try {
     db.emplace(ResultsDatabase::open(args.database, DatabaseMode::read));
@@ -891,6 +896,10 @@ int run_report(const ReportArguments& args) {
       show_candidate(*db, args);
     } else if (!args.atlas.empty()) {
       write_atlas(gnuplot, read_candidates(*db, args, 0), run_thresholds(*db), atlas_header(*db, args), atlas_dir);
+    } else if (html) {
+      write_html_atlas(*db, {args.family, run, args.max_energy}, read_candidates(*db, args, 0), *html);
+      html->commit();
+      if (!html->to_standard_output()) std::fprintf(stderr, "loopfarm report: wrote %s\n", args.html.c_str());
     } else if (args.summary) {
       const SummaryData summary = read_summary(*db, run);
       if (args.format.format == OutputFormat::json) {
@@ -930,6 +939,7 @@ Subcommand add_report_command(CLI::App& parent) {
       "  loopfarm report default.sqlite --summary --format json\n"
       "  loopfarm report default.sqlite --summary --plot docs/default\n"
       "  loopfarm report goldberg-5r.sqlite --atlas docs/research/atlas\n"
+      "  loopfarm report default.sqlite --html atlas.html   # one page, opens offline in any browser\n"
       "Order: unclassified candidates (possible new families) first, then by E_mean from zero upwards, ties by id.\n"
       "The table fits 120 columns (--wide: every column) and prints geometry round-off as 0 (|x| < 1e-9 L for\n"
       "lengths, L the loop's length scale; |x| < 1e-9 rad for angles); csv and json keep every stored digit.\n"
@@ -982,6 +992,20 @@ Subcommand add_report_command(CLI::App& parent) {
       ->excludes("--format")
       ->excludes("--json")
       ->excludes("--wide");
+  CLI::Option* html =
+      app->add_option("--html", args->html,
+                      "write the atlas as one self-contained HTML page: the summary, the histogram of minima, the "
+                      "family table and, per family, its representative moving in 3D (drag to turn; play, pause, a "
+                      "slider for the input angle), its cycle energy and parameters; --family, --run and "
+                      "--max-energy select, --limit does not apply")
+          ->type_name("FILE");
+  html->excludes(atlas)
+      ->excludes(summary)
+      ->excludes(plot)
+      ->excludes(limit)
+      ->excludes("--format")
+      ->excludes("--json")
+      ->excludes("--wide");
   candidate->excludes(family)
       ->excludes(max_energy)
       ->excludes(limit)
@@ -989,6 +1013,7 @@ Subcommand add_report_command(CLI::App& parent) {
       ->excludes(summary)
       ->excludes(plot)
       ->excludes(atlas)
+      ->excludes(html)
       ->excludes("--wide");
   summary->excludes(limit)->excludes("--wide");
   return {app, [args] { return run_report(*args); }};
