@@ -2,7 +2,17 @@
 # The one place that lists the Debian packages loopfarm needs (docs/guide/building.md
 # says why each is there). Installs only what is missing, so on a prepared machine
 # it is a quick no-op; the other scripts call it first.
+#
+#   scripts/deps.sh          what building and running loopfarm needs (scripts/run.sh)
+#   scripts/deps.sh --test   that and what only the tests need (scripts/test.sh)
 set -euo pipefail
+
+test_packages=0
+case "${1:-}" in
+  '') ;;
+  --test) test_packages=1 ;;
+  *) echo "deps.sh: unknown option '$1' (--test adds the packages only the tests need)" >&2; exit 2 ;;
+esac
 
 packages=(
   build-essential      # g++ and make
@@ -25,6 +35,16 @@ packages=(
   libclang-rt-14-dev   # libFuzzer's and the sanitizers' runtimes for clang
   clang-format         # the house style (.clang-format), checked by the test format_check
 )
+
+# Only the tests: the HTML atlas (loopfarm report --html) is opened and driven
+# in a headless browser by tests/tools/html_test.sh.
+if [ "$test_packages" -eq 1 ]; then
+  packages+=(
+    chromium           # the headless browser that loads and drives the HTML atlas
+    python3            # tests/tools/html_browser.py, which speaks to the browser over a pipe
+    fonts-dejavu-core  # a font for the page's text in the browser
+  )
+fi
 
 missing=()
 for package in "${packages[@]}"; do

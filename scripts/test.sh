@@ -32,7 +32,7 @@ case "$fuzz_seconds" in
   ''|*[!0-9]*) echo "scripts/test.sh: --fuzz-seconds wants a whole number of seconds, not '$fuzz_seconds'" >&2; exit 2 ;;
 esac
 
-scripts/deps.sh
+scripts/deps.sh --test
 
 # The MPI tests run mpirun, which refuses to run as root (CI containers)
 # without these.
