@@ -96,7 +96,7 @@ std::string summary_html(const ResultsDatabase& db, const HtmlSelection& selecti
       "<th>zero threshold</th><th>started</th><th>updated</th></tr>\n";
   for (const RunRow& r : runs) {
     const std::string where = r.merged_inputs > 0 ? "merged from " + std::to_string(r.merged_inputs) + " databases"
-                                                  : std::to_string(r.ranks) + " ranks";
+                                                  : count_of(r.ranks, "rank");
     out += "<tr><td>" + std::to_string(r.run_id) + "</td><td><code>" + html_escape(r.job_path) + "</code></td><td>" +
            std::to_string(r.seed) + "</td><td>" + (r.slice ? to_string(*r.slice) : "") + "</td><td>" +
            std::to_string(r.starts_done) + "</td><td>" + std::to_string(r.starts) + "</td><td>" +
@@ -438,7 +438,8 @@ svg.chart text.threshold { fill: #d62728; }
 svg.chart .cursor { stroke: #888; stroke-dasharray: 2,2; }
 .viewer canvas { border: 1px solid #ccc; cursor: grab; touch-action: none; display: block; }
 .viewer .controls { display: flex; align-items: center; gap: 0.6em; margin-top: 0.3em; }
-.viewer input[type=range] { width: 220px; }
+.viewer input[type=range] { width: 200px; }
+.viewer button { white-space: nowrap; }
 .viewer .angle { white-space: nowrap; min-width: 9em; }
 .note { color: #555; font-size: 0.9em; }
 )CSS";
