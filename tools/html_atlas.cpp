@@ -627,7 +627,7 @@ int write_html_atlas(const ResultsDatabase& db, const HtmlSelection& selection, 
   if (!selection.max_energy.empty()) chosen += ", E_mean at most " + selection.max_energy;
   body += "<h1>loopfarm family atlas</h1>\n<p>Database <code>" + html_escape(db.path()) + "</code>" +
           html_escape(chosen) + ": " + count_of(static_cast<long long>(rows.size()), "candidate") + " in " +
-          count_of(static_cast<long long>(groups.size()), "family") + ".</p>\n";
+          (groups.size() == 1 ? std::string("1 family") : std::to_string(groups.size()) + " families") + ".</p>\n";
   body += summary_html(db, selection);
   body += "<h2 id=\"histogram\">Histogram of all minima</h2>\n";
   body += histogram_svg(db.energy_histogram(selection.run), runs);

@@ -38,16 +38,17 @@ def fail(message):
 class Browser:
     def __init__(self, chromium, profile):
         # The browser reads commands from its fd 3 and writes answers to its fd 4.
+        self.log = tempfile.TemporaryFile()  # the browser's stderr, quoted when it dies
         to_browser_r, self.to_browser = os.pipe()
         self.from_browser, from_browser_w = os.pipe()
         remap = "exec 3<&%d 4>&%d; exec \"$@\"" % (to_browser_r, from_browser_w)
         self.process = subprocess.Popen(
             ["sh", "-c", remap, "sh", chromium, "--headless", "--no-sandbox", "--disable-gpu",
-             "--remote-debugging-pipe", "--user-data-dir=" + profile, "--no-first-run",
+             "--disable-dev-shm-usage", "--remote-debugging-pipe", "--user-data-dir=" + profile, "--no-first-run",
              "--no-default-browser-check", "--disable-extensions", "--window-size=1280,1000",
              "--force-device-scale-factor=1", "about:blank"],
             pass_fds=(to_browser_r, from_browser_w),
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            stdout=subprocess.DEVNULL, stderr=self.log)
         os.close(to_browser_r)
         os.close(from_browser_w)
         self.buffer = b""
@@ -72,7 +73,9 @@ class Browser:
                 return None
             chunk = os.read(self.from_browser, 1 << 20)
             if not chunk:
-                fail("the browser closed its pipe (exit code %s)" % self.process.poll())
+                self.log.seek(0)
+                last = [line for line in self.log.read().decode(errors="replace").splitlines() if line.strip()]
+                fail("the browser closed its pipe (exit code %s): %s" % (self.process.poll(), " | ".join(last[-3:])))
             self.buffer += chunk
         raw, self.buffer = self.buffer.split(b"\0", 1)
         return json.loads(raw)
@@ -250,7 +253,8 @@ def run(browser, page, screenshot):
         shot = call("Page.captureScreenshot", {"format": "png"})
         with open(screenshot, "wb") as f:
             f.write(base64.b64decode(shot["data"]))
-    print("html_browser: ok (%d 3D views; slider %s -> %s deg; drag turned the view; play and pause)" % (viewers, before, after))
+    print("html_browser: ok (%d 3D views; slider %s -> %s deg; drag turned the view; play and pause)"
+          % (viewers, before, after))
 
 
 if __name__ == "__main__":
