@@ -7,7 +7,8 @@
 #            the database; bad input is refused with exit 2 and one line
 #            naming the option (an unwritable path, --html with --atlas or
 #            --summary, a family the database lacks), leaving no file, not
-#            even a temporary one; --family selects one family.
+#            even a temporary one, and a page already there unchanged;
+#            --family selects one family.
 #   browser  in headless Chromium (tests/tools/html_browser.py) the page loads
 #            with no console error, and a click on the slider, a drag on the
 #            3D view, and Play each change the drawing; Pause stops it.
@@ -97,6 +98,10 @@ chmod u+w "$tmp/out"
 bad "--html" --html "$tmp/out/other.html" --atlas "$tmp/atlas"
 bad "--html" --html "$tmp/out/other.html" --summary
 bad "--family" --html "$tmp/out/other.html" --family goldberg
+# A refused command leaves a page already at the path as it was.
+cp "$page" "$tmp/page.before"
+bad "--family" --html "$page" --family goldberg
+cmp -s "$page" "$tmp/page.before" || fail "a refused --html changed the page already there"
 [[ "$(ls -A "$tmp/out")" == atlas.html ]] || fail "a refused --html left files: $(ls -A "$tmp/out" | tr '\n' ' ')"
 [[ ! -e "$tmp/no-such-dir" && ! -e "$tmp/atlas" ]] || fail "a refused --html made a directory"
 cmp -s "$db" "$tmp/before.sqlite" || fail "the database changed"
