@@ -22,8 +22,8 @@ constexpr double kDegreesPerRadian = 180.0 / kPi;
 // Poses embedded per representative: every 3 deg of a full turn, which the
 // page interpolates linearly between.
 constexpr int kMotionFrames = 120;
-// Embedded coordinates are rounded to this (the canonical geometry has L = 1).
-constexpr double kCoordinateStep = 1e-5;
+// Decimals of the embedded coordinates (the canonical geometry has L = 1).
+constexpr int kCoordinateDecimals = 5;
 // A zero threshold no run states (a database without runs): the job file's default.
 constexpr double kDefaultZeroThreshold = 1e-12;
 // A stored value this small beside its scale is round-off of a zero and shows as 0.
@@ -71,7 +71,13 @@ std::string energy_text(double v) {
   return buffer;
 }
 
-double rounded(double v) { return std::round(v / kCoordinateStep) * kCoordinateStep; }
+// The double nearest to v rounded to `decimals` decimals, which JSON then
+// prints in as few digits (the quotient of two exact integers is correctly
+// rounded); -0 as 0.
+double rounded(double v, int decimals = kCoordinateDecimals) {
+  const double scale = std::pow(10.0, decimals);
+  return std::round(v * scale) / scale + 0.0;
+}
 
 // The zero threshold of the run that first found a candidate; the smallest of
 // every run's when that run is not there; the job default without runs.
@@ -369,12 +375,12 @@ nlohmann::json motion_json(const CandidateRow& r, const Representation& rep, dou
   nlohmann::json j;
   j["joints"] = n;
   j["full_turn"] = frames.full_turn;
-  j["lo_deg"] = lo_deg;
-  j["hi_deg"] = hi_deg;
+  j["lo_deg"] = rounded(lo_deg, 4);
+  j["hi_deg"] = rounded(hi_deg, 4);
   std::vector<double> axis_lo, axis_hi;
   for (int i = 0; i < n; ++i) {
-    axis_lo.push_back(std::min(0.0, geometry.d[i]) - kAxisHalf);
-    axis_hi.push_back(std::max(0.0, geometry.d[i]) + kAxisHalf);
+    axis_lo.push_back(rounded(std::min(0.0, geometry.d[i]) - kAxisHalf));
+    axis_hi.push_back(rounded(std::max(0.0, geometry.d[i]) + kAxisHalf));
   }
   j["axis_lo"] = axis_lo;
   j["axis_hi"] = axis_hi;
@@ -402,7 +408,7 @@ nlohmann::json motion_json(const CandidateRow& r, const Representation& rep, dou
       }
     }
     if (!finite) continue;
-    angles.push_back(std::round(input_deg[k] * 1e4) * 1e-4);
+    angles.push_back(rounded(input_deg[k], 4));
     o.push_back(fo);
     p.push_back(fp);
     z.push_back(fz);
