@@ -90,6 +90,9 @@ bad() {  # EXPECTED-TEXT ARGS...
   [[ ! -s "$tmp/stdout" ]] || fail "report $*: printed on stdout"
 }
 bad "--html" --html "$tmp/no-such-dir/atlas.html"
+touch "$tmp/plain"
+bad "--html" --html "$tmp/plain/atlas.html"
+bad "--html" --html "$tmp/out"
 chmod a-w "$tmp/out"
 if [[ ! -w "$tmp/out" ]]; then  # root writes anywhere: then this case says nothing
   bad "--html" --html "$tmp/out/other.html"
