@@ -44,8 +44,11 @@ std::string lengths_text(const JointVector& values) {
 }
 
 std::string degrees_text(const JointVector& radians) {
+  // Round-off of a zero angle (below 1e-9 rad) reads as 0.
   std::vector<double> degrees;
-  for (int i = 0; i < radians.size(); ++i) degrees.push_back(radians[i] * kDegreesPerRadian);
+  for (int i = 0; i < radians.size(); ++i) {
+    degrees.push_back(std::abs(radians[i]) < 1e-9 ? 0.0 : radians[i] * kDegreesPerRadian);
+  }
   return format_list(degrees);
 }
 

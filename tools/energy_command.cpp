@@ -17,8 +17,8 @@
 #include "loopfarm/core/cycle_start.hpp"
 #include "loopfarm/core/equilibrium.hpp"
 #include "loopfarm/core/loop.hpp"
-#include "output_format.hpp"
 #include "loopfarm/search/job.hpp"
+#include "output_format.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {

@@ -87,7 +87,7 @@ std::string format_list(const std::vector<double>& values) {
   std::string out;
   for (size_t i = 0; i < values.size(); ++i) {
     char buffer[40];
-    std::snprintf(buffer, sizeof buffer, "%g", values[i]);
+    std::snprintf(buffer, sizeof buffer, "%g", values[i] == 0.0 ? 0.0 : values[i]);  // never "-0"
     if (i > 0) out += ", ";
     out += buffer;
   }

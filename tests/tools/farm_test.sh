@@ -395,6 +395,50 @@ script)
     fail "the resume exited with $?"
   [[ "$(sqlite3 stopped.sqlite 'SELECT COUNT(*) FROM starts')" == 3000 ]] || fail "the resumed run lacks starts"
   ;;
+slurm)
+  # jobs/slurm.sbatch run as Slurm runs it (SLURM_* set, scontrol a stand-in
+  # that records its arguments): a bad option is rank 0's one line and exit 2;
+  # SIGUSR1 before the time limit stops every rank with the starts in hand
+  # committed, the script exits 3 (loopfarm's code, though mpirun's own is 1
+  # after a signal) and requeues the job.
+  script="$source_dir/jobs/slurm.sbatch"
+  bash -n "$script" || fail "bash -n $script"
+  mkdir -p "$tmp/bin"
+  printf '#!/bin/sh\necho "$@" >>"%s/requeued"\n' "$tmp" >"$tmp/bin/scontrol"
+  chmod +x "$tmp/bin/scontrol"
+  # As Slurm starts it: env execs bash, so $! below is the script's own pid.
+  slurm_env=(env PATH="$tmp/bin:$PATH" SLURM_JOB_ID=4242 SLURM_NTASKS=2 SLURM_SUBMIT_DIR="$tmp" LOOPFARM="$loopfarm"
+    MPIRUN="$mpiexec --oversubscribe" bash "$script")
+  slurm() { "${slurm_env[@]}" "$@"; }
+  set +e
+  slurm "$job" --starts x 2>"$tmp/err"
+  code=$?
+  set -e
+  [[ $code -eq 2 ]] || fail "a bad option through the script exited with $code, not 2"
+  [[ "$(cat "$tmp/err")" == 'loopfarm run: --starts: "x" is not an integer' ]] ||
+    fail "a bad option through the script printed more than rank 0's line: $(head -c 300 "$tmp/err")"
+  [[ ! -e "$tmp/requeued" ]] || fail "a bad option requeued the job"
+  sed -i 's/^starts = 40$/starts = 3000/' "$job"
+  set +e
+  "${slurm_env[@]}" "$job" --db "$tmp/slurm.sqlite" 2>"$tmp/err" &
+  pid=$!
+  for ((i = 0; i < 300; ++i)); do
+    n="$(sqlite3 "$tmp/slurm.sqlite" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
+    [[ "${n:-0}" -gt 0 ]] && break
+    sleep 0.1
+  done
+  kill -USR1 "$pid"
+  wait "$pid"
+  code=$?
+  set -e
+  [[ $code -eq 3 ]] || fail "SIGUSR1 to the script exited with $code, not 3: $(tail -2 "$tmp/err")"
+  grep -q "slurm.sbatch: time limit near, asking loopfarm to stop" "$tmp/err" || fail "no stop line"
+  [[ "$(cat "$tmp/requeued")" == "requeue 4242" ]] || fail "the job was not requeued: $(cat "$tmp/requeued" 2>&1)"
+  [[ "$(sqlite3 "$tmp/slurm.sqlite" 'SELECT status FROM runs')" == stopped ]] || fail "the run is not 'stopped'"
+  ls -A "$tmp" | grep -q '^\.loopfarm-exit' && fail "the script left its exit file behind"
+  # That a stopped run resumes to the same database as an uninterrupted one,
+  # farm_signal and farm_script show; here only that the script requeued it.
+  ;;
 *)
   fail "unknown case"
   ;;

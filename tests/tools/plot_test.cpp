@@ -186,12 +186,14 @@ TEST(PlotFiles, GnuplotWritesTheFormatTheExtensionNames) {
     plot_energy_curve(gnuplot, zero, style, dir / name);
     const std::string bytes = read_bytes(dir / name);
     ASSERT_GT(bytes.size(), 100u) << name;
-    if (style.format == PlotFormat::png) EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
-    if (style.format == PlotFormat::svg) {
+    if (style.format == PlotFormat::png) {
+      EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+    } else if (style.format == PlotFormat::svg) {
       EXPECT_EQ(bytes.substr(0, 5), "<?xml");
       EXPECT_NE(bytes.find("<svg"), std::string::npos);
+    } else if (style.format == PlotFormat::pdf) {
+      EXPECT_EQ(bytes.substr(0, 5), "%PDF-");
     }
-    if (style.format == PlotFormat::pdf) EXPECT_EQ(bytes.substr(0, 5), "%PDF-");
   }
   const std::filesystem::path histogram = dir / "h.svg";
   plot_minima_histogram(gnuplot, {{-31, 4}, {-3, 2}}, 1, 1e-12, PlotFormat::svg, histogram, "--plot");

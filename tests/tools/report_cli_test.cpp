@@ -274,7 +274,7 @@ TEST_F(ReportCli, ACandidateChartQuotesTheTablesEnergy) {
   EXPECT_NE(r.err.find("candidate_" + id + "_cycle.png (E_mean " + energy + " stored, "), std::string::npos)
       << lines[1] << "\n"
       << r.err;
-  for (const std::string name : {"candidate_" + id + "_cycle.png", std::string("minima_histogram.png")}) {
+  for (const std::string& name : {"candidate_" + id + "_cycle.png", std::string("minima_histogram.png")}) {
     std::ifstream in(dir_ / "charts" / name, std::ios::binary);
     std::string magic(8, '\0');
     in.read(magic.data(), 8);
