@@ -58,6 +58,16 @@ dump() {
   sqlite3 "$1" "SELECT $columns FROM starts ORDER BY run_id, start_index;" >>"$2"
 }
 
+# Waits until DB holds a committed start, at most TENTHS tenths of a second.
+wait_for_first_commit() {  # DB TENTHS
+  local i n
+  for ((i = 0; i < $2; ++i)); do
+    n="$(sqlite3 "$1" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
+    [[ "${n:-0}" -gt 0 ]] && return 0
+    sleep 0.1
+  done
+}
+
 same() {  # same A B WHAT
   if ! cmp -s "$1" "$2"; then
     diff "$1" "$2" | grep "^>" | head -3 | cut -c1-400 >&2
@@ -134,11 +144,7 @@ signal)
     "$mpiexec" --oversubscribe -np 2 "$loopfarm" run "$job" --progress none --db "$tmp/stopped.sqlite" 2>"$tmp/err" &
     pid=$!
     # Wait for the first commit (at most 20 s), then signal.
-    for ((i = 0; i < 200; ++i)); do
-      n="$(sqlite3 "$tmp/stopped.sqlite" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
-      [[ "${n:-0}" -gt 0 ]] && break
-      sleep 0.1
-    done
+    wait_for_first_commit "$tmp/stopped.sqlite" 200
     kill -USR1 "$pid"
     wait "$pid"
     code=$?
@@ -376,11 +382,7 @@ script)
   LOOPFARM="$real_loopfarm" NP=2 setsid env --default-signal=INT "$script" "$job" --db stopped.sqlite --progress none \
     2>"$tmp/err" &
   pid=$!
-  for ((i = 0; i < 300; ++i)); do
-    n="$(sqlite3 stopped.sqlite 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
-    [[ "${n:-0}" -gt 0 ]] && break
-    sleep 0.1
-  done
+  wait_for_first_commit stopped.sqlite 300
   kill -INT -- "-$pid"
   wait "$pid"
   code=$?
@@ -422,11 +424,7 @@ slurm)
   set +e
   "${slurm_env[@]}" "$job" --db "$tmp/slurm.sqlite" 2>"$tmp/err" &
   pid=$!
-  for ((i = 0; i < 300; ++i)); do
-    n="$(sqlite3 "$tmp/slurm.sqlite" 'SELECT COUNT(*) FROM starts' 2>/dev/null || echo 0)"
-    [[ "${n:-0}" -gt 0 ]] && break
-    sleep 0.1
-  done
+  wait_for_first_commit "$tmp/slurm.sqlite" 300
   kill -USR1 "$pid"
   wait "$pid"
   code=$?
