@@ -549,7 +549,7 @@ SummaryData read_summary(const ResultsDatabase& db, const std::optional<std::int
 std::string run_where(const RunRow& r) {
   // Where its starts were computed: ranks of the last session, or the databases it was merged from.
   return r.merged_inputs > 0 ? "merged from " + std::to_string(r.merged_inputs) + " databases"
-                             : std::to_string(r.ranks) + " ranks";
+                             : std::to_string(r.ranks) + (r.ranks == 1 ? " rank" : " ranks");
 }
 
 void print_summary(const ResultsDatabase& db, const SummaryData& s) {
