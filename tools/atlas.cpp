@@ -302,6 +302,16 @@ std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vec
   return svg;
 }
 
+std::string representative_sentence(const CandidateRow& r) {
+  return "Representative: candidate " + std::to_string(r.id) + " (first found by run " + std::to_string(r.first_run) +
+         ", start " + std::to_string(r.first_start) + "; " + count_of(r.hits, "hit") + "), E_mean " + g(r.E_mean, 3) +
+         ", rigid residual " + g(r.rigid_residual, 2) + ", family residual " + g(r.family_residual, 2) +
+         ", local dimension " + std::to_string(r.local_dimension) + " of " + std::to_string(r.free_parameters) + ", " +
+         (r.full_turn ? std::string("full turn")
+                      : "input range [" + g(r.range_lo_deg) + ", " + g(r.range_hi_deg) + "] deg") +
+         (r.setup != "none" && !r.setup.empty() ? ", setup " + r.setup : "") + ".";
+}
+
 int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
                 const std::map<std::int64_t, double>& zero_thresholds, const std::string& header,
                 const std::filesystem::path& dir) {
@@ -411,14 +421,7 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
                                      group.family + " (" + std::to_string(group.joints) + "R), candidate " +
                                          std::to_string(r.id) + ": the loop at " + std::to_string(theta.size()) +
                                          " input angles"));
-    md += "\nRepresentative: candidate " + std::to_string(r.id) + " (first found by run " +
-          std::to_string(r.first_run) + ", start " + std::to_string(r.first_start) + "; " + count_of(r.hits, "hit") +
-          "), E_mean " + g(r.E_mean, 3) + ", rigid residual " + g(r.rigid_residual, 2) + ", family residual " +
-          g(r.family_residual, 2) + ", local dimension " + std::to_string(r.local_dimension) + " of " +
-          std::to_string(r.free_parameters) + ", " +
-          (r.full_turn ? std::string("full turn")
-                       : "input range [" + g(r.range_lo_deg) + ", " + g(r.range_hi_deg) + "] deg") +
-          (r.setup != "none" && !r.setup.empty() ? ", setup " + r.setup : "") + ".\n";
+    md += "\n" + representative_sentence(r) + "\n";
     if (!r.detail.empty()) md += "Classification: " + r.detail + ".\n";
     md += "\n```\na     = " + joined(r.a, 9) + "\nalpha = " + joined(r.alpha_deg, 9) +
           " deg\nd     = " + joined(r.d, 9) + "\n```\n\n";

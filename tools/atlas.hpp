@@ -37,6 +37,11 @@ std::string atlas_stem(const std::string& family, int joints);
 // id (a cycle chart marks the threshold of the run that found its candidate);
 // `header` is Markdown put under the title (the database and its runs). Unclassified families come first, then by
 // count. Returns the number of families. Throws EnvironmentError when gnuplot fails or a file cannot be written.
+// "Representative: candidate 262 (first found by run 1, start 640; 1 hit),
+// E_mean ..., full turn, setup asymmetric.": the sentence the Markdown atlas
+// and the HTML page (escaped) both print under a family's heading.
+std::string representative_sentence(const CandidateRow& row);
+
 int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
                 const std::map<std::int64_t, double>& zero_thresholds, const std::string& header,
                 const std::filesystem::path& dir);

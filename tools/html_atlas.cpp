@@ -677,14 +677,7 @@ int write_html_atlas(const ResultsDatabase& db, const HtmlSelection& selection, 
     body += "<section id=\"" + stem + "\">\n<h2>" + html_escape(group.family) + " (" + std::to_string(group.joints) +
             "R): " + count_of(static_cast<long long>(group.rows.size()), "candidate") + ", " +
             count_of(group.hits, "hit") + "</h2>\n";
-    body += "<p>Representative: candidate " + std::to_string(r.id) + " (first found by run " +
-            std::to_string(r.first_run) + ", start " + std::to_string(r.first_start) + "; " + count_of(r.hits, "hit") +
-            "), E_mean " + g(r.E_mean, 3) + ", rigid residual " + g(r.rigid_residual, 2) + ", family residual " +
-            g(r.family_residual, 2) + ", local dimension " + std::to_string(r.local_dimension) + " of " +
-            std::to_string(r.free_parameters) + ", " +
-            (r.full_turn ? std::string("full turn")
-                         : "input range [" + g(r.range_lo_deg) + ", " + g(r.range_hi_deg) + "] deg") +
-            (r.setup != "none" && !r.setup.empty() ? ", setup " + html_escape(r.setup) : "") + ".";
+    body += "<p>" + html_escape(representative_sentence(r));
     if (!r.detail.empty()) body += " Classification: " + html_escape(r.detail) + ".";
     body += "</p>\n<div class=\"row\">\n<div class=\"viewer\" data-index=\"" + std::to_string(k) + "\" data-family=\"" +
             stem +
