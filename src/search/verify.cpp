@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 namespace loopfarm {
@@ -49,6 +50,12 @@ int reported_circuit(const MotionAnalysis& m, const VerificationOptions& o) {
     if (travel(c, o.input_joint) > travel(b, o.input_joint) + 1e-9) best = i;
   }
   return best >= 0 ? best : m.given_circuit;
+}
+
+std::string scientific(double v) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.3g", v);
+  return buffer;
 }
 
 std::string degrees(double radians) {
@@ -123,8 +130,19 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
       out.limit = "the rigid loop closes at isolated poses only and does not move";
     } else if (start_angles && !options.all_circuits) {
       out.limit = "the rigid loop does not close at the start pose";
+    } else if (!m.circuits.empty()) {
+      // Circuits were traced, but none moved the input by min_input_travel
+      // with every pose closing to round-off (an open circuit: its residual
+      // at most 1e-3 of the tolerance; Circuit::moves).
+      double best = std::numeric_limits<double>::infinity();
+      for (const Circuit& c : m.circuits) best = std::min(best, c.worst_residual);
+      out.limit = std::to_string(m.circuits.size()) + (m.circuits.size() == 1 ? " circuit" : " circuits") +
+                  " traced (least residual " + scientific(m.least_residual) + "), none moving the input " +
+                  degrees(options.min_input_travel) +
+                  " deg with every pose closing to round-off (the best circuit's worst residual " + scientific(best) +
+                  ")";
     } else {
-      out.limit = "the rigid loop closes nowhere (least residual " + std::to_string(m.least_residual) + ")";
+      out.limit = "the rigid loop closes nowhere (least residual " + scientific(m.least_residual) + ")";
     }
     return out;
   }
