@@ -598,4 +598,76 @@ PosedLoop three_bennett_6r(const ThreeBennett6R& p, double t) {
 
 JointVector three_bennett_6r_pose(const ThreeBennett6R& p, double t) { return three_bennett_6r(p, t).theta; }
 
+// ---------------------------------------------------------------------------
+// Waldron's hybrid 6R
+
+PosedLoop waldron_hybrid_6r(const WaldronHybrid6R& p, double t) {
+  if (!(p.b > 0.0) || !std::isfinite(p.b)) bad("waldron_hybrid_6r: b must be > 0", p.b);
+  if (!(p.e > 0.0) || !std::isfinite(p.e)) bad("waldron_hybrid_6r: e must be > 0", p.e);
+  check_twist(p.beta, "waldron_hybrid_6r: beta");
+  check_twist(p.alpha, "waldron_hybrid_6r: alpha");
+  check_twist(p.epsilon, "waldron_hybrid_6r: epsilon");
+  check_twist(p.gamma, "waldron_hybrid_6r: gamma");
+  for (double v : {p.turn, p.slide, p.phase, t}) {
+    if (!std::isfinite(v)) bad("waldron_hybrid_6r: turn, slide, phase and t must be finite", v);
+  }
+  // Each loop with frame 0 on axis A (the z axis through the origin), link
+  // 3 (DA, GA) the fixed body and link 0 (AB, AE) turned by the angle at A.
+  const LoopGeometry first = bennett(p.b * std::abs(std::sin(p.alpha) / std::sin(p.beta)), p.alpha, p.b, p.beta);
+  const LoopGeometry second = bennett(p.e * std::abs(std::sin(p.gamma) / std::sin(p.epsilon)), p.gamma, p.e, p.epsilon);
+  const std::vector<Axis> x1 = joint_axes(first, bennett_pose(first, t));
+  const Eigen::Isometry3d place = Eigen::Translation3d(0.0, 0.0, p.slide) * Eigen::AngleAxisd(p.turn, Vector3::UnitZ());
+  std::vector<Axis> x2 = joint_axes(second, bennett_pose(second, t + p.phase));
+  for (Axis& axis : x2) axis = {place * axis.point, place.linear() * axis.direction};
+  const std::vector<Axis> axes{x1[1], x1[2], x1[3], x2[3], x2[2], x2[1]};  // B C D G F E
+  return dh_from_axes(axes);
+}
+
+// ---------------------------------------------------------------------------
+// Sarrus 6R
+
+namespace {
+
+// The middle joint of a planar chain: where circles of radius r_from about
+// `from` and r_to about `to` meet, in the plane spanned by e1 and e2
+// (orthonormal), on the side `elbow` picks; nothing where they do not meet.
+std::optional<Vector3> elbow_point(const Vector3& from, const Vector3& to, double r_from, double r_to,
+                                   const Vector3& e1, const Vector3& e2, bool elbow) {
+  const Eigen::Vector2d p(from.dot(e1), from.dot(e2)), q(to.dot(e1), to.dot(e2));
+  const Eigen::Vector2d pq = q - p;
+  const double dist = pq.norm();
+  if (!(dist > 0.0)) return std::nullopt;
+  const double along = (dist * dist + r_from * r_from - r_to * r_to) / (2.0 * dist);
+  const double h2 = r_from * r_from - along * along;
+  if (h2 < 0.0) return std::nullopt;
+  const Eigen::Vector2d unit = pq / dist, normal(-unit.y(), unit.x());
+  const Eigen::Vector2d m = p + along * unit + (elbow ? 1.0 : -1.0) * std::sqrt(h2) * normal;
+  return Vector3(m.x() * e1 + m.y() * e2);
+}
+
+}  // namespace
+
+std::optional<PosedLoop> sarrus_6r(const Sarrus6R& p, double s) {
+  check_twist(p.gamma, "sarrus_6r: gamma");
+  for (double r : {p.r_base_u, p.r_top_u, p.r_base_v, p.r_top_v}) {
+    if (!(r > 0.0) || !std::isfinite(r)) bad("sarrus_6r: the chains' link lengths must be > 0", r);
+  }
+  for (const Vector3* point : {&p.base_u, &p.top_u, &p.base_v, &p.top_v}) {
+    if (!point->allFinite()) bad("sarrus_6r: a point is not finite", point->norm());
+  }
+  if (!std::isfinite(s)) bad("sarrus_6r: s", s);
+  const Vector3 w = Vector3::UnitX(), u = Vector3::UnitZ();
+  const Vector3 v(0.0, -std::sin(p.gamma), std::cos(p.gamma));
+  const Vector3 top_u = p.top_u + s * w, top_v = p.top_v + s * w;
+  // The u chain in the plane normal to u (spanned by w and u x w), the v
+  // chain in the plane normal to v (w and v x w).
+  const std::optional<Vector3> middle_u = elbow_point(p.base_u, top_u, p.r_base_u, p.r_top_u, w, u.cross(w), p.elbow_u);
+  const std::optional<Vector3> middle_v = elbow_point(p.base_v, top_v, p.r_base_v, p.r_top_v, w, v.cross(w), p.elbow_v);
+  if (!middle_u || !middle_v) return std::nullopt;
+  // The base's v axis first: link 1 (v -> u) is not between parallel axes,
+  // so the normals of the parallel links run from its foot (dh_from_axes).
+  const std::vector<Axis> axes{{p.base_v, v}, {p.base_u, u}, {*middle_u, u}, {top_u, u}, {top_v, v}, {*middle_v, v}};
+  return dh_from_axes(axes);
+}
+
 }  // namespace loopfarm

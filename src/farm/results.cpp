@@ -184,6 +184,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::goldberg_bent:
       case Family::bennett_pair:
       case Family::bennett_dyads:
+      case Family::sarrus:
       case Family::degenerate:
       case Family::unclassified:
         break;

@@ -174,6 +174,8 @@ std::string special_detail(Family family, const LoopGeometry& g) {
         return "plane symmetry through joints 1 and 4 of the best representation";
       case Family::bricard_trihedral:
         return "right-angle twists, no offsets, a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2";
+      case Family::sarrus:
+        return "two chains of three parallel axes (joints 2-4 and 5-1 of the best representation)";
       default:
         return "";
     }

@@ -36,6 +36,8 @@ const char* to_string(Family family) {
       return "bennett_pair";
     case Family::bennett_dyads:
       return "bennett_dyads";
+    case Family::sarrus:
+      return "sarrus";
   }
   return "unknown";
 }
@@ -60,6 +62,7 @@ int family_joints(Family family) {
     case Family::bricard_trihedral:
     case Family::bennett_pair:
     case Family::bennett_dyads:
+    case Family::sarrus:
       return 6;
     case Family::planar:
     case Family::spherical:
@@ -99,6 +102,10 @@ std::optional<int> family_dimension(Family family, int joints) {
       return 4;
     case Family::bennett_dyads:
       return 9;
+    case Family::sarrus:
+      // 18 parameters less five conditions; the first-order count
+      // (local_dimension) reads 14 on members (docs/guide/families.md).
+      return 13;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
     case Family::unclassified:

@@ -617,6 +617,38 @@ void bennett_dyads_conditions(const RepresentationView& w, Sink& c) {
         });
 }
 
+// Sarrus 6R: two chains of three parallel axes, joints 2, 3, 4 and 5, 6, 1
+// of the representation: sin(alpha2) = sin(alpha3) = 0, sin(alpha5) =
+// sin(alpha6) = 0, and cos(alpha1)^2 = cos(alpha4)^2. Each chain lets the link between the chains (links 1 and
+// 4) move in the plane normal to its axes, so it translates along the line
+// normal to both directions: every such loop that closes moves (planar when
+// the two directions are parallel, which planar is tried for first).
+template <class RepresentationView, class Sink>
+void sarrus_conditions(const RepresentationView& w, Sink& c) {
+  const int n = 6;
+  static constexpr const char* kSin[] = {"sin(alpha2)", "sin(alpha3)", "sin(alpha5)", "sin(alpha6)"};
+  static constexpr int kLinks[] = {1, 2, 4, 5};
+  for (int i = 0; i < 4; ++i) {
+    const int k = kLinks[i];
+    c.add([&] { return std::string(kSin[i]); }, [&] { return w.sin_alpha(k); },
+          [&] {
+            GeometryVector g = GeometryVector::Zero(3 * n);
+            g[n + k] = w.cos_alpha(k);
+            return g;
+          });
+  }
+  // The angle between the two directions seen from either link between the
+  // chains: without it the loop does not close.
+  c.add([] { return "cos(alpha1)^2 - cos(alpha4)^2"; },
+        [&] { return w.cos_alpha(0) * w.cos_alpha(0) - w.cos_alpha(3) * w.cos_alpha(3); },
+        [&] {
+          GeometryVector g = GeometryVector::Zero(3 * n);
+          g[n + 0] = -2.0 * w.cos_alpha(0) * w.sin_alpha(0);
+          g[n + 3] = 2.0 * w.cos_alpha(3) * w.sin_alpha(3);
+          return g;
+        });
+}
+
 // The 5R families built from two Bennett loops sharing a link: Goldberg's,
 // its symmetric case Myard's and its bent-link variant.
 constexpr bool goldberg_type(Family family) {
@@ -645,6 +677,7 @@ inline int condition_sets(Family family, int joints) {
     case Family::bennett_pair:
       return 4;
     case Family::bennett_dyads:
+    case Family::sarrus:
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
     case Family::bricard_trihedral:
@@ -661,7 +694,7 @@ inline int condition_sets(Family family, int joints) {
 // tabulates them only then).
 constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
-         family == Family::bricard_trihedral || family == Family::bennett_dyads;
+         family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus;
 }
 
 template <Family F, class RepresentationView, class Sink>
@@ -687,6 +720,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     bennett_pair_conditions(set, w, c);
   } else if constexpr (F == Family::bennett_dyads) {
     bennett_dyads_conditions(w, c);
+  } else if constexpr (F == Family::sarrus) {
+    sarrus_conditions(w, c);
   } else if (set == 0) {
     adjacent_coaxial_conditions(w, c);
   } else {

@@ -77,6 +77,8 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
       return best_over_representations<Family::bennett_pair>(g, by_norm);
     case Family::bennett_dyads:
       return best_over_representations<Family::bennett_dyads>(g, by_norm);
+    case Family::sarrus:
+      return best_over_representations<Family::sarrus>(g, by_norm);
     case Family::spherical:
     case Family::degenerate:
     case Family::unclassified:
@@ -109,7 +111,7 @@ std::vector<Family> special_families(int n) {
       return {Family::myard, Family::goldberg, Family::goldberg_bent};
     case 6:
       return {Family::bricard_trihedral, Family::bricard_plane_symmetric, Family::bricard_line_symmetric,
-              Family::bennett_pair, Family::bennett_dyads};
+              Family::bennett_pair,      Family::bennett_dyads,           Family::sarrus};
     default:
       return {};
   }

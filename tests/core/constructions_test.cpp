@@ -588,12 +588,90 @@ TEST(Constructions, ThreeBennett6RClosesAlongItsMotionOnEveryLinkAndFusion) {
   }
 }
 
+// One degree of freedom at a built pose: the closure Jacobian of the 6R has
+// rank 5.
+void expect_one_freedom(const PosedLoop& at, const std::string& tag) {
+  ClosureJacobians J;
+  closure_jacobians(at.geometry, at.theta, J);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
+  EXPECT_GT(svd.singularValues()[4], 1e-5 * svd.singularValues()[0]) << tag;
+  EXPECT_LT(svd.singularValues()[5], 1e-10 * svd.singularValues()[0]) << tag;
+}
+
+TEST(Constructions, WaldronHybridClosesAlongItsMotion) {
+  // Both loops' setups, several placements of the second loop on axis A.
+  const std::vector<WaldronHybrid6R> hybrids = {
+      {},
+      {1.0, 1.2, 0.7, 0.8, 2.1, -1.4, 0.0, 0.0, 0.0},
+      {0.7, -0.9, 2.4, 1.5, 0.5, 1.9, -2.2, -0.6, 1.3},
+  };
+  for (size_t i = 0; i < hybrids.size(); ++i) {
+    const WaldronHybrid6R& h = hybrids[i];
+    const std::string tag = "waldron " + std::to_string(i);
+    expect_closes_along([&](double t) { return waldron_hybrid_6r(h, t); }, kMotion, tag);
+    const PosedLoop at = waldron_hybrid_6r(h, 1.0);
+    ASSERT_EQ(at.geometry.joints(), 6);
+    expect_one_freedom(at, tag);
+    // Its two Bennett chains keep their links: B -> C and C -> D are loop
+    // 1's (b, beta) and (a, alpha), G -> F and F -> E loop 2's (c, gamma)
+    // and (e, epsilon) read backwards, with no offset at C and F.
+    EXPECT_NEAR(at.geometry.a[0], h.b, 1e-10) << tag;
+    EXPECT_NEAR(at.geometry.a[1], h.b * std::abs(std::sin(h.alpha) / std::sin(h.beta)), 1e-10) << tag;
+    EXPECT_NEAR(at.geometry.a[3], h.e * std::abs(std::sin(h.gamma) / std::sin(h.epsilon)), 1e-10) << tag;
+    EXPECT_NEAR(at.geometry.a[4], h.e, 1e-10) << tag;
+    EXPECT_NEAR(at.geometry.d[1], 0.0, 1e-10) << tag;
+    EXPECT_NEAR(at.geometry.d[4], 0.0, 1e-10) << tag;
+  }
+}
+
+TEST(Constructions, SarrusClosesAlongItsMotionAndItsTopOnlyTranslates) {
+  std::vector<Sarrus6R> linkages(3);
+  linkages[1].gamma = 2.3;
+  linkages[1].elbow_u = true;
+  linkages[2].gamma = 0.6;
+  linkages[2].elbow_v = false;
+  linkages[2].r_top_v = 1.4;
+  const std::vector<double> travel = {-0.3, -0.15, 0.0, 0.1, 0.25};
+  for (size_t i = 0; i < linkages.size(); ++i) {
+    const Sarrus6R& p = linkages[i];
+    const std::string tag = "sarrus " + std::to_string(i);
+    for (double s : travel) ASSERT_TRUE(sarrus_6r(p, s).has_value()) << tag << " s " << s;
+    expect_closes_along([&](double s) { return *sarrus_6r(p, s); }, travel, tag);
+    const PosedLoop at = *sarrus_6r(p, 0.1);
+    expect_one_freedom(at, tag);
+    // Two chains of parallel axes: twists 0 or pi within each chain, and
+    // gamma (up to the axes' orientation) where the chains meet.
+    for (int k : {1, 2, 4, 5}) EXPECT_NEAR(std::sin(at.geometry.alpha[k]), 0.0, 1e-12) << tag << " link " << k;
+    for (int k : {0, 3}) EXPECT_NEAR(std::abs(std::cos(at.geometry.alpha[k])), std::abs(std::cos(p.gamma)), 1e-12);
+    // The top only translates against the base: at every pose its axes
+    // (joints 4 and 5) point as the base's (joints 2 and 1) do.
+    for (double s : travel) {
+      const PosedLoop pose = *sarrus_6r(p, s);
+      const std::vector<Axis> axes = joint_axes(pose.geometry, pose.theta);
+      EXPECT_NEAR(axes[3].direction.dot(axes[1].direction), 1.0, 1e-10) << tag << " s " << s;
+      EXPECT_NEAR(axes[4].direction.dot(axes[0].direction), 1.0, 1e-10) << tag << " s " << s;
+    }
+  }
+  // Out of reach: the u chain cannot stretch that far.
+  EXPECT_FALSE(sarrus_6r(Sarrus6R{}, 5.0).has_value());
+}
+
 TEST(Constructions, FusedConstructionsRefuseBadParameters) {
   EXPECT_THROW(goldberg_5r({{-1.0, 1.0, 1.0, 2.0}, kPi}, 0.5), std::invalid_argument);
   EXPECT_THROW(goldberg_5r({{1.0, 0.0, 1.0, 2.0}, kPi}, 0.5), std::invalid_argument);
   EXPECT_THROW(bennett_pair_6r({1.0, 1.0, kPi, 2.0}, 0.5, 0.5), std::invalid_argument);
   EXPECT_THROW(three_bennett_6r({{{1.0, 1.0, 1.0, 2.0}, kPi}, 5, 1.0, 0.0}, 0.5), std::invalid_argument);
   EXPECT_THROW(three_bennett_6r({{{1.0, 1.0, 1.0, 2.0}, kPi}, 0, 0.0, 0.0}, 0.5), std::invalid_argument);
+  WaldronHybrid6R waldron;
+  waldron.epsilon = kPi;
+  EXPECT_THROW(waldron_hybrid_6r(waldron, 0.5), std::invalid_argument);
+  EXPECT_THROW(waldron_hybrid_6r(WaldronHybrid6R{}, NAN), std::invalid_argument);
+  Sarrus6R sarrus;
+  sarrus.gamma = 0.0;
+  EXPECT_THROW(sarrus_6r(sarrus, 0.0), std::invalid_argument);
+  sarrus = {};
+  sarrus.r_top_v = -1.0;
+  EXPECT_THROW(sarrus_6r(sarrus, 0.0), std::invalid_argument);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include <bit>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -586,6 +587,45 @@ TEST(MotionGroundTruth, ThreeBennettLoopsAreVerifiedWhateverTheta0) {
         }
         EXPECT_LT(nearest, MotionOptions{}.max_step) << tag << " t " << t;
       }
+    }
+  }
+}
+
+// Waldron's hybrid and the Sarrus linkage, built from their mechanisms:
+// verified from their built pose and from none, and the construction's
+// poses at other values of its parameter lie on the traced circuit.
+TEST(MotionGroundTruth, WaldronHybridAndSarrusLoopsAreVerified) {
+  WaldronHybrid6R waldron;
+  Sarrus6R sarrus;
+  sarrus.gamma = 2.3;
+  struct Case {
+    std::string name;
+    std::function<std::optional<PosedLoop>(double)> build;
+    std::vector<double> others;
+  };
+  const std::vector<Case> cases = {
+      {"waldron", [&](double t) { return std::optional<PosedLoop>(waldron_hybrid_6r(waldron, t)); }, {0.3, 1.4, -2.2}},
+      {"sarrus", [&](double s) { return sarrus_6r(sarrus, s); }, {-0.2, 0.05, 0.15}},
+  };
+  for (const Case& c : cases) {
+    const PosedLoop built = *c.build(0.1);
+    const VerificationSummary from_pose = verify_motion(built.geometry, built.theta);
+    ASSERT_TRUE(from_pose.verified) << c.name << ": " << from_pose.limit;
+    EXPECT_TRUE(from_pose.on_motion) << c.name;
+    EXPECT_LE(from_pose.worst_residual, 1e-12) << c.name;
+    EXPECT_TRUE(verify_motion(built.geometry, nullptr).verified) << c.name;
+    const Circuit& circuit = from_pose.motion.circuits[static_cast<size_t>(from_pose.circuit)];
+    EXPECT_EQ(circuit.freedoms, 1) << c.name;
+    for (double t : c.others) {
+      const std::optional<PosedLoop> q = c.build(t);
+      ASSERT_TRUE(q.has_value()) << c.name << " " << t;
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const JointVector& x : circuit.points) {
+        double gap = 0.0;
+        for (int j = 0; j < 6; ++j) gap = std::max(gap, angle_gap(q->theta[j], x[j]));
+        nearest = std::min(nearest, gap);
+      }
+      EXPECT_LT(nearest, MotionOptions{}.max_step) << c.name << " t " << t;
     }
   }
 }

@@ -54,6 +54,11 @@ TEST(Families, BricardTrihedralMovesAndIsClassified) {
   expect_6r_family(bricard_trihedral_geometry, Family::bricard_trihedral, {5, 6 + 1, 12 + 3}, 24);  // a6, alpha2, d4
 }
 
+TEST(Families, SarrusMovesAndIsClassified) {
+  // Near misses: a twist of either chain moved off parallel.
+  expect_6r_family(sarrus_geometry, Family::sarrus, {6 + 1, 6 + 2, 6 + 5}, 33);  // alpha2, alpha3, alpha6
+}
+
 // Two Bennett loops sharing a link (removed, nothing fused): built in space,
 // movable, every offset zero, classified bennett_pair in any representation with
 // residual at round-off; two degrees of freedom (the closure's Jacobian has
@@ -226,7 +231,7 @@ TEST(Families, Generic5RAnd6RAreUnclassifiedWithEveryResidualLarge) {
       const LoopGeometry g = random_loop(n, seed);
       const Classification c = classify(g, random_angles(n, seed), std::vector<double>(n, 1.0));
       EXPECT_EQ(c.family, Family::unclassified) << n << " " << seed;
-      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 10u);
+      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 11u);
       for (const FamilyCheck& check : c.checks) EXPECT_GT(check.residual, 1e-3) << to_string(check.family);
     }
   }
@@ -250,7 +255,8 @@ TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
                              {Family::bricard_plane_symmetric, bricard_plane_geometry(rng)},
                              {Family::bricard_trihedral, bricard_trihedral_geometry(rng)},
                              {Family::bennett_pair, bennett_pair_member(rng).geometry},
-                             {Family::bennett_dyads, bennett_dyads_geometry(rng)}};
+                             {Family::bennett_dyads, bennett_dyads_geometry(rng)},
+                             {Family::sarrus, sarrus_geometry(rng)}};
   for (const Case& c : cases) {
     const int n = c.member.joints();
     EXPECT_LT(family_distance(c.family, c.member), 1e-12) << to_string(c.family);

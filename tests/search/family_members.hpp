@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -202,6 +203,34 @@ inline LoopGeometry bennett_dyads_geometry(std::mt19937_64& rng) {
     if (*std::min_element(a.begin(), a.end()) < 0.2 || *std::max_element(a.begin(), a.end()) > 3.0) continue;
     const double e = uniform(rng, -0.3, 0.3), f = uniform(rng, -0.3, 0.3);
     return make_loop(a, {t1, t2, gamma, t4, t5, gamma}, {e, 0.0, e, f, 0.0, f});
+  }
+}
+
+// A Sarrus loop from its mechanism (constructions.hpp: two chains of parallel
+// axes between a base and a top), not from its conditions: random axis
+// directions, points and links, read off the axes at the top's travel 0.
+inline LoopGeometry sarrus_geometry(std::mt19937_64& rng) {
+  auto point = [&] { return Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)); };
+  for (;;) {
+    Sarrus6R p;
+    p.gamma = uniform(rng, 0.3, kPi - 0.3);
+    p.base_u = point();
+    p.top_u = point();
+    p.base_v = point();
+    p.top_v = point();
+    p.r_base_u = uniform(rng, 0.5, 1.5);
+    p.r_top_u = uniform(rng, 0.5, 1.5);
+    p.r_base_v = uniform(rng, 0.5, 1.5);
+    p.r_top_v = uniform(rng, 0.5, 1.5);
+    p.elbow_u = uniform(rng, 0, 1) < 0.5;
+    p.elbow_v = uniform(rng, 0, 1) < 0.5;
+    const std::optional<PosedLoop> built = sarrus_6r(p, 0.0);
+    if (!built) continue;
+    const LoopGeometry& g = built->geometry;
+    if (g.a.minCoeff() < 0.1 * length_scale(g)) continue;  // no nearly coincident axes
+    // The top must travel: both chains still reach a little either way.
+    if (!sarrus_6r(p, -0.05) || !sarrus_6r(p, 0.05)) continue;
+    return g;
   }
 }
 

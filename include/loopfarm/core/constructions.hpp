@@ -10,7 +10,9 @@
 //   and the perpendiculars from the point to the trihedron's faces;
 // - Bennett loops fused in space: the Goldberg 5R, two Bennett loops sharing
 //   a link (a 6R with two degrees of freedom) and a 6R of three Bennett loops,
-//   their DH parameters read off the joint axes (dh_from_axes).
+//   their DH parameters read off the joint axes (dh_from_axes);
+// - Waldron's hybrid 6R (two Bennett loops sharing a joint axis) and the
+//   Sarrus 6R (two chains of parallel axes), also read off their axes.
 //
 // Angles in radians; lengths in the geometry's unit. Bad arguments throw
 // std::invalid_argument naming the value.
@@ -222,5 +224,53 @@ struct ThreeBennett6R {
 };
 PosedLoop three_bennett_6r(const ThreeBennett6R& parameters, double t);
 JointVector three_bennett_6r_pose(const ThreeBennett6R& parameters, double t);
+
+// ---------------------------------------------------------------------------
+// Waldron's hybrid 6R
+//
+// Two Bennett loops A B C D = (a, alpha), (b, beta), (a, alpha), (b, beta)
+// and A E F G = (c, gamma), (e, epsilon), (c, gamma), (e, epsilon), each with
+// Bennett's ratio (a = b |sin alpha / sin beta|, c = e |sin gamma / sin
+// epsilon|; the two ratios independent), share the joint axis A: the second
+// loop is turned about A by `turn` and slid along it by `slide`. Link AB is
+// fused to AE and link DA to GA, and joint A is removed, so each loop's angle
+// at A is the angle between the same two fused bodies: the second loop's is
+// the first's plus `phase`. The 6R is B C D G F E (two Bennett chains joined
+// by the two fused bodies), one degree of freedom: t, the first loop's angle
+// at A (K. J. Waldron, "Hybrid overconstrained linkages", J. Mechanisms 3
+// (1968) 73-78).
+struct WaldronHybrid6R {
+  double b = 1.0, beta = 1.0, alpha = 2.0;      // loop 1: link BC (b, beta), link AB (a, alpha)
+  double e = 1.3, epsilon = -0.8, gamma = 0.6;  // loop 2: link EF (e, epsilon), link AE (c, gamma)
+  double turn = 0.7;                            // loop 2 turned about A [rad]
+  double slide = 0.3;                           // and slid along A
+  double phase = 0.4;                           // loop 2's angle at A minus loop 1's [rad]
+};
+PosedLoop waldron_hybrid_6r(const WaldronHybrid6R& parameters, double t);
+
+// ---------------------------------------------------------------------------
+// Sarrus 6R
+//
+// Two planar chains of three parallel axes between a base and a top: one
+// chain's axes along u, the other's along v, at an angle `gamma` to u. Each
+// chain lets the top move in the plane normal to its axes, so the top
+// translates along w = u x v / |u x v|, the only motion both allow: one
+// degree of freedom, s, the top's travel along w. Base frame: w = x, u = z,
+// v = (0, -sin gamma, cos gamma). The loop's joints, in order: 1 the base's
+// v axis (through base_v), 2 the base's u axis (base_u), 3 the u chain's
+// middle axis, 4 the top's u axis (top_u), 5 the top's v axis (top_v), 6 the
+// v chain's middle axis. A middle axis sits where two circles meet in the
+// plane normal to its chain's axes, of radius r_base about the chain's base
+// axis and r_top about its top axis, on the side `elbow` picks.
+struct Sarrus6R {
+  double gamma = 1.2;                                     // angle between the chains' axes, away from 0 and pi
+  Vector3 base_u{0.0, 0.0, 0.0}, top_u{0.3, 1.5, 0.4};    // points on the u axes at s = 0
+  Vector3 base_v{-0.2, -0.4, 0.6}, top_v{0.8, 1.0, 0.9};  // points on the v axes at s = 0
+  double r_base_u = 1.0, r_top_u = 1.1;                   // the u chain's links, > 0
+  double r_base_v = 1.2, r_top_v = 0.9;                   // the v chain's links, > 0
+  bool elbow_u = false, elbow_v = true;
+};
+// Nothing where a chain cannot reach (its circles do not meet) at s.
+std::optional<PosedLoop> sarrus_6r(const Sarrus6R& parameters, double s);
 
 }  // namespace loopfarm

@@ -26,6 +26,10 @@
 //              removed and nothing fused: moves with two degrees of freedom
 //   bennett_dyads (n = 6) two Bennett dyads with equal (cos alpha + cos
 //              beta) / kappa joined by two equal links (docs/guide/families.md)
+//   sarrus     (n = 6) two chains of three parallel axes: sin(alpha) = 0 for
+//              two pairs of consecutive links (2, 3 and 5, 6 of a
+//              representation) and cos^2(alpha1) = cos^2(alpha4); the link
+//              between the chains translates along one line
 //   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
 //              or pi) and the (n-1)R loop with them merged is in a movable
 //              family (not trivial); or a joint stays locked over the motion
@@ -69,6 +73,8 @@ enum class Family {
   bennett_pair,
   // 6R: two Bennett dyads joined by two equal links (found by the generic search)
   bennett_dyads,
+  // 6R: two chains of three parallel axes (Sarrus)
+  sarrus,
 };
 const char* to_string(Family family);
 
@@ -90,6 +96,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::goldberg_bent,
     Family::bennett_pair,
     Family::bennett_dyads,
+    Family::sarrus,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -138,8 +145,8 @@ struct Classification {
   std::string detail;     // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
-  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads (the order they
-  // are tried).
+  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads, sarrus (the
+  // order they are tried).
   std::vector<FamilyCheck> checks;
 };
 
