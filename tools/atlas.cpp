@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 
+#include "candidate_display.hpp"
 #include "cli_support.hpp"
 #include "loopfarm/core/assembly.hpp"
 #include "loopfarm/core/cycle.hpp"
@@ -26,11 +27,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegreesPerRadian = 180.0 / kPi;
 constexpr int kFrames = 8;  // frames in the motion strip
-
-// "1 hit", "2 hits".
-std::string count_of(long long count, const std::string& noun) {
-  return std::to_string(count) + " " + noun + (count == 1 ? "" : "s");
-}
 
 std::string g(double v, int digits = 4) { return format_significant(v, digits); }
 

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atlas.hpp"
+#include "candidate_display.hpp"
 #include "loopfarm/core/motion.hpp"
 #include "loopfarm/farm/candidate_pose.hpp"
 
@@ -26,8 +27,6 @@ constexpr int kMotionFrames = 120;
 constexpr int kCoordinateDecimals = 5;
 // A zero threshold no run states (a database without runs): the job file's default.
 constexpr double kDefaultZeroThreshold = 1e-12;
-// A stored value this small beside its scale is round-off of a zero and shows as 0.
-constexpr double kRoundOff = 1e-9;
 
 std::string html_escape(std::string_view text) {
   std::string out;
@@ -53,16 +52,6 @@ std::string html_escape(std::string_view text) {
 }
 
 std::string g(double v, int digits = 4) { return format_significant(v, digits); }
-
-// A value for people to read: round-off (|v| < threshold) as 0, never "-0".
-std::string shown(double v, double threshold, int digits = 6) {
-  if (std::isfinite(v) && std::abs(v) < threshold) v = 0.0;
-  return format_significant(v == 0.0 ? 0.0 : v, digits);
-}
-
-std::string count_of(long long count, const std::string& noun) {
-  return std::to_string(count) + " " + noun + (count == 1 ? "" : "s");
-}
 
 // 1e-20 as "1e-20", 2.5e-12 as "2.5e-12".
 std::string energy_text(double v) {
@@ -295,12 +284,11 @@ std::string energy_svg(const Representation& rep, double threshold, double lo_de
 
 std::string parameters_html(const CandidateRow& r) {
   const double length = kRoundOff;  // the canonical geometry has L = 1
-  const double angle = kRoundOff * kDegreesPerRadian;
   std::string out = "<table class=\"data params\"><tr><th>joint</th><th>a</th><th>alpha [deg]</th><th>d</th></tr>\n";
   for (size_t i = 0; i < r.a.size(); ++i) {
-    out += "<tr><td>" + std::to_string(i + 1) + "</td><td>" + shown(r.a[i], length) + "</td><td>" +
-           shown(i < r.alpha_deg.size() ? r.alpha_deg[i] : kNaN, angle) + "</td><td>" +
-           shown(i < r.d.size() ? r.d[i] : kNaN, length) + "</td></tr>\n";
+    out += "<tr><td>" + std::to_string(i + 1) + "</td><td>" + shown(r.a[i], length, 6) + "</td><td>" +
+           shown(i < r.alpha_deg.size() ? r.alpha_deg[i] : kNaN, kAngleRoundOffDeg, 6) + "</td><td>" +
+           shown(i < r.d.size() ? r.d[i] : kNaN, length, 6) + "</td></tr>\n";
   }
   return out + "</table>\n";
 }
