@@ -30,7 +30,13 @@ constexpr int kFrames = 8;  // frames in the motion strip
 
 std::string g(double v, int digits = 4) { return format_significant(v, digits); }
 
-std::string joined(const std::vector<double>& values, int digits) { return join_significant(values, digits, ", "); }
+// A geometry as a fenced Markdown block, 9 significant digits, round-off of a zero as 0.
+std::string parameter_block(const CandidateRow& r) {
+  const double length = kRoundOff * scale_of(r);
+  return "\n```\na     = " + shown_list(r.a, length, 9, ", ") +
+         "\nalpha = " + shown_list(r.alpha_deg, kAngleRoundOffDeg, 9, ", ") +
+         " deg\nd     = " + shown_list(r.d, length, 9, ", ") + "\n```\n";
+}
 
 struct Spread {
   double min = kNaN, median = kNaN, max = kNaN;
@@ -308,6 +314,31 @@ std::string representative_sentence(const CandidateRow& r) {
          (r.setup != "none" && !r.setup.empty() ? ", setup " + r.setup : "") + ".";
 }
 
+std::string chart_joints_sentence(const CandidateRow& r, const std::string& drawings) {
+  std::string out = drawings +
+                    " are drawn from the canonical form (as stored; the representation that gives the canonical key), "
+                    "its joint 1 the input (theta1)";
+  const ConventionalJoints map = conventional_joints(r);
+  if (map.joint.empty()) return out + ".";
+  bool numbered_alike = true, negated = false;
+  std::string from, to;
+  for (size_t i = 0; i < map.joint.size(); ++i) {
+    numbered_alike = numbered_alike && map.joint[i] == static_cast<int>(i);
+    negated = negated || map.negated[i];
+    from += (i ? ", " : "") + std::to_string(i + 1);
+    to += (i ? ", " : "") + std::to_string(map.joint[i] + 1);
+  }
+  // Numbered alike with no angle negated: the same representation.
+  if (numbered_alike && !negated) return out + "; here the canonical form is the conventional form.";
+  const std::string input = std::to_string(map.joint[0] + 1);
+  out += numbered_alike ? "; its joints are numbered as the conventional form's, and theta1 is the angle of joint 1"
+                        : ": its joints " + from + " are joints " + to +
+                              " of the conventional form, and theta1 is the angle of joint " + input;
+  return out + (map.negated[0]
+                    ? " there measured the other way (joint " + input + " of the conventional form is at -theta1)."
+                    : " there.");
+}
+
 int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
                 const std::map<std::int64_t, double>& zero_thresholds, const std::string& header,
                 const std::filesystem::path& dir) {
@@ -315,19 +346,23 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
   std::string md = "# Family atlas\n\n" + header + "\n";
   md +=
       "Per family: the candidates (distinct verified movable linkages) and the starts that found them (hits); "
-      "the spread of their canonical parameters (length scale L = 1, twists in degrees, the representation that gives "
-      "the canonical key); the local dimension found and the family's known dimension. Both count free real "
+      "the spread of their parameters in the conventional form (length scale L = 1, twists in degrees, positive "
+      "where the loop allows, as the report's table shows them; the canonical form, which gives the de-duplication "
+      "key, may have them negative); the local dimension found and the family's known dimension. Both count free real "
       "parameters **including the scale**: the known one in the full 3n-parameter space (docs/guide/families.md, "
       "docs/guide/classification.md), the found one (`candidates.local_dimension`) among the search's free "
       "parameters, so a sub-space search (ties, zero offsets, symmetry) can find less than the family has and a "
       "point on a larger family more. The representative is a full-turn candidate if there is one, with the "
-      "smallest rigid-closure residual; its cycle energy is recomputed from its canonical geometry (" +
+      "smallest rigid-closure residual; its cycle energy is recomputed from its stored canonical form with joint 1 "
+      "as the input (" +
       std::to_string(kAtlasCycleSamples) +
       " samples, log axis; energies below the zero threshold of the run that found it "
       "are round-off of a zero and are drawn on the threshold's dashed line) and its motion drawn at " +
       std::to_string(kFrames) +
-      " input angles of that cycle (oblique view; dashed: joint axes, black: links, dots: joints). "
-      "Unclassified candidates come first: a possible new family.\n\n";
+      " input angles of that cycle (oblique view; dashed: joint axes, black: links, dots: joints). The canonical "
+      "form may number the joints otherwise than the conventional one, reverse the loop or flip axes: each family "
+      "says which joint of the conventional form its charts drive. Unclassified candidates come first: a possible new "
+      "family.\n\n";
   md +=
       "| family | joints | candidates | hits | local dimension found (candidates) | free parameters | known dimension "
       "|\n";
@@ -367,15 +402,17 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
             " |\n";
     }
 
-    // Parameter spread.
+    // Parameter spread, in the form people read (round-off of a zero as 0).
+    std::vector<CandidateRow> shown_rows;
+    for (const CandidateRow* r : group.rows) shown_rows.push_back(conventional(*r));
     md +=
-        "\nParameters (canonical, L = 1, twists in degrees):\n\n| parameter | min | median | max "
+        "\nParameters (conventional form, L = 1, twists in degrees):\n\n| parameter | min | median | max "
         "|\n|---|---|---|---|\n";
     for (int kind = 0; kind < 3; ++kind) {
       for (int i = 0; i < group.joints; ++i) {
         std::vector<double> values;
-        for (const CandidateRow* r : group.rows) {
-          const std::vector<double>& v = kind == 0 ? r->a : kind == 1 ? r->alpha_deg : r->d;
+        for (const CandidateRow& r : shown_rows) {
+          const std::vector<double>& v = kind == 0 ? r.a : kind == 1 ? r.alpha_deg : r.d;
           if (i < static_cast<int>(v.size())) values.push_back(v[static_cast<size_t>(i)]);
         }
         const Spread s = spread(values);
@@ -383,7 +420,9 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
                                   : kind == 1 ? "alpha"
                                               : "d") +
                                  std::to_string(i + 1) + (kind == 1 ? " [deg]" : "");
-        md += "| " + name + " | " + g(s.min) + " | " + g(s.median) + " | " + g(s.max) + " |\n";
+        const double threshold = kind == 1 ? kAngleRoundOffDeg : kRoundOff;
+        md += "| " + name + " | " + shown(s.min, threshold, 4) + " | " + shown(s.median, threshold, 4) + " | " +
+              shown(s.max, threshold, 4) + " |\n";
       }
     }
 
@@ -419,8 +458,9 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
                                          " input angles"));
     md += "\n" + representative_sentence(r) + "\n";
     if (!r.detail.empty()) md += "Classification: " + r.detail + ".\n";
-    md += "\n```\na     = " + joined(r.a, 9) + "\nalpha = " + joined(r.alpha_deg, 9) +
-          " deg\nd     = " + joined(r.d, 9) + "\n```\n\n";
+    md += "\nThe representative's parameters (conventional form, L = 1, twists in degrees):\n" +
+          parameter_block(conventional(r)) + "\nIts canonical form (L = 1, twists in degrees):\n" + parameter_block(r) +
+          "\n" + chart_joints_sentence(r, "The cycle-energy chart and the motion drawing") + "\n\n";
     md += "Cycle energy recomputed here: E_mean " + g(rep.cycle.E_mean, 3) + ", E_max " + g(rep.cycle.E_max, 3) + ", " +
           std::to_string(rep.cycle.failed_samples) + " failed samples.\n\n";
     md += "![cycle energy of candidate " + std::to_string(r.id) + "](" + png.filename().string() + ")\n\n";

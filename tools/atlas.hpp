@@ -1,8 +1,9 @@
 // The family atlas of `loopfarm report --atlas DIR` (atlas.cpp): per family of
 // the candidates read from a results database, the count, the spread of the
-// canonical parameters, the local dimension found against the family's known
-// one, and one representative with its cycle-energy chart (PNG, gnuplot) and a
-// strip of frames of its motion (SVG, drawn from the forward kinematics).
+// parameters in their conventional form, the local dimension found against the
+// family's known one, and one representative with its cycle-energy chart (PNG,
+// gnuplot) and a strip of frames of its motion (SVG, drawn from the forward
+// kinematics of its stored canonical form).
 #pragma once
 
 #include <cstdint>
@@ -41,6 +42,12 @@ std::string atlas_stem(const std::string& family, int joints);
 // E_mean ..., full turn, setup asymmetric.": the sentence the Markdown atlas
 // and the HTML page (escaped) both print under a family's heading.
 std::string representative_sentence(const CandidateRow& row);
+
+// What the representative's drawings (`drawings`: "The cycle-energy chart and
+// the motion drawing") are drawn from, for both atlases: the stored canonical
+// form, its joint 1 the input (theta1), and which joint of the conventional
+// form (the parameters printed beside them) each of its joints is.
+std::string chart_joints_sentence(const CandidateRow& row, const std::string& drawings);
 
 int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
                 const std::map<std::int64_t, double>& zero_thresholds, const std::string& header,

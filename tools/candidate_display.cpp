@@ -22,9 +22,12 @@ std::string shown(double v, double threshold, int digits) {
   return format_significant(v == 0.0 ? 0.0 : v, digits);
 }
 
-std::string shown_list(const std::vector<double>& values, double threshold, int digits) {
+std::string shown_list(const std::vector<double>& values, double threshold, int digits, std::string_view separator) {
   std::string out;
-  for (double v : values) out += (out.empty() ? "" : ",") + shown(v, threshold, digits);
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (i) out += separator;
+    out += shown(values[i], threshold, digits);
+  }
   return out;
 }
 
@@ -59,6 +62,31 @@ CandidateRow conventional(const CandidateRow& r) {
   } catch (const std::invalid_argument&) {
   }
   return shown;
+}
+
+ConventionalJoints conventional_joints(const CandidateRow& r) {
+  ConventionalJoints out;
+  try {
+    const LoopGeometry stored = candidate_geometry(r);
+    const CanonicalForm form = conventional_form(stored);
+    // The angles map as theta'[k] = +-theta[m] (loop.hpp): a unit angle at
+    // stored joint i lands, signed, on the joint it becomes.
+    const int n = stored.joints();
+    for (int i = 0; i < n; ++i) {
+      JointVector probe = JointVector::Zero(n);
+      probe[i] = 1.0;
+      const JointVector mapped = canonical_angles(form, probe);
+      int k = 0;
+      for (int j = 1; j < n; ++j) {
+        if (std::abs(mapped[j]) > std::abs(mapped[k])) k = j;
+      }
+      out.joint.push_back(k);
+      out.negated.push_back(mapped[k] < 0.0);
+    }
+  } catch (const std::invalid_argument&) {
+    return {};
+  }
+  return out;
 }
 
 void print_columns(const std::vector<TextColumn>& columns, size_t width) {

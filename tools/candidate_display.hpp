@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "loopfarm/farm/results_database.hpp"
@@ -24,8 +25,9 @@ inline constexpr double kAngleRoundOffDeg = kRoundOff * (180.0 / 3.1415926535897
 // A value for people to read: `digits` significant digits, and 0 for
 // round-off (|v| < threshold), never "-0".
 std::string shown(double v, double threshold, int digits);
-// The values so shown, joined by commas: "1,0,2.5".
-std::string shown_list(const std::vector<double>& values, double threshold, int digits);
+// The values so shown, joined by `separator`: "1,0,2.5".
+std::string shown_list(const std::vector<double>& values, double threshold, int digits,
+                       std::string_view separator = ",");
 
 // 41100 as "41,100".
 std::string grouped(long long n);
@@ -46,6 +48,17 @@ int stored_joints(const CandidateRow& r);
 // in csv, json and the database. A row whose geometry is not a loop (damage)
 // is returned as stored.
 CandidateRow conventional(const CandidateRow& r);
+
+// Where each joint of the stored geometry lies in its conventional form:
+// stored joint i (from 0) is joint `joint[i]` there, its angle measured the
+// other way (negated) when `negated[i]`, since a reversal of the loop or a
+// flipped axis negates a joint angle (canonical.hpp canonical_angles). Empty
+// for a row whose geometry is not a loop.
+struct ConventionalJoints {
+  std::vector<int> joint;
+  std::vector<bool> negated;
+};
+ConventionalJoints conventional_joints(const CandidateRow& r);
 
 // A text table: columns padded to their widest cell, one space apart. The
 // last column is cut to fit `width` (0: never cut) and ends in "..." then.

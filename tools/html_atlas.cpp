@@ -282,8 +282,9 @@ std::string energy_svg(const Representation& rep, double threshold, double lo_de
   return svg;
 }
 
+// A geometry as a table, a row per joint, round-off of a zero as 0.
 std::string parameters_html(const CandidateRow& r) {
-  const double length = kRoundOff;  // the canonical geometry has L = 1
+  const double length = kRoundOff;  // both forms of a stored geometry have L = 1
   std::string out = "<table class=\"data params\"><tr><th>joint</th><th>a</th><th>alpha [deg]</th><th>d</th></tr>\n";
   for (size_t i = 0; i < r.a.size(); ++i) {
     out += "<tr><td>" + std::to_string(i + 1) + "</td><td>" + shown(r.a[i], length, 6) + "</td><td>" +
@@ -631,7 +632,11 @@ int write_html_atlas(const ResultsDatabase& db, const HtmlSelection& selection, 
       "the starts that found them. The local dimension (scale included) is found among the search's free "
       "parameters; the known one is the family's in the full 3n-parameter space. The representative is a "
       "full-turn candidate if there is one, with the smallest rigid-closure residual (as in <code>report "
-      "--atlas</code>). Unclassified candidates come first: a possible new family.</p>\n<table class=\"data\">"
+      "--atlas</code>). Its parameters are shown in the conventional form (L = 1, twists in degrees, positive where "
+      "the loop allows, as the report's table shows them), then in the canonical form, which gives the "
+      "de-duplication key and from which the 3D view and the cycle-energy chart are drawn, its joint 1 the input: "
+      "each family says which joint of the conventional form that is. Unclassified candidates come first: a "
+      "possible new family.</p>\n<table class=\"data\">"
       "<tr><th>family</th><th>joints</th><th>candidates</th><th>hits</th><th>local dimension found "
       "(candidates)</th><th>free parameters</th><th>known dimension</th><th>representative</th></tr>\n";
   for (const FamilyGroup& group : groups) {
@@ -679,8 +684,11 @@ int write_html_atlas(const ResultsDatabase& db, const HtmlSelection& selection, 
         "<div class=\"side\"><p class=\"note\">Cycle energy E / (k_a L&#178;) of the canonical geometry, recomputed (" +
         std::to_string(kAtlasCycleSamples) + " samples, log axis), E_mean " + g(rep.cycle.E_mean, 3) + ", E_max " +
         g(rep.cycle.E_max, 3) + ", " + std::to_string(rep.cycle.failed_samples) + " failed samples.</p>\n" +
-        energy_svg(rep, threshold, lo_deg, hi_deg) + "<p class=\"note\">Parameters (canonical, L = 1):</p>\n" +
-        parameters_html(r) + "</div>\n</div>\n";
+        energy_svg(rep, threshold, lo_deg, hi_deg) +
+        "<p class=\"note\">Parameters (conventional form, L = 1, twists in degrees):</p>\n" +
+        parameters_html(conventional(r)) + "<p class=\"note\">Canonical form (L = 1, twists in degrees):</p>\n" +
+        parameters_html(r) + "<p class=\"note\">" +
+        html_escape(chart_joints_sentence(r, "The 3D view and the cycle-energy chart")) + "</p>\n</div>\n</div>\n";
     body += "</section>\n";
   }
 

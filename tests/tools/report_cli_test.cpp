@@ -22,6 +22,7 @@
 
 #include "command_test_support.hpp"
 #include "loopfarm/farm/results_database.hpp"
+#include "loopfarm/search/canonical.hpp"
 
 namespace loopfarm {
 namespace {
@@ -567,6 +568,99 @@ TEST_F(ReportCli, ARowThatIsNoLoopIsShownNotCrashedOn) {
   const testing::CommandResult r = run_command(kExecutable, "report", {copy.string(), "--format", "json"});
   ASSERT_TRUE(json_valid(r.out));
   EXPECT_EQ(json_length(r.out), kCandidates);
+}
+
+// The cells of a Markdown table row ("| a | b |": "a", "b"), trimmed.
+std::vector<std::string> markdown_cells(const std::string& line) {
+  std::vector<std::string> cells = split(line, '|');
+  std::vector<std::string> out;
+  for (size_t i = 1; i + 1 < cells.size(); ++i) {
+    std::string cell = cells[i];
+    cell.erase(0, cell.find_first_not_of(' '));
+    cell.erase(cell.find_last_not_of(' ') + 1);
+    out.push_back(cell);
+  }
+  return out;
+}
+
+// People read the atlases: a Bennett loop stored in its canonical form (every
+// twist negative) shows its twists positive, in the conventional form as the
+// table does, in the parameter spread and the representative's parameters of
+// both the Markdown atlas and the HTML page; the canonical values stay shown
+// for the charts, which are drawn from them.
+TEST_F(ReportCli, TheAtlasesShowABennettLoopWithPositiveTwists) {
+  const fs::path path = dir_ / "bennett.sqlite";
+  std::vector<LoopGeometry> stored;
+  for (const double alpha : {30.0, 45.0}) {
+    // a1 / sin(alpha1) = a2 / sin(alpha2): a Bennett loop.
+    const double a1 = std::sin(alpha * kPi / 180.0);
+    stored.push_back(canonical_form(degrees({a1, 1, a1, 1}, {alpha, 90, alpha, 90}, {0, 0, 0, 0})).geometry);
+    for (int k = 0; k < 4; ++k) ASSERT_LT(stored.back().alpha[k], 0.0) << "the canonical twists are not negative";
+  }
+  {
+    ResultsDatabase db = ResultsDatabase::open(path.string(), DatabaseMode::write);
+    RunIdentity id;
+    id.job_path = "jobs/bennett-test.toml";
+    id.job_text = "[search]\nstarts = 2\n";
+    id.seed = 1;
+    id.starts = 2;
+    id.joints = 4;
+    id.zero_threshold = 1e-12;
+    id.report_threshold = 1e-6;
+    const std::int64_t run = db.open_run(id).run_id;
+    db.commit(run, {verified(0, stored[0], "bennett", 1e-25), verified(1, stored[1], "bennett", 1e-24)});
+  }
+
+  // The HTML page: the representative's first parameter table is the conventional form.
+  const fs::path page = dir_ / "atlas.html";
+  testing::CommandResult r = run_command(kExecutable, "report", {path.string(), "--html", page.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(page);
+  const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t table = html.find("<table class=\"data params");
+  ASSERT_NE(table, std::string::npos);
+  const std::string params = html.substr(table, html.find("</table>", table) - table);
+  EXPECT_NE(html.rfind("conventional form, L = 1, twists in degrees", table), std::string::npos);
+  int twists = 0;
+  for (size_t at = params.find("<tr><td>"); at != std::string::npos; at = params.find("<tr><td>", at + 1)) {
+    // <tr><td>joint</td><td>a</td><td>alpha</td><td>d</td></tr>: the third cell.
+    size_t cell = at;
+    for (int k = 0; k < 3; ++k) cell = params.find("<td>", cell) + 4;
+    EXPECT_GT(to_number(params.substr(cell, params.find("</td>", cell) - cell)), 0.0) << params;
+    ++twists;
+  }
+  EXPECT_EQ(twists, 4) << params;
+
+  // The Markdown atlas: every twist of the spread and of the representative positive.
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) GTEST_SKIP() << "no gnuplot for --atlas";
+  const fs::path atlas = dir_ / "atlas";
+  r = run_command(kExecutable, "report", {path.string(), "--atlas", atlas.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream md_in(atlas / "atlas.md");
+  const std::string md((std::istreambuf_iterator<char>(md_in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(md.find("Parameters (conventional form, L = 1, twists in degrees)"), std::string::npos) << md;
+  int spread = 0;
+  bool representative = false;
+  for (const std::string& line : lines_of(md)) {
+    if (line.rfind("| alpha", 0) == 0) {
+      const std::vector<std::string> cells = markdown_cells(line);
+      ASSERT_EQ(cells.size(), 4u) << line;
+      for (size_t i = 1; i < 4; ++i) EXPECT_GT(to_number(cells[i]), 0.0) << line;
+      ++spread;
+    }
+    // The representative's conventional parameters come first, then the canonical ones.
+    if (line.rfind("alpha = ", 0) == 0 && !representative) {
+      representative = true;
+      for (const std::string& value : split(line.substr(8, line.find(" deg") - 8), ',')) {
+        EXPECT_GT(to_number(value.substr(value.find_first_not_of(' '))), 0.0) << line;
+      }
+    }
+  }
+  EXPECT_EQ(spread, 4) << md;
+  EXPECT_TRUE(representative) << md;
+  // The canonical form, which the charts are drawn from, stays shown and says how its joints map.
+  EXPECT_NE(md.find("canonical form"), std::string::npos) << md;
+  EXPECT_NE(md.find("of the conventional form"), std::string::npos) << md;
 }
 
 }  // namespace
