@@ -52,6 +52,21 @@ std::vector<Field> candidate_fields(const CandidateRow& r, int joints) {
   Fields f;
   f.integer("candidate_id", r.id);
   f.text("family", r.family);
+  // Every family whose conditions hold, ';'-separated in CSV and Markdown as
+  // lists are; null when the row predates their recording (schema version 4).
+  if (r.families) {
+    std::vector<std::string> names;
+    for (size_t at = 0; at <= r.families->size();) {
+      const size_t comma = std::min(r.families->find(',', at), r.families->size());
+      if (comma > at) names.push_back(r.families->substr(at, comma - at));
+      at = comma + 1;
+    }
+    std::string joined;
+    for (const std::string& name : names) joined += (joined.empty() ? "" : ";") + name;
+    f.raw({"families", joined, nlohmann::ordered_json(names), joined.empty() ? "none" : joined});
+  } else {
+    f.raw({"families", "", nullptr, "not recorded"});
+  }
   f.text("setup", r.setup);
   f.text("detail", r.detail);
   f.number("E_mean", r.E_mean, 0.0, 3);

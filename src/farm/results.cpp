@@ -7,7 +7,7 @@
 //   "LFR1"  u64 record count  then per record:
 //   u64 index, str status, f64 E_mean, f64 E_max, f64 objective, i32 evaluations, f64 seconds,
 //   u8 zero, u8 verified, geometry final_geometry, vec final_angles,
-//   str family, str setup, str detail, f64 family/bennett/planar/spherical/trivial/rigid residuals,
+//   str family, str setup, str detail, str families, f64 family/bennett/planar/spherical/trivial/rigid residuals,
 //   u8 full_turn, f64 range_lo_deg, f64 range_hi_deg, i32 local_dimension, i32 free_parameters,
 //   u32 count + f64 singular values, str canonical_key, geometry canonical_geometry
 //
@@ -156,6 +156,7 @@ StartRecord make_start_record(const StartSummary& summary) {
   c.family = to_string(k.family);
   c.setup = to_string(k.setup);
   c.detail = k.detail;
+  for (Family f : k.fitting) c.families += (c.families.empty() ? "" : ",") + std::string(to_string(f));
   c.family_residual = k.residual;
   c.bennett_residual = c.planar_residual = c.spherical_residual = c.trivial_residual = kInfinity;
   // By family rather than by position, so a reordering of the checks cannot
@@ -225,6 +226,7 @@ void encode_records(const std::vector<StartRecord>& records, std::string& out) {
     w.text(c.family);
     w.text(c.setup);
     w.text(c.detail);
+    w.text(c.families);
     w.raw(c.family_residual);
     w.raw(c.bennett_residual);
     w.raw(c.planar_residual);
@@ -271,6 +273,7 @@ std::vector<StartRecord> decode_records(std::string_view bytes) {
     c.family = in.text("family");
     c.setup = in.text("setup");
     c.detail = in.text("detail");
+    c.families = in.text("families");
     c.family_residual = in.raw<double>("family_residual");
     c.bennett_residual = in.raw<double>("bennett_residual");
     c.planar_residual = in.raw<double>("planar_residual");

@@ -279,6 +279,7 @@ void ResultsDatabase::Impl::bind_candidate(Statement& s, std::int64_t run_id, co
   s.bind(p++, run_id);
   s.bind(p++, static_cast<std::int64_t>(r.index));
   s.bind(p++, grid_cell);
+  s.bind(p++, c.families);
 }
 
 // The candidate_id for a verified record: an existing candidate of the same

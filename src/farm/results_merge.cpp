@@ -417,8 +417,15 @@ MergeSummary ResultsDatabase::merge(const std::string& output, const std::vector
       in->cursor.prepare(in->path, in->connection,
                          "SELECT " + start_columns() + " FROM starts WHERE run_id = ?1 ORDER BY start_index");
       in->cursor.bind(1, in->run_id);
+      // An input older than schema version 4 has not recorded the families
+      // whose conditions hold: NULL, as in an upgraded database.
+      std::string input_list;
+      for (const std::string& name : candidate_names) {
+        input_list += (input_list.empty() ? "" : ", ") +
+                      (name == "families" && in->schema_version < 4 ? std::string("NULL") : name);
+      }
       in->candidate.prepare(in->path, in->connection,
-                            "SELECT " + candidate_list + " FROM candidates WHERE candidate_id = ?1");
+                            "SELECT " + input_list + " FROM candidates WHERE candidate_id = ?1");
     }
     Statement insert_candidate;
     {

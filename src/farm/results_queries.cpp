@@ -183,10 +183,13 @@ std::int64_t ResultsDatabase::candidate_count() const {
 
 namespace {
 
-// The columns a CandidateRow is read from, in read_candidate_row's order.
-std::string candidate_row_columns() {
+// The columns a CandidateRow is read from, in read_candidate_row's order;
+// `families` is NULL in a database of schema version 3 or older (the column
+// came with version 4, and a reader does not upgrade).
+std::string candidate_row_columns(int schema_version) {
   std::string sql =
-      "candidate_id, family, setup, detail, E_mean, E_max, hits, first_run, first_start, local_dimension, "
+      std::string("candidate_id, family, ") + (schema_version >= 4 ? "families" : "NULL") +
+      ", setup, detail, E_mean, E_max, hits, first_run, first_start, local_dimension, "
       "free_parameters, rigid_residual, family_residual, bennett_residual, planar_residual, spherical_residual, "
       "trivial_residual, full_turn, range_lo_deg, range_hi_deg, joints";
   for (const char* kind : {"a%d", "alpha%d_deg", "d%d"}) {
@@ -203,6 +206,8 @@ std::string candidate_row_columns() {
 int read_candidate_row(const Query& q, int c, CandidateRow& r) {
   r.id = q.integer(c++);
   r.family = q.text(c++);
+  if (!q.null(c)) r.families = q.text(c);
+  ++c;
   r.setup = q.text(c++);
   r.detail = q.text(c++);
   r.E_mean = q.real(c++);
@@ -266,7 +271,7 @@ std::vector<CandidateRow> ResultsDatabase::candidates(const CandidateFilter& fil
   const Impl& m = impl();
   // candidate_id last: equal energies come in one order, the same every time.
   Query q(m.path, m.db(),
-          "SELECT " + candidate_row_columns() + " FROM candidates" + candidate_filter_sql(filter) +
+          "SELECT " + candidate_row_columns(m.schema_version) + " FROM candidates" + candidate_filter_sql(filter) +
               " ORDER BY family <> 'unclassified', E_mean, candidate_id LIMIT ?4 OFFSET ?5");
   bind_candidate_filter(q, filter);
   q.bind(4, filter.limit < 0 ? std::int64_t{-1} : filter.limit);
@@ -283,7 +288,7 @@ std::vector<CandidateRow> ResultsDatabase::candidates(const CandidateFilter& fil
 std::optional<CandidateDetails> ResultsDatabase::candidate(std::int64_t candidate_id) const {
   const Impl& m = impl();
   Query q(m.path, m.db(),
-          "SELECT " + candidate_row_columns() +
+          "SELECT " + candidate_row_columns(m.schema_version) +
               ", canonical_key, singular_values, grid_cell FROM candidates WHERE candidate_id = ?1");
   q.bind(1, candidate_id);
   if (!q.step()) return std::nullopt;

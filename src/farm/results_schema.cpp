@@ -48,7 +48,7 @@ std::vector<std::string> candidate_columns() {
   for (const char* name :
        {"family_residual", "bennett_residual", "planar_residual", "spherical_residual", "trivial_residual",
         "rigid_residual", "full_turn", "range_lo_deg", "range_hi_deg", "local_dimension", "free_parameters",
-        "singular_values", "E_mean", "E_max", "first_run", "first_start", "grid_cell"}) {
+        "singular_values", "E_mean", "E_max", "first_run", "first_start", "grid_cell", "families"}) {
     out.push_back(name);
   }
   return out;
@@ -214,6 +214,12 @@ const char* const kUpgradeToVersion3 =
     "DROP INDEX candidates_by_key;\n"
     "DROP INDEX candidates_by_cell;\n";
 
+// Version 3 to 4: every family whose conditions hold is recorded with the
+// candidate (`families`, comma-separated, `family` first), since one geometry
+// can satisfy several families' conditions. Rows classified before have NULL
+// there: not recorded. Nothing else changes.
+const char* const kUpgradeToVersion4 = "ALTER TABLE candidates ADD COLUMN families TEXT;\n";
+
 }  // namespace
 
 std::string schema_upgrade_sql(int from_version) {
@@ -222,6 +228,8 @@ std::string schema_upgrade_sql(int from_version) {
       return kUpgradeToVersion2;
     case 2:
       return kUpgradeToVersion3;
+    case 3:
+      return kUpgradeToVersion4;
     default:
       throw std::logic_error("schema_upgrade_sql: no upgrade from version " + std::to_string(from_version));
   }

@@ -342,6 +342,17 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
                   nearest->residual);
     out.detail = buffer;
   }
+  if (out.family != Family::unclassified) out.fitting.push_back(out.family);
+  const auto add_fitting = [&](Family f, double residual) {
+    if (residual <= tol && std::find(out.fitting.begin(), out.fitting.end(), f) == out.fitting.end()) {
+      out.fitting.push_back(f);
+    }
+  };
+  add_fitting(Family::trivial, trivial.residual);
+  for (const FamilyCheck& c : out.checks) {
+    if (c.family != Family::bennett && c.family != Family::trivial) add_fitting(c.family, c.residual);
+  }
+  add_fitting(Family::bennett, bennett.residual);
   return out;
 }
 

@@ -64,6 +64,7 @@ StartRecord awkward_record(std::uint64_t index, int n) {
   c.setup = "line_symmetric";
   const char detail[] = "axes 1 and 3\0 coincide \xc3\xa9";
   c.detail = std::string(detail, sizeof detail - 1);
+  c.families = "bennett,planar";
   c.family_residual = 1e-300;
   c.bennett_residual = -kInf;
   c.planar_residual = std::numeric_limits<double>::quiet_NaN();
@@ -109,6 +110,7 @@ void expect_same_record(const StartRecord& x, const StartRecord& y) {
   EXPECT_EQ(a.family, b.family);
   EXPECT_EQ(a.setup, b.setup);
   EXPECT_EQ(a.detail, b.detail);
+  EXPECT_EQ(a.families, b.families);
   for (auto [p, q] : {std::pair{a.family_residual, b.family_residual},
                       {a.bennett_residual, b.bennett_residual},
                       {a.planar_residual, b.planar_residual},
@@ -239,6 +241,7 @@ StartSummary verified_summary() {
   k.setup = BennettSetup::asymmetric;
   k.residual = 1e-15;
   k.detail = "asymmetric setup";
+  k.fitting = {Family::bennett, Family::planar};
   k.checks = {{Family::bennett, BennettSetup::asymmetric, 1e-15, {}},
               {Family::planar, BennettSetup::none, 0.5, {}},
               {Family::spherical, BennettSetup::none, 0.75, {}},
@@ -269,6 +272,7 @@ TEST(MakeStartRecord, VerifiedZeroCarriesItsAnalysis) {
   EXPECT_EQ(c.family, "bennett");
   EXPECT_EQ(c.setup, "asymmetric");
   EXPECT_EQ(c.detail, "asymmetric setup");
+  EXPECT_EQ(c.families, "bennett,planar");
   EXPECT_EQ(c.family_residual, 1e-15);
   EXPECT_EQ(c.bennett_residual, 1e-15);
   EXPECT_EQ(c.planar_residual, 0.5);

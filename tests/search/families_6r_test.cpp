@@ -219,7 +219,11 @@ TEST(Families, PlanarAndSpherical5RAnd6RKeepTheirFamilies) {
   ASSERT_TRUE(closed_pose(planar, rng, theta));
   const VerificationSummary v = verify_from(planar, theta);
   EXPECT_TRUE(v.verified);
-  EXPECT_EQ(classified({planar, theta}, v).family, Family::planar);
+  const Classification c = classified({planar, theta}, v);
+  EXPECT_EQ(c.family, Family::planar);
+  // Every twist zero satisfies Sarrus's conditions too (its two directions
+  // parallel): both are recorded, the family chosen first.
+  EXPECT_EQ(c.fitting, (std::vector<Family>{Family::planar, Family::sarrus}));
   const LoopGeometry spherical =
       make_loop(std::vector<double>(5, 0.0), {0.9, 1.2, 0.7, 1.4, 1.1}, std::vector<double>(5, 0.0));
   EXPECT_EQ(classify(spherical, JointVector::Zero(5), std::vector<double>(5, 1.0)).family, Family::spherical);
@@ -231,6 +235,7 @@ TEST(Families, Generic5RAnd6RAreUnclassifiedWithEveryResidualLarge) {
       const LoopGeometry g = random_loop(n, seed);
       const Classification c = classify(g, random_angles(n, seed), std::vector<double>(n, 1.0));
       EXPECT_EQ(c.family, Family::unclassified) << n << " " << seed;
+      EXPECT_TRUE(c.fitting.empty()) << n << " " << seed;
       EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 11u);
       for (const FamilyCheck& check : c.checks) EXPECT_GT(check.residual, 1e-3) << to_string(check.family);
     }

@@ -286,6 +286,8 @@ inline void expect_movable_member(const Posed& member, Family family, std::mt199
   EXPECT_GT(v.range_hi - v.range_lo, 10.0 * kPi / 180.0) << tag;
   const Classification c = classified(w, v);
   EXPECT_EQ(c.family, family) << tag << ": " << to_string(c.family) << ", " << c.detail;
+  ASSERT_FALSE(c.fitting.empty()) << tag;
+  EXPECT_EQ(c.fitting.front(), family) << tag;
   EXPECT_LT(c.residual, 1e-10) << tag;
   // The family's own check says so too, whatever family won.
   for (const FamilyCheck& check : c.checks) {

@@ -259,7 +259,7 @@ report)
   [[ "$(wc -l <"$tmp/table.txt")" -eq $((n + 1)) ]] || fail "the table has not $n rows and a header"
   "$loopfarm" report "$tmp/r.sqlite" --format csv >"$tmp/c.csv"
   [[ "$(wc -l <"$tmp/c.csv")" -eq $((n + 1)) ]] || fail "the CSV has not $n rows and a header"
-  head -1 "$tmp/c.csv" | grep -q '^candidate_id,family,setup,' || fail "CSV header: $(head -1 "$tmp/c.csv")"
+  head -1 "$tmp/c.csv" | grep -q '^candidate_id,family,families,setup,' || fail "CSV header: $(head -1 "$tmp/c.csv")"
   # The order: unclassified candidates first, then by energy from zero
   # upwards, ties by id (docs/guide/database.md), as SQLite orders them.
   cut -d, -f1 "$tmp/c.csv" | sed 1d >"$tmp/order.txt"

@@ -25,6 +25,7 @@ struct CandidateRecord {
   std::string family;             // "bennett", "planar", "spherical", "trivial", "unclassified"
   std::string setup;              // Bennett: "asymmetric" / "line_symmetric"; otherwise "none"
   std::string detail;             // e.g. "axes 1 and 3 coincide; joints 2, 4 frozen"
+  std::string families;           // every family whose conditions hold, comma-separated, `family` first
   double family_residual = 0.0;   // of the family found (of the nearest family when unclassified)
   double bennett_residual = 0.0;  // every family's residual (classify.hpp's checks)
   double planar_residual = 0.0;

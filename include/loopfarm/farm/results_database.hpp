@@ -50,7 +50,7 @@ inline constexpr std::int32_t kDatabaseApplicationId = 0x4C4F4F50;
 // PRAGMA user_version: the schema version this build writes. It reads every
 // version from kOldestDatabaseSchemaVersion on, and upgrades an older file to
 // this one when it opens it for writing (results_schema.cpp says what changed).
-inline constexpr int kDatabaseSchemaVersion = 3;
+inline constexpr int kDatabaseSchemaVersion = 4;
 inline constexpr int kOldestDatabaseSchemaVersion = 1;
 // busy_timeout: how long a connection waits for another one's lock.
 inline constexpr int kDatabaseBusyTimeoutMs = 10000;
@@ -169,6 +169,9 @@ struct CandidateRow {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   long long id = 0;
   std::string family, setup, detail;
+  // Every family whose conditions hold, comma-separated, `family` first;
+  // none for a row written before schema version 4 (not recorded).
+  std::optional<std::string> families;
   double E_mean = kNaN, E_max = kNaN;
   long long hits = 0, first_run = 0, first_start = 0;
   int local_dimension = 0, free_parameters = 0;

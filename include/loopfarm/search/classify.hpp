@@ -143,6 +143,12 @@ struct Classification {
   BennettSetup setup = BennettSetup::none;
   double residual = 0.0;  // of the family found (of the nearest family when unclassified)
   std::string detail;     // e.g. "axes 1 and 3 coincide; joints 2 and 4 frozen"
+  // Every family whose conditions hold (its check's residual within the
+  // tolerance; trivial by the pose and the motion): `family` first when it is
+  // one of them, then the others in the order they are tried. One geometry
+  // can satisfy several families' conditions (a line-symmetric Sarrus loop);
+  // `family` is the one the order of precedence picks. Empty when none holds.
+  std::vector<Family> fitting;
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads, sarrus (the
