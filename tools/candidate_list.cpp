@@ -24,8 +24,12 @@ std::string geometry_text(const CandidateRow& stored, int digits) {
 
 std::string range_text(const CandidateRow& r, bool unit) {
   if (r.full_turn) return "full turn";
-  return "[" + shown(r.range_lo_deg, kAngleRoundOffDeg, 4) + ", " + shown(r.range_hi_deg, kAngleRoundOffDeg, 4) + "]" +
-         (unit ? " deg" : "");
+  std::string text = "[";
+  text += shown(r.range_lo_deg, kAngleRoundOffDeg, 4);
+  text += ", ";
+  text += shown(r.range_hi_deg, kAngleRoundOffDeg, 4);
+  text += unit ? "] deg" : "]";
+  return text;
 }
 
 }  // namespace
@@ -55,15 +59,19 @@ std::vector<Field> candidate_fields(const CandidateRow& r, int joints) {
   // Every family whose conditions hold, ';'-separated in CSV and Markdown as
   // lists are; null when the row predates their recording (schema version 4).
   if (r.families) {
-    std::vector<std::string> names;
-    for (size_t at = 0; at <= r.families->size();) {
-      const size_t comma = std::min(r.families->find(',', at), r.families->size());
-      if (comma > at) names.push_back(r.families->substr(at, comma - at));
-      at = comma + 1;
+    std::string joined = *r.families;
+    std::replace(joined.begin(), joined.end(), ',', ';');
+    nlohmann::ordered_json names = nlohmann::ordered_json::array();
+    std::string name;
+    for (char ch : *r.families + ",") {
+      if (ch != ',') {
+        name.push_back(ch);
+      } else if (!name.empty()) {
+        names.push_back(name);
+        name.clear();
+      }
     }
-    std::string joined;
-    for (const std::string& name : names) joined += (joined.empty() ? "" : ";") + name;
-    f.raw({"families", joined, nlohmann::ordered_json(names), joined.empty() ? "none" : joined});
+    f.raw({"families", joined, names, joined.empty() ? "none" : joined});
   } else {
     f.raw({"families", "", nullptr, "not recorded"});
   }

@@ -156,7 +156,10 @@ StartRecord make_start_record(const StartSummary& summary) {
   c.family = to_string(k.family);
   c.setup = to_string(k.setup);
   c.detail = k.detail;
-  for (Family f : k.fitting) c.families += (c.families.empty() ? "" : ",") + std::string(to_string(f));
+  for (Family f : k.fitting) {
+    if (!c.families.empty()) c.families += ',';
+    c.families += to_string(f);
+  }
   c.family_residual = k.residual;
   c.bennett_residual = c.planar_residual = c.spherical_residual = c.trivial_residual = kInfinity;
   // By family rather than by position, so a reordering of the checks cannot
