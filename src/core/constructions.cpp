@@ -521,12 +521,16 @@ JointVector bennett_pose(const LoopGeometry& g, double t) {
   return asymmetric ? bennett_angles(g, t) : bennett_angles_line_symmetric(g, t);
 }
 
+// The Bennett loop (a, alpha), (b, beta), (a, alpha), (b, beta) whose link a
+// has Bennett's ratio with the link (b, beta): a = b |sin alpha / sin beta|.
+LoopGeometry bennett_with_link(double b, double beta, double alpha) {
+  return bennett(b * std::abs(std::sin(alpha) / std::sin(beta)), alpha, b, beta);
+}
+
 // Loop 1 (ABCD) and loop 2 (AFED), both with frame 0 on axis A and x0 along
 // the shared link DA.
 std::pair<LoopGeometry, LoopGeometry> pair_loops(const BennettPairParameters& p) {
-  const double a = p.b * std::abs(std::sin(p.alpha) / std::sin(p.beta));
-  const double c = p.b * std::abs(std::sin(p.gamma) / std::sin(p.beta));
-  return {bennett(a, p.alpha, p.b, p.beta), bennett(c, p.gamma, p.b, p.beta)};
+  return {bennett_with_link(p.b, p.beta, p.alpha), bennett_with_link(p.b, p.beta, p.gamma)};
 }
 
 std::vector<Axis> goldberg_axes(const Goldberg5R& p, double t) {
@@ -613,8 +617,8 @@ PosedLoop waldron_hybrid_6r(const WaldronHybrid6R& p, double t) {
   }
   // Each loop with frame 0 on axis A (the z axis through the origin), link
   // 3 (DA, GA) the fixed body and link 0 (AB, AE) turned by the angle at A.
-  const LoopGeometry first = bennett(p.b * std::abs(std::sin(p.alpha) / std::sin(p.beta)), p.alpha, p.b, p.beta);
-  const LoopGeometry second = bennett(p.e * std::abs(std::sin(p.gamma) / std::sin(p.epsilon)), p.gamma, p.e, p.epsilon);
+  const LoopGeometry first = bennett_with_link(p.b, p.beta, p.alpha);
+  const LoopGeometry second = bennett_with_link(p.e, p.epsilon, p.gamma);
   const std::vector<Axis> x1 = joint_axes(first, bennett_pose(first, t));
   const Eigen::Isometry3d place = Eigen::Translation3d(0.0, 0.0, p.slide) * Eigen::AngleAxisd(p.turn, Vector3::UnitZ());
   std::vector<Axis> x2 = joint_axes(second, bennett_pose(second, t + p.phase));

@@ -516,6 +516,20 @@ const std::vector<BennettPairParameters> kPairs = {
 
 const std::vector<double> kMotion = {0.4, 0.9, 1.5, 2.2, 2.8};
 
+// The closure Jacobian at a built pose has rank `rank`: its singular value
+// `rank` - 1 above `least` of the largest, the next one round-off (n - rank
+// degrees of freedom).
+void expect_closure_rank(const PosedLoop& at, int rank, double least, const std::string& tag) {
+  ClosureJacobians J;
+  closure_jacobians(at.geometry, at.theta, J);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
+  EXPECT_GT(svd.singularValues()[rank - 1], least * svd.singularValues()[0]) << tag;
+  EXPECT_LT(svd.singularValues()[rank], 1e-10 * svd.singularValues()[0]) << tag;
+}
+
+// One degree of freedom of a 6R.
+void expect_one_freedom(const PosedLoop& at, const std::string& tag) { expect_closure_rank(at, 5, 1e-5, tag); }
+
 TEST(Constructions, Goldberg5RClosesAlongItsMotionInEveryFusion) {
   for (const BennettPairParameters& pair : kPairs) {
     for (double phi : {0.0, kPi, 1.1, -2.3}) {
@@ -525,12 +539,7 @@ TEST(Constructions, Goldberg5RClosesAlongItsMotionInEveryFusion) {
       const PosedLoop at = goldberg_5r(g, 1.0);
       ASSERT_EQ(at.geometry.joints(), 5);
       EXPECT_EQ(goldberg_5r_pose(g, 1.0), at.theta);
-      // One degree of freedom: the closure Jacobian has rank 4.
-      ClosureJacobians J;
-      closure_jacobians(at.geometry, at.theta, J);
-      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
-      EXPECT_GT(svd.singularValues()[3], 1e-4 * svd.singularValues()[0]) << tag;
-      EXPECT_LT(svd.singularValues()[4], 1e-10 * svd.singularValues()[0]) << tag;
+      expect_closure_rank(at, 4, 1e-4, tag);  // one degree of freedom
     }
   }
 }
@@ -542,11 +551,7 @@ TEST(Constructions, BennettPair6RClosesOverBothOfItsFreedoms) {
     expect_closes_along([&](double t) { return bennett_pair_6r(pair, 0.8, t); }, kMotion, tag + " t2");
     const PosedLoop at = bennett_pair_6r(pair, 1.1, -0.6);
     EXPECT_EQ(bennett_pair_6r_pose(pair, 1.1, -0.6), at.theta);
-    ClosureJacobians J;
-    closure_jacobians(at.geometry, at.theta, J);
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
-    EXPECT_GT(svd.singularValues()[3], 1e-4 * svd.singularValues()[0]) << tag;
-    EXPECT_LT(svd.singularValues()[4], 1e-10 * svd.singularValues()[0]) << tag;
+    expect_closure_rank(at, 4, 1e-4, tag);  // two degrees of freedom
   }
 }
 
@@ -577,25 +582,11 @@ TEST(Constructions, ThreeBennett6RClosesAlongItsMotionOnEveryLinkAndFusion) {
           EXPECT_NEAR(angle_distance(at.geometry.alpha[link], alpha_pq), 0.0, 1e-10) << tag;
           EXPECT_NEAR(at.geometry.a[link + 1], a_pq * std::abs(std::sin(gamma) / std::sin(alpha_pq)), 1e-10) << tag;
           EXPECT_NEAR(angle_distance(at.geometry.alpha[link + 1], gamma), 0.0, 1e-10) << tag;
-          ClosureJacobians J;
-          closure_jacobians(at.geometry, at.theta, J);
-          const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
-          EXPECT_GT(svd.singularValues()[4], 1e-5 * svd.singularValues()[0]) << tag;
-          EXPECT_LT(svd.singularValues()[5], 1e-10 * svd.singularValues()[0]) << tag;
+          expect_one_freedom(at, tag);
         }
       }
     }
   }
-}
-
-// One degree of freedom at a built pose: the closure Jacobian of the 6R has
-// rank 5.
-void expect_one_freedom(const PosedLoop& at, const std::string& tag) {
-  ClosureJacobians J;
-  closure_jacobians(at.geometry, at.theta, J);
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J.theta);
-  EXPECT_GT(svd.singularValues()[4], 1e-5 * svd.singularValues()[0]) << tag;
-  EXPECT_LT(svd.singularValues()[5], 1e-10 * svd.singularValues()[0]) << tag;
 }
 
 TEST(Constructions, WaldronHybridClosesAlongItsMotion) {

@@ -47,6 +47,9 @@ class MergeTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::string file(const std::string& name) const { return (dir_ / name).string(); }
+  // The database at `path` has exactly the schema of a new one (an upgrade
+  // leaves nothing of the version it came from).
+  void expect_schema_of_a_new_database(const std::string& path) const;
   // Every file in the test's directory.
   std::vector<std::string> listing() const {
     std::vector<std::string> names;
@@ -139,6 +142,13 @@ Rows starts_content(const std::string& path) {
       "SELECT start_index, status, E_mean, E_max, objective, evaluations, zero, verified, candidate_id, a1, a4, "
       "alpha2_deg, d3 FROM starts ORDER BY start_index");
 }
+void MergeTest::expect_schema_of_a_new_database(const std::string& path) const {
+  const std::string fresh = file("fresh.sqlite");
+  { ResultsDatabase db = ResultsDatabase::open(fresh, DatabaseMode::write); }
+  const std::string schema = "SELECT type, name, sql FROM sqlite_schema ORDER BY type, name";
+  EXPECT_EQ(rows(path, schema), rows(fresh, schema));
+}
+
 // Every column of every candidate; `families` (schema version 4) only where
 // the file has it, so that a database written before it compares with its
 // upgraded or merged copy, whose rows hold NULL there (checked apart).
@@ -358,11 +368,7 @@ TEST_F(MergeTest, AVersion1DatabaseIsReadAsItIsAndUpgradedByItsNextRun) {
   EXPECT_EQ(value(path, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
   EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
   EXPECT_EQ(rows(path, "SELECT slice_index, slice_count FROM runs"), (Rows{{"NULL", "NULL"}}));
-  // The upgraded schema is the very schema of a new database.
-  const std::string fresh = file("fresh.sqlite");
-  { ResultsDatabase db = ResultsDatabase::open(fresh, DatabaseMode::write); }
-  const std::string schema = "SELECT type, name, sql FROM sqlite_schema ORDER BY type, name";
-  EXPECT_EQ(rows(path, schema), rows(fresh, schema));
+  expect_schema_of_a_new_database(path);
   EXPECT_EQ(candidates_content(path), candidates);
 }
 
@@ -438,11 +444,7 @@ TEST_F(MergeTest, AVersion2DatabaseLosesTheDeduplicationIndexesAndStillFindsItsC
             (Rows{{"1", std::to_string(std::stoi(candidates[0].back()) + 1)},
                   {"2", std::to_string(std::stoi(candidates[1].back()) + 1)}}));
   EXPECT_EQ(value(path, "SELECT COUNT(*) FROM candidates"), std::to_string(candidates.size()));
-  // The upgraded schema is the very schema of a new database.
-  const std::string fresh = file("fresh.sqlite");
-  { ResultsDatabase db = ResultsDatabase::open(fresh, DatabaseMode::write); }
-  const std::string schema = "SELECT type, name, sql FROM sqlite_schema ORDER BY type, name";
-  EXPECT_EQ(rows(path, schema), rows(fresh, schema));
+  expect_schema_of_a_new_database(path);
 }
 
 // --- a database written before the families whose conditions hold were recorded: version 3 ----
@@ -493,11 +495,7 @@ TEST_F(MergeTest, AVersion3DatabaseGainsTheFamiliesColumnItsOldRowsLeaveUnrecord
       }
     }
   }
-  // The upgraded schema is the very schema of a new database.
-  const std::string fresh = file("fresh.sqlite");
-  { ResultsDatabase db = ResultsDatabase::open(fresh, DatabaseMode::write); }
-  const std::string schema = "SELECT type, name, sql FROM sqlite_schema ORDER BY type, name";
-  EXPECT_EQ(rows(path, schema), rows(fresh, schema));
+  expect_schema_of_a_new_database(path);
 
   // Merged with a database of this version, the old rows stay unrecorded.
   const std::string merged = file("merged-v3.sqlite");

@@ -150,20 +150,27 @@ constexpr int kFiller = 1200;      // bennett-like rows of run 1 beyond the real
 constexpr int kCandidates = 1206;  // 4 real loops, the filler, 2 of run 2
 constexpr int kBennett = 1203;     // the Bennett loop, the filler, run 2's
 
+// A 4R test job of `starts` starts, seed 1, zero threshold 1e-12, report
+// threshold 1e-6.
+RunIdentity test_job(const std::string& job_path, std::uint64_t starts) {
+  RunIdentity id;
+  id.job_path = job_path;
+  id.job_text = "[search]\nstarts = " + std::to_string(starts) + "\n";
+  id.seed = 1;
+  id.starts = starts;
+  id.joints = 4;
+  id.zero_threshold = 1e-12;
+  id.report_threshold = 1e-6;
+  return id;
+}
+
 // Candidate 1: a Bennett loop (canonical, its offset d1 stored as round-off);
 // 2: a planar crank-rocker whose joint 1 turns fully; 3: a generic loop that
 // does not move (unclassified); 4: a planar crank-rocker whose joint 1 rocks;
 // then bennett-like rows at three energies (ties), and two rows of run 2.
 void build_database(const std::string& path) {
   ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
-  RunIdentity id;
-  id.job_path = "jobs/report-test.toml";
-  id.job_text = "[search]\nstarts = 2000\n";
-  id.seed = 1;
-  id.starts = 2000;
-  id.joints = 4;
-  id.zero_threshold = 1e-12;
-  id.report_threshold = 1e-6;
+  RunIdentity id = test_job("jobs/report-test.toml", 2000);
   const std::int64_t run1 = db.open_run(id).run_id;
   const double s = std::sqrt(10.0);
   LoopGeometry bennett = degrees({2 / s, 4 / s, 2 / s, 4 / s}, {30, 90, 30, 90}, {0, 0, 0, 0});
@@ -599,15 +606,7 @@ TEST_F(ReportCli, TheAtlasesShowABennettLoopWithPositiveTwists) {
   }
   {
     ResultsDatabase db = ResultsDatabase::open(path.string(), DatabaseMode::write);
-    RunIdentity id;
-    id.job_path = "jobs/bennett-test.toml";
-    id.job_text = "[search]\nstarts = 2\n";
-    id.seed = 1;
-    id.starts = 2;
-    id.joints = 4;
-    id.zero_threshold = 1e-12;
-    id.report_threshold = 1e-6;
-    const std::int64_t run = db.open_run(id).run_id;
+    const std::int64_t run = db.open_run(test_job("jobs/bennett-test.toml", 2)).run_id;
     db.commit(run, {verified(0, stored[0], "bennett", 1e-25), verified(1, stored[1], "bennett", 1e-24)});
   }
 
