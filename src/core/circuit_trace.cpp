@@ -392,6 +392,12 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
       walk.end = CircuitEnd::closed;
       return walk;
     }
+    const size_t count = walk.arclength.size();
+    const auto window = static_cast<size_t>(o.stall_points);
+    if (window > 0 && count > window && s - walk.arclength[count - 1 - window] < o.max_step) {
+      walk.end = CircuitEnd::stalled;
+      return walk;
+    }
     if (c.iterations <= 3 && next_info.tangent.dot(info.tangent) >= 0.995) h = std::min(1.5 * h, o.max_step);
     x = next;
     info = next_info;
@@ -518,6 +524,7 @@ TracedCircuit trace(const LoopGeometry& g, JointVector x, const MotionOptions& o
   c.end = forward.end == CircuitEnd::closed ? CircuitEnd::closed
           : either(CircuitEnd::singular)    ? CircuitEnd::singular
           : either(CircuitEnd::too_long)    ? CircuitEnd::too_long
+          : either(CircuitEnd::stalled)     ? CircuitEnd::stalled
                                             : CircuitEnd::lost;
   append_events(backward.extremes, forward.extremes, back_length, c.extremes);
   append_events(backward.bifurcations, forward.bifurcations, back_length, c.bifurcations);

@@ -68,6 +68,8 @@ const char* to_string(CircuitEnd end) {
       return "lost";
     case CircuitEnd::too_long:
       return "too_long";
+    case CircuitEnd::stalled:
+      return "stalled";
     case CircuitEnd::singular:
       return "singular";
     case CircuitEnd::rigid:
@@ -83,6 +85,7 @@ void MotionOptions::validate() const {
   if (!(max_step > 0.0 && max_step <= 0.1)) fail("max_step must be in (0, 0.1] rad");
   if (max_halvings < 1 || max_halvings > 60) fail("max_halvings must be in [1, 60]");
   if (max_points < 16) fail("max_points must be >= 16");
+  if (stall_points < 0) fail("stall_points must be >= 0");
   if (!(rank_tolerance > 0.0 && rank_tolerance < 1e-2)) fail("rank_tolerance must be in (0, 1e-2)");
   if (!(stop_below_singular_ratio >= 0.0 && stop_below_singular_ratio < 1.0)) {
     fail("stop_below_singular_ratio must be in [0, 1)");

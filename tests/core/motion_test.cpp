@@ -738,6 +738,9 @@ TEST(Motion, BadInputThrows) {
   o = {};
   o.input_joint = 4;
   EXPECT_THROW(analyse_motion(g, nullptr, o), std::invalid_argument);
+  o = {};
+  o.stall_points = -1;
+  EXPECT_THROW(analyse_motion(g, nullptr, o), std::invalid_argument);
 }
 
 }  // namespace

@@ -231,11 +231,12 @@ TEST(AnalyseZero, AMovableLoopWhosePoseIsOffItsCircuitIsVerifiedFromEveryCircuit
 
 // A near miss of the generic 6R job (start 42: its cycle energy 2e-27, the
 // rigid loop closing to about the tolerance along a curve, not to round-off)
-// is not verified. Its walk creeps and ends too long, covering part of the
-// curve; the scan's seeds beyond its ends lie on the first trace that repeats
-// it, and are not traced again: one circuit is kept. Independently, the
-// circuit traced from an assembly at each of four inputs over the turn does
-// not move.
+// is not verified. Its walk creeps over a stretch of the curve: it ends
+// `stalled` after a few thousand points, where without the stall rule the
+// walk spends max_points there and ends too long, having covered less.
+// The scan's seeds beyond its ends lie on the first trace that repeats it,
+// and are not traced again: one circuit is kept. Independently, the circuit
+// traced from an assembly at each of four inputs over the turn does not move.
 TEST(AnalyseZero, ANearMissIsNotVerifiedAndItsCurveIsNotTracedAgainFromEverySeed) {
   const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/generic-6r.toml");
   const StartSummary s = run_start(job, 42);
@@ -243,7 +244,22 @@ TEST(AnalyseZero, ANearMissIsNotVerifiedAndItsCurveIsNotTracedAgainFromEverySeed
   const VerificationSummary& v = s.candidate.verification;
   EXPECT_FALSE(v.verified);
   ASSERT_EQ(v.motion.circuits.size(), 1u);
-  EXPECT_EQ(v.motion.circuits.front().end, CircuitEnd::too_long);
+  const Circuit& stalled = v.motion.circuits.front();
+  EXPECT_EQ(stalled.end, CircuitEnd::stalled);
+  const MotionOptions defaults;
+  EXPECT_LT(stalled.points.size(), static_cast<size_t>(defaults.max_points / 5));
+  EXPECT_GT(stalled.worst_residual, 1e-3 * defaults.residual_tolerance);  // not round-off: a near miss
+  const VerificationOptions creeping = StartOptions{}.verification;
+  MotionOptions never_stalls = creeping.motion();
+  never_stalls.stall_points = 0;
+  const MotionAnalysis without_rule = analyse_motion(s.final_geometry, &s.final_angles, never_stalls);
+  ASSERT_EQ(without_rule.circuits.size(), 1u);
+  const Circuit& crept = without_rule.circuits.front();
+  EXPECT_EQ(crept.end, CircuitEnd::too_long);
+  // The creeping walk spent every point on one stretch; the stalled one gave
+  // up there and walked the other way, covering more of the curve.
+  EXPECT_GT(stalled.length, crept.length);
+  EXPECT_FALSE(crept.moves(0, creeping.min_input_travel, creeping.residual_tolerance));
   const VerificationOptions options;
   const MotionOptions motion = options.motion();
   int traced = 0;

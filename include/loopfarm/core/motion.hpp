@@ -58,6 +58,13 @@ struct MotionOptions {
   int max_halvings = 30;
   // Points per circuit at most (a circuit longer than this ends, said so).
   int max_points = 50000;
+  // A walk whose last stall_points steps advanced, together, less than one
+  // max_step ends `stalled` (0: never). On a curve of closed poses the step
+  // regrows by half each easy step after a hard stretch, so a genuine walk
+  // advances many max_steps in this many points; a walk that creeps is
+  // following the thin tube where a near miss closes only to about the
+  // tolerance, and would spend max_points on a fraction of a degree.
+  int stall_points = 1000;
   // A walk that reaches a point whose singular ratio (Circuit::
   // least_singular_ratio) is below this ends there, `singular` (0: never):
   // for a coarse trace that is redone finely near singular poses anyway.
@@ -110,6 +117,7 @@ enum class CircuitEnd {
   closed,    // returned to its first point: a whole circuit
   lost,      // the closure could not be followed further (steps halved to nothing)
   too_long,  // MotionOptions::max_points reached
+  stalled,   // its last MotionOptions::stall_points steps advanced less than one max_step
   singular,  // a point nearer a singular pose than MotionOptions::stop_below_singular_ratio allows
   rigid,     // the pose closes but the closure Jacobian has full rank: an isolated pose
 };
