@@ -4,17 +4,19 @@
 //
 // Two paths share one set of condition formulas (the templates below):
 //
-// - the reporting path (classify, family_distance_report) writes out every
-//   representation of the loop as a LoopGeometry and keeps every condition of the
-//   best one with its name: what a report lists;
-// - the numeric path (family_distance, called on every evaluation of a
-//   steered search) looks each representation's parameters up in small tables filled
-//   once per call, keeps only the running sum of squares, gives a representation up
-//   as soon as it cannot beat the best so far, and writes out only the best
-//   representation, to differentiate it. It builds no string and allocates nothing.
+// - the numeric path (representation_search.hpp) looks each representation's
+//   parameters up in small tables filled once per call, keeps only a running
+//   score (the sum of squares for family_distance, called on every evaluation
+//   of a steered search; the max |value| for classification), gives a
+//   representation up as soon as it cannot beat the best so far, and builds no
+//   string and allocates nothing;
+// - the reporting path (classify, family_distance_report) writes out the
+//   representation the numeric path picked as a LoopGeometry and keeps every
+//   condition with its name: what a report lists; family_distance writes it
+//   out too, to differentiate it.
 //
 // Both evaluate the same formulas on the same numbers in the same order, so
-// they pick the same representation and return the same distance bit for bit.
+// the written-out representation scores what the search scored, bit for bit.
 #pragma once
 
 #include <algorithm>

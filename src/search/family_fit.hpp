@@ -1,15 +1,17 @@
 // The fit of a loop to the known families by its geometry alone, on the
-// reporting path (family_conditions.hpp): every representation written out,
-// every condition named. Shared by classification (classify.cpp, locked_joints.cpp)
+// reporting path (family_conditions.hpp): the best representation written
+// out, every condition named. Shared by classification (classify.cpp, locked_joints.cpp)
 // and family_distance_report (family_distance.cpp). Internal to the search.
 #pragma once
 
+#include <cassert>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "family_conditions.hpp"
 #include "representation.hpp"
+#include "representation_search.hpp"
 
 namespace loopfarm::detail {
 
@@ -23,25 +25,25 @@ struct Best {
   int set = 0;              // the best representation's condition set (condition_sets)
 };
 
+// The representation is picked by the numeric path's search
+// (representation_search.hpp), which evaluates the same formulas on the same
+// numbers in the same order as writing every representation out would, and
+// keeps the first of equal scores as that would: only the one picked is
+// written out, with its conditions named.
 template <Family F>
 Best best_over_representations(const LoopGeometry& g, bool by_norm) {
+  const RepresentationSearch search =
+      by_norm ? best_representation<F, SquaredNorm>(g) : best_representation<F, MaxAbs>(g);
   Best best;
-  const int sets = condition_sets(F, g.joints());
-  for (const detail::Representation& r : detail::representations(g.joints())) {
-    const WrittenOut w(detail::apply(r, g));
-    for (int set = 0; set < sets; ++set) {
-      Conditions c;
-      condition_set<F>(set, w, c);
-      const double score = by_norm ? c.norm() : c.max_abs();
-      if (score < best.score) {
-        best.score = score;
-        best.conditions = std::move(c);
-        best.representation = &r;
-        best.setup_sign = F == Family::bennett ? (set == 0 ? 1.0 : -1.0) : 0.0;
-        best.set = set;
-      }
-    }
-  }
+  if (search.representation < 0) return best;  // no finite score
+  const detail::Representation& r = detail::representations(g.joints())[static_cast<size_t>(search.representation)];
+  const WrittenOut w(detail::apply(r, g));
+  condition_set<F>(search.set, w, best.conditions);
+  best.score = by_norm ? best.conditions.norm() : best.conditions.max_abs();
+  assert(best.score == search.score);  // the search's numbers, bit for bit
+  best.representation = &r;
+  best.setup_sign = F == Family::bennett ? (search.set == 0 ? 1.0 : -1.0) : 0.0;
+  best.set = search.set;
   return best;
 }
 

@@ -5,11 +5,13 @@
 #include <iterator>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "allocation_counter.hpp"
+#include "family_fit.hpp"
 #include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
@@ -254,10 +256,10 @@ LoopGeometry comparison_geometry(int n, std::uint64_t seed) {
   return g;
 }
 
-// The numeric path (family_distance) picks the same representation as the reporting
-// path (family_distance_report, which writes every representation out and names its
-// conditions: the algorithm as it was) and returns the same distance and
-// gradient. Required to 1e-14 relative; by construction (the same formulas
+// The numeric path (family_distance) gives the distance and gradient of the
+// reporting path (family_distance_report, which names the conditions of the
+// representation it writes out; that it picks what writing every
+// representation out picks is FamilyFit's test). Required to 1e-14 relative; by construction (the same formulas
 // on the same numbers, in the same order) they agree bit for bit.
 TEST(FamilyDistance, NumericPathEqualsTheReportingPath) {
   const int geometries_per_n[] = {0, 0, 0, 0, 600, 120, 60, 30, 18};
@@ -288,6 +290,78 @@ TEST(FamilyDistance, NumericPathEqualsTheReportingPath) {
     }
   }
   EXPECT_EQ(identical, compared) << "the paths should agree bit for bit";
+}
+
+// The algorithm as it was, as the reference: every representation written
+// out, every condition set evaluated with its names, the first of the least
+// scores kept.
+template <Family F>
+detail::Best every_representation_written_out(const LoopGeometry& g, bool by_norm) {
+  detail::Best best;
+  const int sets = detail::condition_sets(F, g.joints());
+  for (const detail::Representation& r : detail::representations(g.joints())) {
+    const detail::WrittenOut w(detail::apply(r, g));
+    for (int set = 0; set < sets; ++set) {
+      detail::Conditions c;
+      detail::condition_set<F>(set, w, c);
+      const double score = by_norm ? c.norm() : c.max_abs();
+      if (score < best.score) {
+        best.score = score;
+        best.conditions = std::move(c);
+        best.representation = &r;
+        best.set = set;
+      }
+    }
+  }
+  return best;
+}
+
+template <Family F>
+void expect_same_pick(const LoopGeometry& g, const std::string& where, long& compared) {
+  for (bool by_norm : {false, true}) {
+    const detail::Best reference = every_representation_written_out<F>(g, by_norm);
+    const detail::Best best = detail::best_over_representations<F>(g, by_norm);
+    const std::string what = where + " " + to_string(F) + (by_norm ? " by norm" : " by max");
+    ASSERT_EQ(best.representation, reference.representation) << what;
+    EXPECT_EQ(best.set, reference.set) << what;
+    EXPECT_EQ(best.score, reference.score) << what;
+    EXPECT_EQ(best.conditions.names, reference.conditions.names) << what;
+    EXPECT_EQ(best.conditions.values, reference.conditions.values) << what;
+    ++compared;
+  }
+}
+
+// Classification picks the best representation by the numeric path's search
+// (tables, a running score, representations given up early) and writes out
+// only that one: it picks what writing every representation out picks, first
+// of equals included (the geometries hold exact special values, so ties are
+// common), with the same conditions bit for bit.
+TEST(FamilyFit, PicksTheRepresentationThatWritingEveryOneOutPicks) {
+  const int geometries_per_n[] = {0, 0, 0, 0, 300, 60, 24};
+  long compared = 0;
+  for (int n = kMinJoints; n <= 6; ++n) {
+    for (std::uint64_t seed = 0; seed < static_cast<std::uint64_t>(geometries_per_n[n]); ++seed) {
+      const LoopGeometry g = comparison_geometry(n, 7000 + 1000 * static_cast<std::uint64_t>(n) + seed);
+      const std::string where = "n=" + std::to_string(n) + " seed=" + std::to_string(seed);
+      expect_same_pick<Family::planar>(g, where, compared);
+      expect_same_pick<Family::trivial>(g, where, compared);
+      if (n == 4) expect_same_pick<Family::bennett>(g, where, compared);
+      if (n == 5) {
+        expect_same_pick<Family::goldberg>(g, where, compared);
+        expect_same_pick<Family::myard>(g, where, compared);
+        expect_same_pick<Family::goldberg_bent>(g, where, compared);
+      }
+      if (n == 6) {
+        expect_same_pick<Family::bricard_line_symmetric>(g, where, compared);
+        expect_same_pick<Family::bricard_plane_symmetric>(g, where, compared);
+        expect_same_pick<Family::bricard_trihedral>(g, where, compared);
+        expect_same_pick<Family::bennett_pair>(g, where, compared);
+        expect_same_pick<Family::bennett_dyads>(g, where, compared);
+        expect_same_pick<Family::sarrus>(g, where, compared);
+      }
+    }
+  }
+  EXPECT_EQ(compared, 2 * (300 * 3 + 60 * 5 + 24 * 8));
 }
 
 // The reporting path names the best representation's conditions.
