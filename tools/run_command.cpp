@@ -65,11 +65,11 @@ struct RunArguments {
   std::string seed;
   std::string db;
   std::string slice;
-  // 16 starts per request: a worker waits for its next chunk up to one
-  // 2 ms polling period of rank 0, which at 4 starts of the default job
-  // (about 6 ms each) cost 5 % of its time (parallel efficiency 0.947 from
-  // 1 to 2 ranks; 0.983 at 16).
-  std::string chunk = "16";
+  // 64 starts per request: a worker waits for its next chunk up to one 2 ms
+  // polling period of rank 0 (longer where rank 0's threads wait for a
+  // core); the default job on 2 ranks took 89.4 s of wall time with chunks
+  // of 16, 71.3 s with 64 and 72.8 s with 256 (docs/performance.md).
+  std::string chunk = "64";
   std::string progress = "auto";
   bool new_run = false;
   bool quiet = false;

@@ -214,7 +214,7 @@ ResumePlan plan_run(ResultsDatabase& db, const Job& job, bool new_run, int ranks
 CoordinatorSummary coordinate(ResultsDatabase& db, const ResumePlan& plan, CoordinatorTransport& transport,
                               const StartRunner& run, int chunk, StopFlag& stop, Progress& progress) {
   using Clock = std::chrono::steady_clock;
-  Dispenser dispenser(plan.pending, chunk, stop);
+  Dispenser dispenser(plan.pending, chunk, transport.remote_workers() + 1, stop);
   OrderedCommits commits(plan.pending);
   ProgressCounts counts;
   counts.total = plan.starts;

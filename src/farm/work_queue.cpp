@@ -2,6 +2,7 @@
 #include "loopfarm/farm/work_queue.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace loopfarm {
 
@@ -26,14 +27,22 @@ std::uint64_t PendingCursor::count() const {
   return n;
 }
 
+Dispenser::Dispenser(PendingCursor pending, int chunk, int workers, const StopFlag& stop)
+    : cursor_(std::move(pending)), left_(cursor_.count()), chunk_(chunk), workers_(workers), stop_(stop) {
+  if (chunk_ < 1 || workers_ < 1) throw std::invalid_argument("Dispenser: chunk and workers must be >= 1");
+}
+
 std::vector<std::uint64_t> Dispenser::take() {
   std::lock_guard lock(mutex_);
   std::vector<std::uint64_t> out;
   if (stop_.requested()) return out;
-  while (static_cast<int>(out.size()) < chunk_ && !cursor_.done()) {
+  const std::uint64_t guided = std::max<std::uint64_t>(1, left_ / (2 * static_cast<std::uint64_t>(workers_)));
+  const std::uint64_t size = std::min(static_cast<std::uint64_t>(chunk_), guided);
+  while (out.size() < size && !cursor_.done()) {
     out.push_back(cursor_.peek());
     cursor_.advance();
   }
+  left_ -= out.size();
   return out;
 }
 

@@ -376,15 +376,40 @@ TEST(WorkQueue, OrderedCommitsHoldBackWhatArrivesEarly) {
 
 TEST(WorkQueue, ADispenserHandsOutChunksInOrderAndNothingAfterAStop) {
   StopFlag stop;
-  Dispenser dispenser(PendingCursor({{1, 2}}, 7), 3, stop);
-  EXPECT_EQ(dispenser.take(), (std::vector<std::uint64_t>{0, 2, 3}));
-  EXPECT_EQ(dispenser.take(), (std::vector<std::uint64_t>{4, 5, 6}));
+  Dispenser dispenser(PendingCursor({{1, 2}}, 7), 3, 1, stop);
+  EXPECT_EQ(dispenser.take(), (std::vector<std::uint64_t>{0, 2, 3}));  // 6 left: at most 3
+  EXPECT_EQ(dispenser.take(), (std::vector<std::uint64_t>{4}));        // 3 left: 1
+  EXPECT_EQ(dispenser.take(), (std::vector<std::uint64_t>{5}));
+  EXPECT_EQ(dispenser.take(), (std::vector<std::uint64_t>{6}));
   EXPECT_TRUE(dispenser.take().empty());
-  Dispenser stopped(PendingCursor({}, 7), 3, stop);
+  Dispenser stopped(PendingCursor({}, 7), 3, 1, stop);
   stop.request(SIGINT);
   EXPECT_TRUE(stopped.take().empty());
   stop.request(SIGTERM);
   EXPECT_EQ(stop.signal(), SIGINT);  // the first request is remembered
+}
+
+// Chunks of at most `chunk`, and of at most 1 / (2 workers) of what is left:
+// every index once, in order, large chunks first, single indices at the end.
+TEST(WorkQueue, ADispenserShrinksItsChunksAsTheRunEnds) {
+  StopFlag stop;
+  Dispenser dispenser(PendingCursor({}, 1000), 64, 2, stop);
+  std::vector<size_t> sizes;
+  std::uint64_t next = 0;
+  for (std::vector<std::uint64_t> chunk = dispenser.take(); !chunk.empty(); chunk = dispenser.take()) {
+    for (std::uint64_t index : chunk) EXPECT_EQ(index, next++);
+    sizes.push_back(chunk.size());
+  }
+  EXPECT_EQ(next, 1000u);
+  ASSERT_GE(sizes.size(), 4u);
+  EXPECT_EQ(sizes.front(), 64u);                              // 1000 / 4 = 250 left per share: the cap
+  EXPECT_TRUE(std::is_sorted(sizes.rbegin(), sizes.rend()));  // never growing
+  EXPECT_EQ(sizes.back(), 1u);
+  // A run smaller than the workers' chunks is shared: 24 starts, 2 workers.
+  Dispenser small(PendingCursor({}, 24), 64, 2, stop);
+  EXPECT_EQ(small.take().size(), 6u);
+  EXPECT_EQ(small.take().size(), 4u);
+  EXPECT_THROW(Dispenser(PendingCursor({}, 24), 0, 2, stop), std::invalid_argument);
 }
 
 }  // namespace

@@ -48,7 +48,7 @@ class MpiSession {
 };
 
 struct FarmOptions {
-  int chunk = 16;  // start indices per request
+  int chunk = 64;  // start indices per request
   ProgressStyle progress = ProgressStyle::log;
   bool new_run = false;             // add a new run to a database that holds another job
   std::optional<StartSlice> slice;  // run only this slice of the job's starts (a run of its own)

@@ -41,17 +41,22 @@ class PendingCursor {
 };
 
 // Hands out the pending start indices in chunks, in increasing order; nothing
-// once a stop is requested. Thread-safe.
+// once a stop is requested. Thread-safe. A chunk holds at most `chunk`
+// indices, and at most 1 / (2 workers) of those left (at least one), as
+// guided scheduling does: large chunks while much is left, for few requests,
+// and small ones at the end, so that `workers` workers share the last starts
+// (and share a run smaller than workers * chunk at all).
 class Dispenser {
  public:
-  Dispenser(PendingCursor pending, int chunk, const StopFlag& stop)
-      : cursor_(std::move(pending)), chunk_(chunk), stop_(stop) {}
+  Dispenser(PendingCursor pending, int chunk, int workers, const StopFlag& stop);
   std::vector<std::uint64_t> take();
 
  private:
   std::mutex mutex_;
   PendingCursor cursor_;
+  std::uint64_t left_;
   int chunk_;
+  int workers_;
   const StopFlag& stop_;
 };
 
