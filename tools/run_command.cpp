@@ -65,10 +65,11 @@ struct RunArguments {
   std::string seed;
   std::string db;
   std::string slice;
-  // 64 starts per request: a worker waits for its next chunk up to one 2 ms
-  // polling period of rank 0 (longer where rank 0's threads wait for a
-  // core); the default job on 2 ranks took 89.4 s of wall time with chunks
-  // of 16, 71.3 s with 64 and 72.8 s with 256 (docs/performance.md).
+  // At most 64 starts per request: a worker waits for its next chunk up to
+  // one 2 ms polling period of rank 0 (longer where rank 0's threads wait
+  // for a core); on 2 ranks the default job's wall time was 0.754 of its
+  // core-seconds of local minimisation with chunks of 16, 0.725 with 64 or
+  // 256 (docs/performance.md).
   std::string chunk = "64";
   std::string progress = "auto";
   bool new_run = false;
