@@ -33,6 +33,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <thread>
@@ -41,6 +42,7 @@
 #include "loopfarm/farm/coordinator.hpp"
 #include "loopfarm/farm/results.hpp"
 #include "loopfarm/farm/results_database.hpp"
+#include "loopfarm/farm/work_queue.hpp"
 #include "loopfarm/search/job.hpp"
 
 namespace loopfarm {
@@ -55,7 +57,7 @@ constexpr double kRepeatFraction = 5.0 / 2439.0;   // verified starts that hit a
 constexpr std::uint64_t kRepeatedLinkages = 64;    // the linkages those repeats fall on
 constexpr double kZeroStopvalFraction = 2367.0 / 2439.0;
 constexpr double kNonzeroFtolFraction = 3318.0 / 3561.0;
-constexpr int kChunk = 16;  // loopfarm run's default --chunk
+constexpr int kChunk = 64;  // loopfarm run's default --chunk
 
 // splitmix64: a record depends on its index alone.
 std::uint64_t mix(std::uint64_t x) {
@@ -169,13 +171,26 @@ double process_cpu_seconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
+// The chunks a run of `starts` hands out to `workers` workers, the local one
+// included: the dispenser's sizes depend on what is left alone, not on who
+// takes them, so they are known before the run.
+std::vector<std::vector<std::uint64_t>> chunks_of_a_run(std::uint64_t starts, int workers) {
+  StopFlag never;
+  Dispenser dispenser(PendingCursor({}, starts), kChunk, workers, never);
+  std::vector<std::vector<std::uint64_t>> chunks;
+  for (std::vector<std::uint64_t> c = dispenser.take(); !c.empty(); c = dispenser.take()) chunks.push_back(c);
+  return chunks;
+}
+
 // Workers that each hold one chunk and return its records, already encoded,
 // with their next request; round robin, every request at once (a cluster
-// whose workers are all waiting on rank 0).
+// whose workers are all waiting on rank 0). `first_chunk` maps a chunk's
+// first start index to its number in `encoded_chunks`.
 class SyntheticWorkers : public CoordinatorTransport {
  public:
-  SyntheticWorkers(int workers, const std::vector<std::string>& encoded_chunks)
-      : chunks_(encoded_chunks), held_(static_cast<size_t>(workers), kIdle) {}
+  SyntheticWorkers(int workers, const std::vector<std::string>& encoded_chunks,
+                   const std::map<std::uint64_t, long>& first_chunk)
+      : chunks_(encoded_chunks), first_chunk_(first_chunk), held_(static_cast<size_t>(workers), kIdle) {}
   int remote_workers() const override { return static_cast<int>(held_.size()); }
   std::optional<WorkRequest> poll() override {
     for (size_t tried = 0; tried < held_.size(); ++tried) {
@@ -195,14 +210,16 @@ class SyntheticWorkers : public CoordinatorTransport {
       held = kStopped;
       return;
     }
-    if (chunk.front() % kChunk != 0) throw std::logic_error("SyntheticWorkers: a chunk not on the chunk grid");
-    held = static_cast<long>(chunk.front() / kChunk);
+    const auto it = first_chunk_.find(chunk.front());
+    if (it == first_chunk_.end()) throw std::logic_error("SyntheticWorkers: a chunk the run does not hand out");
+    held = it->second;
   }
 
  private:
   static constexpr long kIdle = -1;
   static constexpr long kStopped = -2;
   const std::vector<std::string>& chunks_;
+  const std::map<std::uint64_t, long>& first_chunk_;
   std::vector<long> held_;  // the chunk number a worker holds, or kIdle / kStopped
   size_t next_ = 0;
 };
@@ -212,9 +229,11 @@ void BM_Ingest(benchmark::State& state) {
   const auto starts = static_cast<std::uint64_t>(state.range(0));
   const int workers = static_cast<int>(state.range(1));
   std::vector<std::string> encoded_chunks;
-  for (std::uint64_t first = 0; first < starts; first += kChunk) {
+  std::map<std::uint64_t, long> first_chunk;
+  for (const std::vector<std::uint64_t>& chunk : chunks_of_a_run(starts, workers + 1)) {
     std::vector<StartRecord> records;
-    for (std::uint64_t i = first; i < std::min(starts, first + kChunk); ++i) records.push_back(synthetic_record(i));
+    for (std::uint64_t i : chunk) records.push_back(synthetic_record(i));
+    first_chunk[chunk.front()] = static_cast<long>(encoded_chunks.size());
     encode_records(records, encoded_chunks.emplace_back());
   }
   Job job;
@@ -240,7 +259,7 @@ void BM_Ingest(benchmark::State& state) {
     {
       ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
       const ResumePlan plan = plan_run(db, job, false, workers + 1);
-      SyntheticWorkers transport(workers, encoded_chunks);
+      SyntheticWorkers transport(workers, encoded_chunks, first_chunk);
       StopFlag stop;
       Progress progress(ProgressStyle::none);
       const StartRunner local = [](std::uint64_t index) {
