@@ -259,8 +259,9 @@ LoopGeometry comparison_geometry(int n, std::uint64_t seed) {
 // The numeric path (family_distance) gives the distance and gradient of the
 // reporting path (family_distance_report, which names the conditions of the
 // representation it writes out; that it picks what writing every
-// representation out picks is FamilyFit's test). Required to 1e-14 relative; by construction (the same formulas
-// on the same numbers, in the same order) they agree bit for bit.
+// representation out picks is FamilyFit's test). Required to 1e-14 relative;
+// by construction (the same formulas on the same numbers, in the same order)
+// they agree bit for bit.
 TEST(FamilyDistance, NumericPathEqualsTheReportingPath) {
   const int geometries_per_n[] = {0, 0, 0, 0, 600, 120, 60, 30, 18};
   long compared = 0, identical = 0;
