@@ -125,7 +125,8 @@ int run_start_command(const StartArguments& args) {
                  "|step|", "damping", "accepted");
     options.trace = [out](const SearchTraceRow& row) {
       std::fprintf(out, "%5d %6d %-23.17g %-23.17g %-12.4g %-12.4g %-10.3g %s\n", row.iteration, row.evaluations,
-                   row.value, row.E_mean, row.gradient_norm, row.step_norm, row.damping, row.accepted ? "yes" : "no");
+                   row.value, row.E_mean, row.gradient_norm, row.step_norm, row.damping,
+                   row.accepted ? "yes" : (row.abandoned ? "no, abandoned" : "no"));
     };
   }
   RecordStream records(stdout, format);

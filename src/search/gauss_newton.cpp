@@ -128,7 +128,11 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
       const Eigen::VectorXd taken = trial - x;
       // Decrease the Gauss-Newton model predicts for the step actually taken.
       const double predicted = -(gradient.dot(taken) + 0.5 * (J * taken).squaredNorm());
-      const ObjectiveValue tried = objective.evaluate_residuals(trial, trial_r, nullptr);
+      // The step is accepted only below this (ratio > 1e-4 below), so the
+      // trial's cycle is given up as soon as its samples show it above:
+      // about a third of the trials are rejected.
+      const double ceiling = predicted > 0.0 ? current.value - 1e-4 * predicted : -1.0;
+      const ObjectiveValue tried = objective.evaluate_residuals(trial, trial_r, nullptr, ceiling);
       const double actual = current.value - tried.value;
       const double ratio = predicted > 0.0 ? actual / predicted : -1.0;
       accepted = tried.ok && actual > 0.0 && ratio > 1e-4;
@@ -142,6 +146,7 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
         row.step_norm = taken.cwiseAbs().maxCoeff();
         row.damping = mu;
         row.accepted = accepted;
+        row.abandoned = tried.abandoned;
         options.trace(row);
       }
       ++summary.iterations;

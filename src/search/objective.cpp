@@ -59,12 +59,12 @@ CycleObjective::CycleObjective(const ParameterSpace& space, ObjectiveOptions opt
   }
 }
 
-bool CycleObjective::run_cycle(const Eigen::VectorXd& x) {
-  last_ok_ = run_cycle_at(x);
+bool CycleObjective::run_cycle(const Eigen::VectorXd& x, double ceiling) {
+  last_ok_ = run_cycle_at(x, ceiling);
   return last_ok_;
 }
 
-bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
+bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x, double ceiling) {
   ++evaluations_;
   last_x_ = x;
   // The last successful cycle is the nearby cycle of this one (after a
@@ -76,6 +76,8 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
   }
   last_ok_ = false;
   cycle_.samples.clear();
+  cycle_.abandoned = false;
+  deflation_ = std::numeric_limits<double>::quiet_NaN();
   geometry_ = space_.geometry(x);
   if (!x.allFinite()) return false;
   try {
@@ -83,10 +85,20 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
   } catch (const std::invalid_argument&) {
     return false;  // e.g. a length pushed below zero: no loop to evaluate
   }
+  // F = M E >= deflation * E (the travel factor is at least 1): the energy's
+  // own ceiling, widened by a relative 1e-12 against round-off in the cycle's
+  // partial sums, so that no point the ceiling admits is given up.
+  CycleCeiling energy_ceiling;
+  if (ceiling < std::numeric_limits<double>::infinity()) {
+    deflation_ = deflation(nullptr);
+    const double bound = ceiling / deflation_ * (1.0 + 1e-12);
+    (options_.measure == CycleMeasure::mean ? energy_ceiling.mean : energy_ceiling.max) = bound;
+  }
   model_ = std::make_unique<LoopModel>(geometry_, options_.equilibrium);
   workspace_ = std::make_unique<EquilibriumWorkspace>(*model_);
   if (have_nearby_ && options_.reuse_nearby_cycle &&
-      cycle_energy_from_nearby(*model_, *workspace_, nearby_, options_.cycle, cycle_)) {
+      cycle_energy_from_nearby(*model_, *workspace_, nearby_, options_.cycle, cycle_, energy_ceiling)) {
+    if (cycle_.abandoned) return false;
     // The start state is the sample at theta0 (the first one of a full turn).
     if (cycle_.samples.front().theta_in == initial_angles_[0]) {
       start_ = cycle_.samples.front().state;
@@ -105,8 +117,8 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x) {
   if (start.status != SolveStatus::converged) start = assemble(*model_, *workspace_, initial_angles_[0]);
   if (start.status != SolveStatus::converged) return false;
   start_ = start.state;
-  cycle_energy(*model_, *workspace_, initial_angles_[0], start_, options_.cycle, cycle_);
-  return std::isfinite(cycle_.E_mean);
+  cycle_energy(*model_, *workspace_, initial_angles_[0], start_, options_.cycle, cycle_, energy_ceiling);
+  return !cycle_.abandoned && std::isfinite(cycle_.E_mean);
 }
 
 void CycleObjective::continue_from(const CycleObjective& other) {
@@ -117,20 +129,26 @@ void CycleObjective::continue_from(const CycleObjective& other) {
   last_ok_ = false;  // so that the next evaluation keeps this nearby cycle
 }
 
-double CycleObjective::steering(const Eigen::MatrixXd* angle_jacobian, GeometryVector* gradient) const {
+double CycleObjective::deflation(GeometryVector* log_gradient) const {
   const int n = geometry_.joints();
   double factor = 1.0;
-  GeometryVector log_gradient = GeometryVector::Zero(3 * n);  // d log M / dp
   const double p = options_.deflation_power;
   for (const DeflationTerm& term : options_.deflation) {
     GeometryVector dd = GeometryVector::Zero(3 * n);
-    const double dist = std::max(term.distance(geometry_, gradient ? &dd : nullptr), 1e-300);
+    const double dist = std::max(term.distance(geometry_, log_gradient ? &dd : nullptr), 1e-300);
     const double inverse = std::pow(dist, -p);
     const double f = inverse + options_.deflation_shift;
     factor *= f;
     // d/dp log(dist^-p + s) = -p dist^(-p-1) / (dist^-p + s) * d dist / dp
-    if (gradient) log_gradient += (-p * inverse / dist / f) * dd;
+    if (log_gradient) *log_gradient += (-p * inverse / dist / f) * dd;
   }
+  return factor;
+}
+
+double CycleObjective::steering(const Eigen::MatrixXd* angle_jacobian, GeometryVector* gradient) const {
+  const int n = geometry_.joints();
+  GeometryVector log_gradient = GeometryVector::Zero(3 * n);  // d log M / dp
+  double factor = gradient || std::isnan(deflation_) ? deflation(gradient ? &log_gradient : nullptr) : deflation_;
   if (options_.nontrivial) {
     const std::vector<JointTravel> travel = joint_travel(cycle_, n);
     const double t0 = options_.min_travel;
@@ -221,10 +239,17 @@ ObjectiveValue CycleObjective::evaluate(const Eigen::VectorXd& x, Eigen::VectorX
 }
 
 ObjectiveValue CycleObjective::evaluate_residuals(const Eigen::VectorXd& x, Eigen::VectorXd& r,
-                                                  Eigen::MatrixXd* jacobian) {
+                                                  Eigen::MatrixXd* jacobian, double ceiling) {
   ObjectiveValue v;
-  if (!run_cycle(x)) {
+  if (!run_cycle(x, ceiling)) {
     v.value = std::numeric_limits<double>::infinity();
+    if (cycle_.abandoned) {
+      v.abandoned = true;
+      v.E_mean = cycle_.E_mean;
+      v.E_max = cycle_.E_max;
+      v.steering_factor = deflation_;
+      v.value = deflation_ * measured_energy();
+    }
     r.resize(0);
     if (jacobian) jacobian->resize(0, x.size());
     return v;

@@ -323,6 +323,75 @@ TEST(Cycle, PredictorChangesOnlyTheStartingPoints) {
   }
 }
 
+// A cycle abandoned above a ceiling: against the whole cycle of the same
+// geometry, walked without one, its energies are lower bounds that already
+// exceed the ceiling; a ceiling above the cycle changes nothing. From a
+// nearby cycle, nearby's most costly sample is solved first, so a ceiling on
+// E_max below it gives up after that one sample, with its energy.
+TEST(Cycle, ACycleAboveItsCeilingIsAbandonedWithLowerBounds) {
+  CycleOptions options;
+  options.samples = 8;
+  const LoopGeometry g = long_link_loop();
+  const CycleSummary whole = run_cycle(g, paper_start(), {}, options);
+  ASSERT_EQ(whole.failed_samples + whole.branch_jumps, 0);
+  ASSERT_FALSE(whole.abandoned);
+  const LoopModel model(g);
+  EquilibriumWorkspace ws(model);
+  const EquilibriumSummary assembled = assemble_from_angles(model, ws, paper_start());
+  ASSERT_EQ(assembled.status, SolveStatus::converged);
+  const double theta0 = paper_start()[0];
+
+  CycleSummary walked;
+  cycle_energy(model, ws, theta0, assembled.state, options, walked, {.mean = 1.01 * whole.E_mean});
+  EXPECT_FALSE(walked.abandoned);
+  EXPECT_EQ(walked.E_mean, whole.E_mean);
+  EXPECT_EQ(walked.E_max, whole.E_max);
+  for (const double fraction : {0.1, 0.5, 0.9}) {
+    const CycleCeiling ceiling{.mean = fraction * whole.E_mean};
+    cycle_energy(model, ws, theta0, assembled.state, options, walked, ceiling);
+    EXPECT_TRUE(walked.abandoned) << fraction;
+    EXPECT_GT(walked.E_mean, ceiling.mean) << fraction;
+    EXPECT_LE(walked.E_mean, whole.E_mean * (1 + 1e-12)) << fraction;
+    EXPECT_LE(walked.E_max, whole.E_max * (1 + 1e-12)) << fraction;
+    // Given up before its last sample, unless that one tells.
+    EXPECT_LE(walked.total_iterations, whole.total_iterations) << fraction;
+    if (fraction <= 0.5) EXPECT_LT(walked.total_iterations, whole.total_iterations) << fraction;
+  }
+  cycle_energy(model, ws, theta0, assembled.state, options, walked, {.max = 0.5 * whole.E_max});
+  EXPECT_TRUE(walked.abandoned);
+  EXPECT_GT(walked.E_max, 0.5 * whole.E_max);
+
+  // From the whole cycle itself as the nearby one: each sample converges
+  // where it is, so the bounds are the samples' own energies.
+  const auto costliest =
+      std::max_element(whole.samples.begin(), whole.samples.end(),
+                       [](const CycleSample& a, const CycleSample& b) { return a.energy < b.energy; });
+  CycleSummary reused;
+  ASSERT_TRUE(cycle_energy_from_nearby(model, ws, whole, options, reused, {.max = 0.99 * costliest->energy}));
+  EXPECT_TRUE(reused.abandoned);
+  EXPECT_NEAR(reused.E_max, costliest->energy, 1e-9 * costliest->energy);
+  EXPECT_NEAR(reused.E_mean, costliest->energy / options.samples, 1e-9 * costliest->energy);
+  ASSERT_TRUE(cycle_energy_from_nearby(model, ws, whole, options, reused, {.mean = 0.5 * whole.E_mean}));
+  EXPECT_TRUE(reused.abandoned);
+  EXPECT_GT(reused.E_mean, 0.5 * whole.E_mean);
+  EXPECT_LE(reused.E_mean, whole.E_mean * (1 + 1e-9));
+  // Above the cycle: all of it, in input order, as without a ceiling.
+  CycleSummary unbounded;
+  ASSERT_TRUE(cycle_energy_from_nearby(model, ws, whole, options, unbounded));
+  ASSERT_TRUE(cycle_energy_from_nearby(model, ws, whole, options, reused, {.mean = 2 * whole.E_mean}));
+  EXPECT_FALSE(reused.abandoned);
+  EXPECT_EQ(reused.E_mean, unbounded.E_mean);
+  for (size_t j = 0; j < whole.samples.size(); ++j) {
+    EXPECT_EQ(reused.samples[j].theta_in, unbounded.samples[j].theta_in) << j;
+    EXPECT_EQ(reused.samples[j].energy, unbounded.samples[j].energy) << j;
+  }
+  // A summary abandoned before is whole again when walked without a ceiling.
+  ASSERT_TRUE(walked.abandoned);
+  cycle_energy(model, ws, theta0, assembled.state, options, walked);
+  EXPECT_FALSE(walked.abandoned);
+  EXPECT_EQ(walked.E_mean, whole.E_mean);
+}
+
 // cycle_energy_from_nearby against the walk: the long-link loop's cycle
 // re-solved at a1 a little further gives every sample's energy and angles of
 // the walk at that geometry (to the solve's tolerance); a nearby cycle with a

@@ -254,6 +254,57 @@ TEST(Objective, AFarStepFallsBackToTheFreshCycle) {
   EXPECT_EQ(reused.cycle().total_iterations, fresh.cycle().total_iterations);
 }
 
+// A ceiling on the steered objective: below a point's value the evaluation
+// is given up with a lower bound of it that exceeds the ceiling (against the
+// same point evaluated whole by a second objective), above it the evaluation
+// is the whole one. An abandoned evaluation is not the next one's nearby
+// cycle: the point evaluated again gives its value as before. Both measures.
+TEST(Objective, AnEvaluationAboveItsCeilingIsAbandonedWithALowerBound) {
+  TiedFixture f;
+  for (const CycleMeasure measure : {CycleMeasure::mean, CycleMeasure::max}) {
+    ObjectiveOptions options = ObjectiveOptions::from_loop(f.job.loop);
+    options.measure = measure;
+    options.deflation.push_back({"twist gap", twist_gap});
+    options.nontrivial = true;
+    options.min_travel = rad(60);  // a travel factor well above 1
+    CycleObjective whole(f.job.space, options, f.theta);
+    CycleObjective bounded(f.job.space, options, f.theta);
+    Eigen::VectorXd direction(f.job.space.free_count());
+    direction << 0.3, -0.2, 0.1, rad(2), rad(-1), rad(1.5), 0.05, 0.02;
+    const Eigen::VectorXd x1 = f.x0() + 0.01 * direction;
+    Eigen::VectorXd r;
+    const ObjectiveValue at_x0 = whole.evaluate_residuals(f.x0(), r, nullptr);
+    const ObjectiveValue at_x1 = whole.evaluate_residuals(x1, r, nullptr);
+    const Eigen::Index rows = r.size();
+    ASSERT_TRUE(at_x0.ok && at_x1.ok);
+    ASSERT_GT(rows, 0);
+    ASSERT_GT(at_x1.steering_factor, 1.5);
+    ASSERT_TRUE(bounded.evaluate_residuals(f.x0(), r, nullptr).ok);
+
+    const ObjectiveValue above = bounded.evaluate_residuals(x1, r, nullptr, 2.0 * at_x1.value);
+    ASSERT_TRUE(above.ok);
+    EXPECT_FALSE(above.abandoned);
+    EXPECT_NEAR(above.value, at_x1.value, 1e-10 * at_x1.value);
+    EXPECT_EQ(r.size(), rows);  // the residuals of a whole evaluation
+
+    for (const double fraction : {0.05, 0.3}) {
+      const double ceiling = fraction * at_x1.value;
+      const ObjectiveValue given_up = bounded.evaluate_residuals(x1, r, nullptr, ceiling);
+      EXPECT_FALSE(given_up.ok) << fraction;
+      EXPECT_TRUE(given_up.abandoned) << fraction;
+      EXPECT_GT(given_up.value, ceiling) << fraction;
+      EXPECT_LE(given_up.value, at_x1.value * (1 + 1e-9)) << fraction;
+      EXPECT_EQ(r.size(), 0) << fraction;
+      EXPECT_FALSE(bounded.last_ok()) << fraction;
+    }
+    // The next evaluation starts from the whole cycle at x1 evaluated above,
+    // not from an abandoned one.
+    const ObjectiveValue again = bounded.evaluate_residuals(x1, r, nullptr);
+    ASSERT_TRUE(again.ok);
+    EXPECT_NEAR(again.value, at_x1.value, 1e-10 * at_x1.value);
+  }
+}
+
 TEST(Objective, DeflationLiftsTheZerosOfTheDeflatedFamilyOnly) {
   // The paper's Bennett loop is a zero; deflating a distance that vanishes
   // there makes it a non-zero, deflating one that does not leaves it a zero.

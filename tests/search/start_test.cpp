@@ -229,16 +229,17 @@ TEST(AnalyseZero, AMovableLoopWhosePoseIsOffItsCircuitIsVerifiedFromEveryCircuit
   }
 }
 
-// A near miss of the generic 6R job (start 42: its cycle energy 2e-27, the
-// rigid loop closing to about the tolerance along a curve, not to round-off)
-// is not verified. Its walk creeps over a stretch of the curve: it ends
+// A near miss of the generic 6R job with 32 cycle samples (start 42: its
+// cycle energy 2e-27, the rigid loop closing to about the tolerance along a
+// curve, not to round-off) is not verified. Its walk creeps over a stretch of the curve: it ends
 // `stalled` after a few thousand points, where without the stall rule the
 // walk spends max_points there and ends too long, having covered less.
 // The scan's seeds beyond its ends lie on the first trace that repeats it,
 // and are not traced again: one circuit is kept. Independently, the circuit
 // traced from an assembly at each of four inputs over the turn does not move.
 TEST(AnalyseZero, ANearMissIsNotVerifiedAndItsCurveIsNotTracedAgainFromEverySeed) {
-  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/generic-6r.toml");
+  Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/generic-6r.toml");
+  job.loop.samples = 32;
   const StartSummary s = run_start(job, 42);
   ASSERT_TRUE(s.zero);
   const VerificationSummary& v = s.candidate.verification;
@@ -292,6 +293,34 @@ TEST(RunStart, AZeroWhoseCircuitCannotBeFollowedFromItsPoseIsVerifiedFromTheWhol
     EXPECT_TRUE(s.candidate.verification.verified) << index;
     EXPECT_EQ(s.candidate.classification.family, Family::bricard_trihedral) << index;
   }
+}
+
+// A trial whose cycle shows it above what the step needs to be accepted is
+// given up before its cycle ends. On the default job's first starts (steered,
+// 4 samples, box bounds) many trials are rejected, and many of those are
+// given up; none is accepted. (That a given-up trial's value is a lower
+// bound above its ceiling is checked against whole evaluations in
+// Objective.AnEvaluationAboveItsCeilingIsAbandonedWithALowerBound.)
+TEST(RunStart, GaussNewtonGivesUpTrialsAboveTheAcceptanceCeiling) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/default.toml");
+  int abandoned = 0, rejected = 0, accepted = 0;
+  for (std::uint64_t index = 0; index < 5; ++index) {
+    StartOptions options;
+    options.trace = [&](const SearchTraceRow& row) {
+      if (row.accepted) {
+        EXPECT_FALSE(row.abandoned) << index;
+        ++accepted;
+        return;
+      }
+      ++rejected;
+      abandoned += row.abandoned;
+    };
+    const StartSummary s = run_start(job, index, options);
+    EXPECT_TRUE(std::isfinite(s.E_mean)) << index;
+  }
+  EXPECT_GT(accepted, 0);
+  EXPECT_GT(rejected, 0);
+  EXPECT_GT(abandoned, rejected / 2) << abandoned << " of " << rejected;
 }
 
 // Non-triviality moves a search off a frozen-joint minimum: start 34 of the

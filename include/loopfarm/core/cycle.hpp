@@ -10,6 +10,7 @@
 // (cycle_deformation_jacobian), for Gauss-Newton on the outer problem.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "loopfarm/core/equilibrium.hpp"
@@ -81,6 +82,20 @@ struct CycleSummary {
   int refinements = 0;
   double max_closure_residual = 0.0;
   std::vector<CycleSample> samples;  // in input-angle order
+  // The cycle was given up above a CycleCeiling: E_mean and E_max are the
+  // lower bounds its solved samples gave, and the other samples were not
+  // solved (their entries are stale).
+  bool abandoned = false;
+};
+
+// Energies above which a cycle need not be finished: once the samples solved
+// so far show E_mean > mean (their energies summed over N) or E_max > max
+// (one of them above it), the cycle is abandoned. A local search that rejects
+// every trial point worse than its current one knows its ceiling before the
+// cycle; the samples are never negative, so a partial sum is a lower bound.
+struct CycleCeiling {
+  double mean = std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
 };
 
 // Where the stiff-limit equilibrium path folds (a sample with status
@@ -94,8 +109,11 @@ struct CycleSummary {
 // Drives the loop from `start` (an assembled state at theta0, e.g. from
 // assemble()) through the cycle. `summary` is reused: with the same N it does
 // not allocate. The workspace must belong to `model`.
+//
+// With a finite `ceiling` the walk stops at the first sample after which the
+// cycle is known to exceed it (CycleSummary::abandoned).
 void cycle_energy(const LoopModel& model, EquilibriumWorkspace& workspace, double theta0, const EquilibriumState& start,
-                  const CycleOptions& options, CycleSummary& summary);
+                  const CycleOptions& options, CycleSummary& summary, const CycleCeiling& ceiling = {});
 
 // The cycle of a geometry near the one `nearby` was computed for (same
 // theta0, options and model layout), from nearby's samples: each sample is
@@ -109,8 +127,12 @@ void cycle_energy(const LoopModel& model, EquilibriumWorkspace& workspace, doubl
 // `summary` is then unspecified and the caller walks with cycle_energy.
 // A sample nearby reached by a branch jump keeps that status (and count):
 // its branch is followed, but it is still not joined to its predecessor.
+// With a finite `ceiling`, the sample of nearby's largest energy is solved
+// first (it is the likeliest to tell), and the cycle is abandoned as soon as
+// it is known to exceed the ceiling; that returns true, with
+// CycleSummary::abandoned, though the samples not solved were not vouched for.
 bool cycle_energy_from_nearby(const LoopModel& model, EquilibriumWorkspace& workspace, const CycleSummary& nearby,
-                              const CycleOptions& options, CycleSummary& summary);
+                              const CycleOptions& options, CycleSummary& summary, const CycleCeiling& ceiling = {});
 
 // dE_mean / d(a, alpha, d) in GeometryVector order, in the geometry's own units
 // (per unit length, per radian), from each sample's multipliers; with

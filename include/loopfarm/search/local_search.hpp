@@ -44,6 +44,7 @@ struct SearchTraceRow {
   double step_norm = 0.0;      // max-norm of the step taken; NaN where not known
   double damping = 0.0;        // Levenberg-Marquardt parameter; NaN for NLopt
   bool accepted = true;
+  bool abandoned = false;  // rejected before its cycle was finished: value and E_mean are lower bounds
 };
 
 struct LocalSearchOptions {

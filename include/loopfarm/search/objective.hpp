@@ -25,6 +25,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -71,7 +72,10 @@ struct ObjectiveOptions {
 };
 
 struct ObjectiveValue {
-  bool ok = false;     // assembled and the cycle evaluated
+  bool ok = false;  // assembled and the cycle evaluated
+  // Given up above the caller's ceiling (not ok): value, E_mean and E_max
+  // are lower bounds.
+  bool abandoned = false;
   double value = 0.0;  // M * E_mean (or M * E_max): what the optimiser sees
   double E_mean = 0.0;
   double E_max = 0.0;
@@ -89,7 +93,16 @@ class CycleObjective {
   // F(x) and, when `gradient` is not null, dF/dx.
   ObjectiveValue evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient);
   // F(x) = |r|^2 / 2 and, when `jacobian` is not null, dr/dx.
-  ObjectiveValue evaluate_residuals(const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* jacobian);
+  //
+  // With a finite `ceiling`, a point whose F is known to exceed it before
+  // its cycle is finished is given up (ObjectiveValue::abandoned; r is left
+  // empty): a local search that rejects such points anyway pays only for the
+  // samples that told. The deflation factor is known before the cycle and
+  // the travel factor is at least 1, so the samples solved so far bound F
+  // from below. An abandoned evaluation counts as failed: the next one starts
+  // from the cycle before it.
+  ObjectiveValue evaluate_residuals(const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* jacobian,
+                                    double ceiling = std::numeric_limits<double>::infinity());
 
   // dr/dx at the last evaluation (which must have succeeded): one implicit
   // differentiation of its cycle, no new cycle.
@@ -116,11 +129,16 @@ class CycleObjective {
  private:
   // Builds the geometry, assembles and runs the cycle; false when the loop
   // cannot be assembled at theta0 or the geometry is invalid.
-  bool run_cycle(const Eigen::VectorXd& x);
-  bool run_cycle_at(const Eigen::VectorXd& x);
+  // With a finite `ceiling` on F the cycle may be abandoned (cycle_.abandoned,
+  // and false).
+  bool run_cycle(const Eigen::VectorXd& x, double ceiling = std::numeric_limits<double>::infinity());
+  bool run_cycle_at(const Eigen::VectorXd& x, double ceiling);
   // M and dM/d(a, alpha, d) (when `gradient` is not null) at the last cycle;
   // `angle_jacobian` (rows j * n + i) is needed for the travel term.
   double steering(const Eigen::MatrixXd* angle_jacobian, GeometryVector* gradient) const;
+  // The deflation product of M at the last geometry and, when `log_gradient`
+  // is not null, d log(product) / d(a, alpha, d) added to it.
+  double deflation(GeometryVector* log_gradient) const;
   // The last cycle's energies and counts (unsteered: M = 1).
   ObjectiveValue cycle_value() const;
   // The measure of the last cycle: the sample it looks at (-1: all, the
@@ -141,6 +159,9 @@ class CycleObjective {
   Eigen::VectorXd last_x_;
   bool last_ok_ = false;
   LoopGeometry geometry_;
+  // The deflation product at geometry_, where run_cycle_at needed it for a
+  // ceiling (NaN otherwise): steering() without gradients reuses it.
+  double deflation_ = std::numeric_limits<double>::quiet_NaN();
   std::unique_ptr<LoopModel> model_;  // of the last evaluation
   std::unique_ptr<EquilibriumWorkspace> workspace_;
   EquilibriumState start_;
