@@ -36,9 +36,9 @@ void expect_one_moving_circuit(const LoopGeometry& g, const std::string& name) {
   for (int j = 0; j < 4; ++j) EXPECT_EQ(std::abs(c.ranges[static_cast<size_t>(j)].turns), 1) << name << " joint " << j;
 }
 
-// The default job's best candidate (README's tour), as `loopfarm verify`
-// reads it: at the offsets the results database stores (round-off, about
-// 1e-15) and at zero offsets.
+// A Bennett loop the default job finds (a1 = 0.34, twists -170 and -135.6
+// deg), as `loopfarm verify` reads it: at the offsets the results database
+// stores (round-off, about 1e-15) and at zero offsets.
 TEST(MotionRelease, DefaultJobBennettLoopMoves) {
   const double a[] = {0.3406511249150394, 1.372573062206204, 0.3406511249150396, 1.372573062206204};
   const double alpha_deg[] = {-170.0, -135.5991273336791, -170.0, -135.5991273336791};
