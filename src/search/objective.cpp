@@ -66,15 +66,20 @@ bool CycleObjective::run_cycle(const Eigen::VectorXd& x, double ceiling) {
 
 bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x, double ceiling) {
   ++evaluations_;
-  last_x_ = x;
   // The last successful cycle is the nearby cycle of this one (after a
   // failed evaluation, the one before it still is).
   if (last_ok_) {
     std::swap(nearby_, cycle_);
     nearby_start_ = start_;
     have_nearby_ = true;
+    std::swap(nearby_deformation_sensitivity_, deformation_sensitivity_);
+    std::swap(nearby_angle_sensitivity_, angle_sensitivity_);
+    nearby_has_sensitivity_ = have_sensitivity_;
+    nearby_x_ = last_x_;
   }
+  have_sensitivity_ = false;
   last_ok_ = false;
+  last_x_ = x;
   cycle_.samples.clear();
   cycle_.abandoned = false;
   deflation_ = std::numeric_limits<double>::quiet_NaN();
@@ -97,7 +102,7 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x, double ceiling) {
   model_ = std::make_unique<LoopModel>(geometry_, options_.equilibrium);
   workspace_ = std::make_unique<EquilibriumWorkspace>(*model_);
   if (have_nearby_ && options_.reuse_nearby_cycle &&
-      cycle_energy_from_nearby(*model_, *workspace_, nearby_, options_.cycle, cycle_, energy_ceiling)) {
+      cycle_energy_from_nearby(*model_, *workspace_, predicted_nearby(x), options_.cycle, cycle_, energy_ceiling)) {
     if (cycle_.abandoned) return false;
     // The start state is the sample at theta0 (the first one of a full turn).
     if (cycle_.samples.front().theta_in == initial_angles_[0]) {
@@ -121,11 +126,43 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x, double ceiling) {
   return !cycle_.abandoned && std::isfinite(cycle_.E_mean);
 }
 
+const CycleSummary& CycleObjective::predicted_nearby(const Eigen::VectorXd& x) {
+  if (!nearby_has_sensitivity_ || nearby_x_.size() != x.size()) return nearby_;
+  const int n = space_.joints;
+  const int m = model_->deformation_count();
+  const int N = static_cast<int>(nearby_.samples.size());
+  if (nearby_angle_sensitivity_.rows() != N * n || nearby_deformation_sensitivity_.rows() != N * m) return nearby_;
+  const GeometryVector dp = geometry_jacobian_ * (x - nearby_x_);
+  predicted_ = nearby_;
+  const double limit = options_.cycle.max_passive_step;
+  for (int j = 0; j < N; ++j) {
+    EquilibriumState& state = predicted_.samples[static_cast<size_t>(j)].state;
+    if (state.theta.size() != n || state.deformations.size() != m) return nearby_;
+    const JointVector dtheta = nearby_angle_sensitivity_.middleRows(j * n, n) * dp;
+    DeformationVector ddeformation = nearby_deformation_sensitivity_.middleRows(j * m, m) * dp;
+    // The Jacobian's rows are the deformations weighted by sqrt(stiffness / N).
+    for (int k = 0; k < m; ++k) ddeformation[k] /= std::sqrt(model_->deformation_stiffness(k) / N);
+    // A sample whose prediction would move it further than one step of the
+    // walk starts from where it was: a linearisation that far out is no guide.
+    if (!(std::max(dtheta.cwiseAbs().maxCoeff(), ddeformation.cwiseAbs().maxCoeff()) <= limit)) continue;
+    state.theta += dtheta;
+    state.deformations += ddeformation;
+  }
+  return predicted_;
+}
+
+void CycleObjective::keep_sensitivity() {
+  deformation_sensitivity_ = deformation_jacobian_;
+  angle_sensitivity_ = angle_jacobian_;
+  have_sensitivity_ = deformation_sensitivity_.allFinite() && angle_sensitivity_.allFinite();
+}
+
 void CycleObjective::continue_from(const CycleObjective& other) {
   if (!other.last_ok_ || other.cycle_.samples.empty()) return;
   nearby_ = other.cycle_;
   nearby_start_ = other.start_;
   have_nearby_ = true;
+  nearby_has_sensitivity_ = false;
   last_ok_ = false;  // so that the next evaluation keeps this nearby cycle
 }
 
@@ -269,8 +306,10 @@ void CycleObjective::residual_jacobian(Eigen::MatrixXd& jacobian) {
   const int n = geometry_.joints();
   // Into the buffers of the last call: with the same sizes nothing here
   // allocates (nor do the steering's family distances).
+  const bool predicting = options_.reuse_nearby_cycle;
   cycle_deformation_jacobian(*model_, *workspace_, cycle_, deformation_jacobian_,
-                             options_.nontrivial ? &angle_jacobian_ : nullptr);
+                             options_.nontrivial || predicting ? &angle_jacobian_ : nullptr);
+  if (predicting) keep_sensitivity();
   GeometryVector steering_gradient = GeometryVector::Zero(3 * n);
   const double factor = steered() ? steering(&angle_jacobian_, &steering_gradient) : 1.0;
   // dr'/dp = sqrt(M) dr/dp + r (dM/dp)ᵀ / (2 sqrt(M)), with r unsteered.

@@ -235,6 +235,42 @@ TEST(Objective, ReusedNearbyCyclesAgreeWithFreshOnesAndCostFewerIterations) {
   EXPECT_LT(reused_iterations, fresh_iterations / 3) << reused_iterations << " vs " << fresh_iterations;
 }
 
+// Where the nearby cycle's Jacobian was computed (as Gauss-Newton does at
+// each point it accepts), the next evaluation starts each sample from a
+// first-order prediction along it: the same values as evaluations from the
+// assembly, in fewer Newton iterations than from the nearby samples as they
+// were.
+TEST(Objective, PredictedNearbySamplesGiveTheSameValuesInFewerIterations) {
+  TiedFixture f;
+  ObjectiveOptions fresh_options = ObjectiveOptions::from_loop(f.job.loop);
+  fresh_options.reuse_nearby_cycle = false;
+  CycleObjective fresh(f.job.space, fresh_options, f.theta);
+  CycleObjective predicted(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
+  CycleObjective unpredicted(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
+  Eigen::VectorXd direction(f.job.space.free_count());
+  direction << 0.3, -0.2, 0.1, rad(2), rad(-1), rad(1.5), 0.05, 0.02;
+  long long predicted_iterations = 0, unpredicted_iterations = 0;
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J;
+  for (int k = 0; k <= 8; ++k) {
+    const Eigen::VectorXd x = f.x0() + (0.006 * k) * direction;
+    const ObjectiveValue a = fresh.evaluate(x, nullptr);
+    const ObjectiveValue b = predicted.evaluate_residuals(x, r, &J);
+    const ObjectiveValue c = unpredicted.evaluate_residuals(x, r, nullptr);
+    ASSERT_TRUE(a.ok && b.ok && c.ok) << k;
+    ASSERT_EQ(a.failed_samples + a.branch_jumps, 0) << k;
+    EXPECT_NEAR(b.E_mean, a.E_mean, 1e-10 * a.E_mean) << k;
+    EXPECT_NEAR(c.E_mean, a.E_mean, 1e-10 * a.E_mean) << k;
+    if (k > 0) {
+      predicted_iterations += predicted.cycle().total_iterations;
+      unpredicted_iterations += unpredicted.cycle().total_iterations;
+    }
+  }
+  // 192 against 248 when this was written.
+  EXPECT_LT(predicted_iterations, unpredicted_iterations * 9 / 10)
+      << predicted_iterations << " vs " << unpredicted_iterations;
+}
+
 // A step too large to vouch for falls back to the walk from the assembly,
 // and gives the fresh value exactly.
 TEST(Objective, AFarStepFallsBackToTheFreshCycle) {

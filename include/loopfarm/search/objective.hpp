@@ -133,6 +133,11 @@ class CycleObjective {
   // and false).
   bool run_cycle(const Eigen::VectorXd& x, double ceiling = std::numeric_limits<double>::infinity());
   bool run_cycle_at(const Eigen::VectorXd& x, double ceiling);
+  // nearby_ moved to x along nearby_sensitivity_ (into predicted_): each
+  // sample whose predicted change stays within a step of the walk.
+  const CycleSummary& predicted_nearby(const Eigen::VectorXd& x);
+  // Stores sensitivity_ from the Jacobians just computed at cycle_.
+  void keep_sensitivity();
   // M and dM/d(a, alpha, d) (when `gradient` is not null) at the last cycle;
   // `angle_jacobian` (rows j * n + i) is needed for the travel term.
   double steering(const Eigen::MatrixXd* angle_jacobian, GeometryVector* gradient) const;
@@ -171,6 +176,17 @@ class CycleObjective {
   CycleSummary nearby_;
   EquilibriumState nearby_start_;
   bool have_nearby_ = false;
+  // The sensitivities of cycle_'s sample states to (a, alpha, d), where a
+  // Jacobian was computed at it (as cycle_deformation_jacobian gives them:
+  // the weighted deformations' and the angles'); they travel with it to
+  // nearby_. The next evaluation starts each sample from nearby's state
+  // moved along them (predicted_), a first-order step in the geometry.
+  Eigen::MatrixXd deformation_sensitivity_, angle_sensitivity_;
+  bool have_sensitivity_ = false;
+  Eigen::MatrixXd nearby_deformation_sensitivity_, nearby_angle_sensitivity_;
+  Eigen::VectorXd nearby_x_;
+  bool nearby_has_sensitivity_ = false;
+  CycleSummary predicted_;
   // Buffers of the Jacobians, kept so that repeated evaluations reuse them.
   Eigen::VectorXd weighted_deformations_;
   Eigen::MatrixXd deformation_jacobian_;  // dr/d(a, alpha, d)
