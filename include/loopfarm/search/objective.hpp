@@ -133,10 +133,11 @@ class CycleObjective {
   // and false).
   bool run_cycle(const Eigen::VectorXd& x, double ceiling = std::numeric_limits<double>::infinity());
   bool run_cycle_at(const Eigen::VectorXd& x, double ceiling);
-  // nearby_ moved to x along nearby_sensitivity_ (into predicted_): each
-  // sample whose predicted change stays within a step of the walk.
+  // nearby_ moved to x along its sensitivities, into predicted_ (each sample
+  // whose predicted change stays within a step of the walk); nearby_ itself
+  // where it has none.
   const CycleSummary& predicted_nearby(const Eigen::VectorXd& x);
-  // Stores sensitivity_ from the Jacobians just computed at cycle_.
+  // Keeps the sensitivities of cycle_ from the Jacobians just computed at it.
   void keep_sensitivity();
   // M and dM/d(a, alpha, d) (when `gradient` is not null) at the last cycle;
   // `angle_jacobian` (rows j * n + i) is needed for the travel term.
