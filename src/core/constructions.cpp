@@ -674,4 +674,28 @@ std::optional<PosedLoop> sarrus_6r(const Sarrus6R& p, double s) {
   return dh_from_axes(axes);
 }
 
+// ---------------------------------------------------------------------------
+// Bricard's plane-symmetric octahedron
+
+PosedLoop bricard_octahedral_plane(const OctahedronPlane& v) {
+  for (const Vector3* x : {&v.p, &v.t, &v.q, &v.r}) {
+    if (!x->allFinite()) bad("bricard_octahedral_plane: every vertex must be finite", x->norm());
+  }
+  if (!(std::abs(v.q.z()) > 1e-9) || !(std::abs(v.r.z()) > 1e-9)) {
+    bad("bricard_octahedral_plane: Q and R must lie off the mirror plane z = 0, |z|",
+        std::min(std::abs(v.q.z()), std::abs(v.r.z())));
+  }
+  const Vector3 P(v.p.x(), v.p.y(), 0.0), T(v.t.x(), v.t.y(), 0.0);
+  const Vector3 mirror(1.0, 1.0, -1.0);
+  const Vector3 Q = v.q, R = v.r, U = v.q.cwiseProduct(mirror), S = v.r.cwiseProduct(mirror);
+  const std::array<Vector3, 6> vertices{P, S, Q, T, R, U};  // joint i's axis from vertex i to vertex i + 1
+  std::vector<Axis> axes;
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const Vector3 along = vertices[(i + 1) % vertices.size()] - vertices[i];
+    if (!(along.norm() > 1e-9)) bad("bricard_octahedral_plane: a hinge has no length", along.norm());
+    axes.push_back({vertices[i], along.normalized()});
+  }
+  return dh_from_axes(axes);
+}
+
 }  // namespace loopfarm

@@ -189,6 +189,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::bennett_pair:
       case Family::bennett_dyads:
       case Family::sarrus:
+      case Family::bricard_octahedral_plane:
       case Family::degenerate:
       case Family::unclassified:
         break;

@@ -176,6 +176,9 @@ std::string special_detail(Family family, const LoopGeometry& g) {
         return "right-angle twists, no offsets, a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2";
       case Family::sarrus:
         return "two chains of three parallel axes (joints 2-4 and 5-1 of the best representation)";
+      case Family::bricard_octahedral_plane:
+        return "every a_i = 0: an octahedron with a mirror plane through two opposite vertices that maps each "
+               "other vertex onto its opposite one";
       default:
         return "";
     }

@@ -38,6 +38,8 @@ const char* to_string(Family family) {
       return "bennett_dyads";
     case Family::sarrus:
       return "sarrus";
+    case Family::bricard_octahedral_plane:
+      return "bricard_octahedral_plane";
   }
   return "unknown";
 }
@@ -63,6 +65,7 @@ int family_joints(Family family) {
     case Family::bennett_pair:
     case Family::bennett_dyads:
     case Family::sarrus:
+    case Family::bricard_octahedral_plane:
       return 6;
     case Family::planar:
     case Family::spherical:
@@ -106,6 +109,10 @@ std::optional<int> family_dimension(Family family, int joints) {
       // 18 parameters less five conditions; the first-order count
       // (local_dimension) reads 14 on members (docs/guide/families.md).
       return 13;
+    case Family::bricard_octahedral_plane:
+      // The octahedron's two vertices in the plane and two off it, less the
+      // plane's motions and the flex (docs/guide/families.md).
+      return 6;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
     case Family::unclassified:

@@ -651,6 +651,62 @@ void sarrus_conditions(const RepresentationView& w, Sink& c) {
         });
 }
 
+// Bricard's plane-symmetric octahedral 6R (his second type,
+// docs/guide/families.md). Every a_i = 0, so axes u and u + 1 meet, at V_u:
+// the six meeting points are an octahedron's vertices, V_u and V_{u+3}
+// opposite. Its twelve edges are the hinges, |V_{u-1} V_u| = |d_u| along axis
+// u, and the face diagonals, |V_{u-1} V_{u+1}|^2 = d_u^2 + d_{u+1}^2 +
+// 2 d_u d_{u+1} cos(alpha_u) across link u. Set k (0, 1, 2): the mirror plane
+// holds V_k and V_{k+3} and maps every other vertex onto its opposite one, so
+// each edge is as long as its mirror image: six equalities.
+template <class RepresentationView, class Sink>
+void bricard_octahedral_plane_conditions(int set, const RepresentationView& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  static constexpr const char* kLengths[] = {"a1", "a2", "a3", "a4", "a5", "a6"};
+  for (int i = 0; i < n; ++i) add_length(w, c, kLengths[i], i, -1, 0.0);
+  // The edge between V_u and V_v (not opposite), and when `gradient` is not
+  // null its gradient with respect to the representation's (a, alpha, d).
+  auto edge = [&](int u, int v, GeometryVector* gradient) {
+    if ((v - u + n) % n > 3) std::swap(u, v);  // v is 1 or 2 vertices on from u
+    if (gradient) *gradient = GeometryVector::Zero(3 * n);
+    if ((v - u + n) % n == 1) {  // the hinge along axis v
+      const double d = w.d(v);
+      if (gradient) (*gradient)[2 * n + v] = d > 0.0 ? 1.0 : (d < 0.0 ? -1.0 : 0.0);
+      return std::abs(d);
+    }
+    const int m = (u + 1) % n, m1 = (m + 1) % n;  // the diagonal across link m
+    const double dm = w.d(m), dm1 = w.d(m1), cm = w.cos_alpha(m);
+    const double e = std::sqrt(std::max(0.0, dm * dm + dm1 * dm1 + 2.0 * dm * dm1 * cm));
+    if (gradient && e > 0.0) {
+      (*gradient)[2 * n + m] = (dm + dm1 * cm) / e;
+      (*gradient)[2 * n + m1] = (dm1 + dm * cm) / e;
+      (*gradient)[n + m] = -dm * dm1 * w.sin_alpha(m) / e;
+    }
+    return e;
+  };
+  const int k = set;
+  // Each edge against its mirror image: (u, v) against (u', v').
+  const int pairs[6][4] = {{k, k + 1, k, k + 4},         {k, k + 2, k, k + 5},         {k + 3, k + 1, k + 3, k + 4},
+                           {k + 3, k + 2, k + 3, k + 5}, {k + 1, k + 2, k + 4, k + 5}, {k + 1, k + 5, k + 2, k + 4}};
+  for (const auto& q : pairs) {
+    const int u = q[0] % n, v = q[1] % n, u2 = q[2] % n, v2 = q[3] % n;
+    auto difference = [&] { return (edge(u, v, nullptr) - edge(u2, v2, nullptr)) / s.L; };
+    c.add(
+        [&] {
+          return "(|V" + std::to_string(u + 1) + "V" + std::to_string(v + 1) + "| - |V" + std::to_string(u2 + 1) + "V" +
+                 std::to_string(v2 + 1) + "|) / L";
+        },
+        difference,
+        [&] {
+          GeometryVector g1, g2;
+          edge(u, v, &g1);
+          edge(u2, v2, &g2);
+          return GeometryVector((g1 - g2) / s.L - (difference() / s.L) * s.dL);
+        });
+  }
+}
+
 // The 5R families built from two Bennett loops sharing a link: Goldberg's,
 // its symmetric case Myard's and its bent-link variant.
 constexpr bool goldberg_type(Family family) {
@@ -678,6 +734,8 @@ inline int condition_sets(Family family, int joints) {
       return 4;
     case Family::bennett_pair:
       return 4;
+    case Family::bricard_octahedral_plane:
+      return 3;
     case Family::bennett_dyads:
     case Family::sarrus:
     case Family::bricard_line_symmetric:
@@ -696,7 +754,8 @@ inline int condition_sets(Family family, int joints) {
 // tabulates them only then).
 constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
-         family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus;
+         family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus ||
+         family == Family::bricard_octahedral_plane;
 }
 
 template <Family F, class RepresentationView, class Sink>
@@ -724,6 +783,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     bennett_dyads_conditions(w, c);
   } else if constexpr (F == Family::sarrus) {
     sarrus_conditions(w, c);
+  } else if constexpr (F == Family::bricard_octahedral_plane) {
+    bricard_octahedral_plane_conditions(set, w, c);
   } else if (set == 0) {
     adjacent_coaxial_conditions(w, c);
   } else {

@@ -98,6 +98,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       return distance_over_representations<Family::bennett_dyads>(geometry, gradient);
     case Family::sarrus:
       return distance_over_representations<Family::sarrus>(geometry, gradient);
+    case Family::bricard_octahedral_plane:
+      return distance_over_representations<Family::bricard_octahedral_plane>(geometry, gradient);
     case Family::degenerate:
       throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified:
@@ -131,6 +133,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::bennett_pair:
     case Family::bennett_dyads:
     case Family::sarrus:
+    case Family::bricard_octahedral_plane:
       best = best_for(family, geometry, true);
       break;
     case Family::degenerate:

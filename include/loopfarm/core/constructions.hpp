@@ -273,4 +273,20 @@ struct Sarrus6R {
 // Nothing where a chain cannot reach (its circles do not meet) at s.
 std::optional<PosedLoop> sarrus_6r(const Sarrus6R& parameters, double s);
 
+// ---------------------------------------------------------------------------
+// Bricard's plane-symmetric octahedron (his second type) as a 6R loop
+//
+// The octahedron's vertices P and T (opposite) lie in the mirror plane
+// z = 0; Q and R lie off it, U and S are their mirror images, so the mirror
+// maps Q onto its opposite vertex U and R onto its opposite S. The loop's
+// joints are the hinges PS, SQ, QT, TR, RU, UP, each axis directed from the
+// first vertex to the second (the faces PQR and STU are left out): every
+// a_i = 0, and the DH parameters and the pose are read off the axes in the
+// pose the vertices give.
+struct OctahedronPlane {
+  Vector3 p{1.0, 0.2, 0.0}, t{-0.9, -0.1, 0.0};  // in the plane: their z is ignored
+  Vector3 q{0.1, 1.1, 0.8}, r{0.3, -1.0, 0.6};   // off it
+};
+PosedLoop bricard_octahedral_plane(const OctahedronPlane& vertices);
+
 }  // namespace loopfarm

@@ -30,6 +30,10 @@
 //              two pairs of consecutive links (2, 3 and 5, 6 of a
 //              representation) and cos^2(alpha1) = cos^2(alpha4); the link
 //              between the chains translates along one line
+//   bricard_octahedral_plane (n = 6) every a_i = 0: the axes' meeting
+//              points are the vertices of an octahedron with a mirror plane
+//              through two opposite vertices that maps each other vertex onto
+//              its opposite one (six pairs of equal edges)
 //   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
 //              or pi) and the (n-1)R loop with them merged is in a movable
 //              family (not trivial); or a joint stays locked over the motion
@@ -75,6 +79,9 @@ enum class Family {
   bennett_dyads,
   // 6R: two chains of three parallel axes (Sarrus)
   sarrus,
+  // 6R: every a_i = 0, the axes' meeting points a Bricard octahedron
+  // symmetric in a plane through two opposite vertices (his second type)
+  bricard_octahedral_plane,
 };
 const char* to_string(Family family);
 
@@ -97,6 +104,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::bennett_pair,
     Family::bennett_dyads,
     Family::sarrus,
+    Family::bricard_octahedral_plane,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -151,8 +159,8 @@ struct Classification {
   std::vector<Family> fitting;
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
-  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads, sarrus (the
-  // order they are tried).
+  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads, sarrus,
+  // bricard_octahedral_plane (the order they are tried).
   std::vector<FamilyCheck> checks;
 };
 
