@@ -48,6 +48,18 @@ struct TiedFixture {
     x << 2.1, 3.7, 3.2, rad(20), rad(25), rad(45), 0.15, -0.1;
     return x;
   }
+  // A direction of small steps away from x0 along which the cycle stays smooth.
+  Eigen::VectorXd path_direction() const {
+    Eigen::VectorXd direction(job.space.free_count());
+    direction << 0.3, -0.2, 0.1, rad(2), rad(-1), rad(1.5), 0.05, 0.02;
+    return direction;
+  }
+  // The job's loop settings, each evaluation walking its cycle from the assembly.
+  ObjectiveOptions fresh_options() const {
+    ObjectiveOptions options = ObjectiveOptions::from_loop(job.loop);
+    options.reuse_nearby_cycle = false;
+    return options;
+  }
 };
 
 Eigen::VectorXd central_gradient(CycleObjective& objective, const Eigen::VectorXd& x, double h) {
@@ -212,12 +224,9 @@ TEST(Objective, MaxMeasureHasTheWorstSamplesGradientAndResiduals) {
 // solve's tolerance, at a fraction of the Newton iterations.
 TEST(Objective, ReusedNearbyCyclesAgreeWithFreshOnesAndCostFewerIterations) {
   TiedFixture f;
-  ObjectiveOptions fresh_options = ObjectiveOptions::from_loop(f.job.loop);
-  fresh_options.reuse_nearby_cycle = false;
-  CycleObjective fresh(f.job.space, fresh_options, f.theta);
+  CycleObjective fresh(f.job.space, f.fresh_options(), f.theta);
   CycleObjective reused(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
-  Eigen::VectorXd direction(f.job.space.free_count());
-  direction << 0.3, -0.2, 0.1, rad(2), rad(-1), rad(1.5), 0.05, 0.02;
+  const Eigen::VectorXd direction = f.path_direction();
   long long fresh_iterations = 0, reused_iterations = 0;
   for (int k = 0; k <= 10; ++k) {
     const Eigen::VectorXd x = f.x0() + (0.005 * k) * direction;
@@ -242,13 +251,10 @@ TEST(Objective, ReusedNearbyCyclesAgreeWithFreshOnesAndCostFewerIterations) {
 // were.
 TEST(Objective, PredictedNearbySamplesGiveTheSameValuesInFewerIterations) {
   TiedFixture f;
-  ObjectiveOptions fresh_options = ObjectiveOptions::from_loop(f.job.loop);
-  fresh_options.reuse_nearby_cycle = false;
-  CycleObjective fresh(f.job.space, fresh_options, f.theta);
+  CycleObjective fresh(f.job.space, f.fresh_options(), f.theta);
   CycleObjective predicted(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
   CycleObjective unpredicted(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
-  Eigen::VectorXd direction(f.job.space.free_count());
-  direction << 0.3, -0.2, 0.1, rad(2), rad(-1), rad(1.5), 0.05, 0.02;
+  const Eigen::VectorXd direction = f.path_direction();
   long long predicted_iterations = 0, unpredicted_iterations = 0;
   Eigen::VectorXd r;
   Eigen::MatrixXd J;
@@ -275,9 +281,7 @@ TEST(Objective, PredictedNearbySamplesGiveTheSameValuesInFewerIterations) {
 // and gives the fresh value exactly.
 TEST(Objective, AFarStepFallsBackToTheFreshCycle) {
   TiedFixture f;
-  ObjectiveOptions fresh_options = ObjectiveOptions::from_loop(f.job.loop);
-  fresh_options.reuse_nearby_cycle = false;
-  CycleObjective fresh(f.job.space, fresh_options, f.theta);
+  CycleObjective fresh(f.job.space, f.fresh_options(), f.theta);
   CycleObjective reused(f.job.space, ObjectiveOptions::from_loop(f.job.loop), f.theta);
   Eigen::VectorXd far = f.x0();
   far[0] = 4.5;       // a1 from 2.1
@@ -305,8 +309,7 @@ TEST(Objective, AnEvaluationAboveItsCeilingIsAbandonedWithALowerBound) {
     options.min_travel = rad(60);  // a travel factor well above 1
     CycleObjective whole(f.job.space, options, f.theta);
     CycleObjective bounded(f.job.space, options, f.theta);
-    Eigen::VectorXd direction(f.job.space.free_count());
-    direction << 0.3, -0.2, 0.1, rad(2), rad(-1), rad(1.5), 0.05, 0.02;
+    const Eigen::VectorXd direction = f.path_direction();
     const Eigen::VectorXd x1 = f.x0() + 0.01 * direction;
     Eigen::VectorXd r;
     const ObjectiveValue at_x0 = whole.evaluate_residuals(f.x0(), r, nullptr);
