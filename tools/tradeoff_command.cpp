@@ -34,6 +34,7 @@ struct TradeoffArguments {
   std::string algorithms = "gauss-newton,LD_LBFGS,LD_SLSQP,LD_MMA,LN_BOBYQA";
   std::string zero_thresholds = "1e-8,1e-12,1e-16,1e-20,1e-24";
   std::string ftol_rels = "0,1e-4,1e-3,1e-2";
+  std::string progress_windows = "0";
   std::string reuse_nearby_cycles = "true,false";
   std::string analysis_steps = "64,128,360";
   std::string csv;
@@ -127,6 +128,12 @@ TradeoffOptions read_options(const TradeoffArguments& args) {
       args.zero_thresholds, "--zero-thresholds", [](double v) { return v > 0.0 && v < 1.0; }, "in (0, 1)");
   o.ftol_rels = checked_numbers(
       args.ftol_rels, "--ftol-rels", [](double v) { return v >= 0.0 && v < 1.0; }, "in [0, 1)");
+  o.progress_windows.clear();
+  for (double w : checked_numbers(
+           args.progress_windows, "--progress-windows",
+           [](double v) { return v >= 0 && v <= 100000000 && v == std::floor(v); }, "a whole number in [0, 1e8]")) {
+    o.progress_windows.push_back(static_cast<int>(w));
+  }
   o.reuse_nearby_cycles.clear();
   for (const std::string& r : parse_word_list(args.reuse_nearby_cycles, "--reuse-nearby-cycles")) {
     if (r != "true" && r != "false") {
@@ -208,7 +215,7 @@ void print_table(const std::vector<TradeoffRow>& rows) {
 constexpr double kErrorFloor = 0.01;  // [%]
 
 // The colour of an axis's markers: Okabe and Ito's palette, then Tol's
-// muted wine, olive and indigo, and grey.
+// muted wine, teal, olive and indigo, and grey.
 const char* axis_colour(const std::string& axis) {
   static const std::pair<const char*, const char*> colours[] = {{"base", "#000000"},
                                                                 {"samples", "#0072b2"},
@@ -218,6 +225,7 @@ const char* axis_colour(const std::string& axis) {
                                                                 {"objective", "#882255"},
                                                                 {"algorithm", "#d55e00"},
                                                                 {"ftol_rel", "#cc79a7"},
+                                                                {"progress_window", "#44aa99"},
                                                                 {"reuse_nearby_cycle", "#999933"},
                                                                 {"zero_threshold", "#332288"},
                                                                 {"analysis_steps", "#777777"}};
@@ -430,6 +438,10 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
       ->type_name("LIST")
       ->capture_default_str();
   app->add_option("--ftol-rels", args->ftol_rels, "relative-decrease stops of the local search tried (0: off)")
+      ->type_name("LIST")
+      ->capture_default_str();
+  app->add_option("--progress-windows", args->progress_windows,
+                  "progress stops of the local search tried, in evaluations (0: off), with the job's progress_factor")
       ->type_name("LIST")
       ->capture_default_str();
   app->add_option("--reuse-nearby-cycles", args->reuse_nearby_cycles,

@@ -59,8 +59,8 @@ int run_verify(const VerifyArguments& args) {
   // The cycle energy, only where it means something: driven along the
   // verified motion, from a pose on it (motion_window says where and over
   // what input range).
-  const std::optional<MotionWindow> window =
-      motion_window(geometry, verification, options.verification.theta0, options.verification);
+  const std::optional<MotionWindow> window = motion_window(geometry, verification, options.verification.theta0,
+                                                           options.verification, static_cast<int>(samples));
   const LoopModel model(geometry);
   EquilibriumWorkspace workspace(model);
   CycleSummary cycle;
@@ -144,7 +144,8 @@ Subcommand add_verify_command(CLI::App& parent) {
   CLI::Option* theta0 =
       app->add_option("--theta0-deg", args->theta0_deg,
                       "input angle theta0 [deg]: report the circuit whose input reaches it and start the cycle there "
-                      "(default: from --theta-deg, else 0 for a full turn and the middle of a rocker's range)")
+                      "(default: from --theta-deg, else 0 for a full turn, moved off the circuit's singular poses, "
+                      "and the middle of a rocker's range)")
           ->type_name("DEG");
   args->geometry.theta_option->excludes(theta0);
   app->add_option("--samples", args->samples, "cycle samples for E_mean and the local dimension")

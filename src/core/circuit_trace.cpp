@@ -28,6 +28,13 @@ constexpr int kProbes = 48;
 constexpr double kSingularTolerance = 1e-5;
 // A tangent component or singular value below this is round-off.
 constexpr double kNoise = 1e-10;
+// Extremes located per joint and walk, at most: a joint the motion barely
+// turns (by 1e-6 deg, say) can have a tangent component just above round-off
+// whose sign flips at nearly every step, and each flip would cost a root
+// search of its own (708 per joint, 40 s and more, for one zero of the
+// generic 6R job). Past the cap the joint's range is read off the walk's
+// points.
+constexpr int kMaxExtremesPerJoint = 16;
 
 // What the continuation needs at a closed point: the unit tangent (null
 // vector of the system's Jacobian, rank n - 1), the smallest retained
@@ -315,6 +322,7 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
   double s = 0.0;
   double h = o.max_step;
   int halvings = 0;
+  std::array<int, kMaxJoints> located{};  // extremes located per joint
   while (true) {
     if (static_cast<int>(walk.points.size()) + 1 >= max_points) {
       walk.end = CircuitEnd::too_long;
@@ -376,7 +384,9 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
     // below n - 1 all along.
     for (int j = first; j <= last; ++j) {
       const double a = info.tangent[j], b = next_info.tangent[j];
-      if (((a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0)) && std::max(std::abs(a), std::abs(b)) > kNoise) {
+      if (((a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0)) && std::max(std::abs(a), std::abs(b)) > kNoise &&
+          located[static_cast<size_t>(j)] < kMaxExtremesPerJoint) {
+        ++located[static_cast<size_t>(j)];
         locate_extreme(system, x, info, next, next_info, j, s, o, walk);
       }
     }

@@ -312,10 +312,10 @@ class Stepper {
 class CeilingWatch {
  public:
   CeilingWatch(const CycleCeiling& ceiling, int samples) : ceiling_(ceiling), samples_(samples) {}
-  bool bounded() const { return ceiling_.mean < kInfinity || ceiling_.max < kInfinity; }
+  bool bounded() const { return ceiling_.mean < kInfinity || ceiling_.max < kInfinity || ceiling_.failed_sample; }
   // Adds a solved sample; true once the cycle is known to exceed the ceiling.
   bool exceeded_after(const CycleSample& sample) {
-    if (sample.status == SampleStatus::failed) return false;
+    if (sample.status == SampleStatus::failed) return ceiling_.failed_sample;
     sum_ += sample.energy;
     max_ = std::max(max_, sample.energy);
     return sum_ / samples_ > ceiling_.mean || max_ > ceiling_.max;

@@ -18,12 +18,14 @@
 #include <Eigen/Cholesky>
 
 #include "loopfarm/search/local_search.hpp"
+#include "progress_watch.hpp"
 
 namespace loopfarm {
 namespace {
 
 constexpr double kInitialDampingScale = 1e-3;  // mu0 = this * max diag(JᵀJ)
 constexpr double kMaxDamping = 1e20;           // relative to the scaling: give up beyond
+constexpr const char* kSlowProgress = "objective fell by less than progress_factor over progress_window evaluations";
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -78,12 +80,14 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
     return summary;
   };
 
+  detail::ProgressWatch progress(opt);
   double mu = -1.0;  // set from the first JᵀJ
   double nu = 2.0;
   Eigen::VectorXd step = Eigen::VectorXd::Zero(k);
   for (int iteration = 1;; ++iteration) {
     if (current.value <= opt.stopval) return finish(SearchStatus::stopval_reached, "objective below stopval");
     if (evaluations() >= opt.max_evaluations) return finish(SearchStatus::maxeval_reached, "max_evaluations reached");
+    if (progress.too_slow(evaluations(), current.value)) return finish(SearchStatus::slow_progress, kSlowProgress);
     if (opt.time_limit > 0 && seconds_since(start_time) >= opt.time_limit) {
       return finish(SearchStatus::maxtime_reached, "time limit reached");
     }
@@ -177,6 +181,7 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
           return finish(SearchStatus::xtol_reached, "step vanished at the bounds");
         if (evaluations() >= opt.max_evaluations)
           return finish(SearchStatus::maxeval_reached, "max_evaluations reached");
+        if (progress.too_slow(evaluations(), current.value)) return finish(SearchStatus::slow_progress, kSlowProgress);
         if (opt.time_limit > 0 && seconds_since(start_time) >= opt.time_limit) {
           return finish(SearchStatus::maxtime_reached, "time limit reached");
         }

@@ -146,8 +146,8 @@ Job parse_table(const toml::table& root, const std::string& file) {
 
   if (const toml::table* t = section("optimizer")) {
     for_each_key(r, *t, "optimizer",
-                 {"algorithm", "xtol_rel", "ftol_rel", "ftol_abs", "stopval", "max_evaluations", "time_limit_s",
-                  "reuse_nearby_cycle"},
+                 {"algorithm", "xtol_rel", "ftol_rel", "ftol_abs", "stopval", "max_evaluations", "progress_window",
+                  "progress_factor", "time_limit_s", "reuse_nearby_cycle"},
                  [&](const std::string& k, const std::string& full, const toml::node& node) {
                    if (k == "algorithm") {
                      job.optimizer.algorithm = r.string(node, full);
@@ -174,6 +174,15 @@ Job parse_table(const toml::table& root, const std::string& file) {
                      if (n <= 0 || n > 100000000)
                        r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [1, 1e8]");
                      job.optimizer.max_evaluations = static_cast<int>(n);
+                   } else if (k == "progress_window") {
+                     const long long n = r.integer(node, full);
+                     if (n < 0 || n > 100000000)
+                       r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [0, 1e8] (0: not used)");
+                     job.optimizer.progress_window = static_cast<int>(n);
+                   } else if (k == "progress_factor") {
+                     const double f = r.number(node, full);
+                     if (!(f > 1.0)) r.fail(node.source(), full, "got " + format(f) + "; must be > 1");
+                     job.optimizer.progress_factor = f;
                    } else if (k == "time_limit_s") {
                      job.optimizer.time_limit = r.positive(node, full, false);
                    } else if (k == "reuse_nearby_cycle") {

@@ -15,6 +15,8 @@ const char* to_string(SearchStatus status) {
       return "xtol_reached";
     case SearchStatus::maxeval_reached:
       return "maxeval_reached";
+    case SearchStatus::slow_progress:
+      return "slow_progress";
     case SearchStatus::maxtime_reached:
       return "maxtime_reached";
     case SearchStatus::roundoff_limited:

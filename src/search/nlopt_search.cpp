@@ -6,6 +6,7 @@
 // which (roundoff_limited, forced_stop) still leave a usable best point: every
 // outcome is mapped to a SearchStatus and the best point seen is kept, since
 // after an exception the wrapper's x need not hold it.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -16,6 +17,7 @@
 #include <nlopt.hpp>
 
 #include "loopfarm/search/local_search.hpp"
+#include "progress_watch.hpp"
 
 namespace loopfarm {
 namespace {
@@ -27,10 +29,18 @@ struct Context {
   Eigen::VectorXd best_x;
   ObjectiveValue best;
   bool have_best = false;
+  detail::ProgressWatch* progress = nullptr;
+  bool too_slow = false;  // the progress stop forced NLopt to stop
 };
 
 double objective_function(unsigned k, const double* x, double* grad, void* data) {
   Context& c = *static_cast<Context*>(data);
+  // Some NLopt codes (Luksan's LBFGS) call again after a forced stop before
+  // they return: no further cycle is evaluated.
+  if (c.too_slow) {
+    if (grad) std::fill(grad, grad + k, 0.0);
+    return std::numeric_limits<double>::infinity();
+  }
   const Eigen::Map<const Eigen::VectorXd> point(x, k);
   Eigen::VectorXd gradient;
   const ObjectiveValue v = c.objective->evaluate(point, grad ? &gradient : nullptr);
@@ -54,7 +64,12 @@ double objective_function(unsigned k, const double* x, double* grad, void* data)
   }
   // A geometry that cannot be assembled has no energy: +inf steers every
   // NLopt algorithm away from it (they compare values; none differentiates inf).
-  return v.ok ? v.value : std::numeric_limits<double>::infinity();
+  const double value = v.ok ? v.value : std::numeric_limits<double>::infinity();
+  if (c.progress->too_slow(c.objective->evaluations() - c.first_evaluation, value)) {
+    c.too_slow = true;
+    throw nlopt::forced_stop();
+  }
+  return value;
 }
 
 SearchStatus status_of(nlopt::result result) {
@@ -100,6 +115,8 @@ LocalSearchSummary minimize_nlopt(CycleObjective& objective, const Eigen::Vector
   context.objective = &objective;
   context.options = &options;
   context.first_evaluation = objective.evaluations();
+  detail::ProgressWatch progress(opt);
+  context.progress = &progress;
   std::vector<double> x(x0.data(), x0.data() + k);
   for (int i = 0; i < k; ++i) x[static_cast<size_t>(i)] = std::clamp(x[static_cast<size_t>(i)], lower[i], upper[i]);
 
@@ -138,6 +155,12 @@ LocalSearchSummary minimize_nlopt(CycleObjective& objective, const Eigen::Vector
     summary.message = std::string("NLopt: failure: ") + e.what();
   }
 
+  if (context.too_slow) {
+    // Whatever the algorithm made of the forced stop (Luksan's LBFGS reports
+    // a failure), the progress stop ended it.
+    summary.status = SearchStatus::slow_progress;
+    summary.message = "objective fell by less than progress_factor over progress_window evaluations";
+  }
   summary.evaluations = objective.evaluations() - context.first_evaluation;
   summary.iterations = summary.evaluations;
   if (!context.have_best) {

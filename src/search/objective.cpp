@@ -92,12 +92,14 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x, double ceiling) {
   }
   // F = M E >= deflation * E (the travel factor is at least 1): the energy's
   // own ceiling, widened by a relative 1e-12 against round-off in the cycle's
-  // partial sums, so that no point the ceiling admits is given up.
+  // partial sums, so that no point the ceiling admits is given up. A failed
+  // sample gives the cycle up too (evaluate_residuals).
   CycleCeiling energy_ceiling;
   if (ceiling < std::numeric_limits<double>::infinity()) {
     deflation_ = deflation(nullptr);
     const double bound = ceiling / deflation_ * (1.0 + 1e-12);
     (options_.measure == CycleMeasure::mean ? energy_ceiling.mean : energy_ceiling.max) = bound;
+    energy_ceiling.failed_sample = true;
   }
   model_ = std::make_unique<LoopModel>(geometry_, options_.equilibrium);
   workspace_ = std::make_unique<EquilibriumWorkspace>(*model_);

@@ -64,6 +64,34 @@ std::string degrees(double radians) {
   return buffer;
 }
 
+// The start of a full turn of `samples` samples nearest 0 that keeps every
+// sample a quarter of their spacing h away from the circuit's singular poses,
+// else the one of the offsets 0, +-h/16, ..., +-15 h/16 that keeps them furthest.
+double full_turn_start(const Circuit& c, int input, int samples) {
+  if (samples <= 0 || c.bifurcations.empty()) return 0.0;
+  const double h = 2.0 * kPi / samples;
+  auto clearance = [&](double theta0) {
+    double least = kPi;
+    for (const Bifurcation& b : c.bifurcations) {
+      // The distance from b's input to the nearest sample theta0 + k h.
+      const double offset = std::remainder(b.theta[input] - theta0, h);
+      least = std::min(least, std::abs(offset));
+    }
+    return least;
+  };
+  double best = 0.0, best_clearance = clearance(0.0);
+  for (int step = 1; step < 16 && best_clearance < 0.25 * h; ++step) {
+    for (const double theta0 : {step * h / 16, -step * h / 16}) {
+      const double here = clearance(theta0);
+      if (here > best_clearance) {
+        best = theta0;
+        best_clearance = here;
+      }
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 MotionOptions VerificationOptions::motion() const {
@@ -191,7 +219,8 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
 }
 
 std::optional<MotionWindow> motion_window(const LoopGeometry& geometry, const VerificationSummary& v,
-                                          std::optional<double> theta0, const VerificationOptions& options) {
+                                          std::optional<double> theta0, const VerificationOptions& options,
+                                          int samples) {
   if (!v.verified || v.circuit < 0) return std::nullopt;
   const Circuit& c = v.motion.circuits[static_cast<size_t>(v.circuit)];
   const int input = options.input_joint;
@@ -199,7 +228,7 @@ std::optional<MotionWindow> motion_window(const LoopGeometry& geometry, const Ve
   MotionWindow w;
   const JointRange& r = c.input_range(input);
   if (r.crank()) {
-    w.theta0 = theta0.value_or(0.0);
+    w.theta0 = theta0 ? *theta0 : full_turn_start(c, input, samples);
     w.range = 2.0 * kPi;
   } else {
     double centre = 0.5 * (r.lo + r.hi);

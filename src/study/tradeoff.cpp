@@ -99,6 +99,9 @@ void TradeoffOptions::validate() const {
   for (double f : ftol_rels) {
     if (!(f >= 0.0 && f < 1.0)) fail("ftol_rels: each must be in [0, 1), got " + format_number(f));
   }
+  for (int w : progress_windows) {
+    if (w < 0 || w > 100000000) fail("progress_windows: each must be in [0, 1e8], got " + std::to_string(w));
+  }
   for (int steps : analysis_steps) {
     if (steps < 64 || steps > 100000)
       fail("analysis_steps: each must be in [64, 100000], got " + std::to_string(steps));
@@ -157,6 +160,10 @@ std::vector<TradeoffConfiguration> tradeoff_configurations(const Job& base, cons
   for (double f : options.ftol_rels) {
     if (f == base.optimizer.ftol_rel) continue;
     add("ftol_rel", format_number(f), [f](Job& job) { job.optimizer.ftol_rel = f; });
+  }
+  for (int w : options.progress_windows) {
+    if (w == base.optimizer.progress_window) continue;
+    add("progress_window", std::to_string(w), [w](Job& job) { job.optimizer.progress_window = w; });
   }
   for (bool r : options.reuse_nearby_cycles) {
     if (r == base.optimizer.reuse_nearby_cycle) continue;

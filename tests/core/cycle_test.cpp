@@ -392,6 +392,42 @@ TEST(Cycle, ACycleAboveItsCeilingIsAbandonedWithLowerBounds) {
   EXPECT_EQ(walked.E_mean, whole.E_mean);
 }
 
+// A failed sample abandons a cycle whose ceiling asks for it, at that
+// sample: the kite 2,1,1,2 rocks over [120, 240] deg only, and from its
+// stretched pose at 0 deg every sample of the turn fails (each after the
+// walk's bisections) and reads near zero (docs/quality/stability.md, S4).
+// Walked with the flag, the cycle stops at the first one, for a fraction of
+// the iterations; a cycle without failed samples is not touched by it.
+TEST(Cycle, AFailedSampleAbandonsACycleWhoseCeilingRejectsThem) {
+  const LoopGeometry kite = planar_four_bar(2, 1, 1, 2);
+  const LoopModel model(kite);
+  EquilibriumWorkspace ws(model);
+  CycleOptions options;
+  options.samples = 8;
+  JointVector stretched(4);
+  stretched << 0.0, 0.0, kPi, 0.0;
+  const EquilibriumState from = EquilibriumState::at_angles(model, stretched);
+  CycleSummary whole, given_up;
+  cycle_energy(model, ws, 0.0, from, options, whole);
+  ASSERT_EQ(whole.failed_samples, 8);
+  ASSERT_FALSE(whole.abandoned);
+  cycle_energy(model, ws, 0.0, from, options, given_up, {.failed_sample = true});
+  EXPECT_TRUE(given_up.abandoned);
+  EXPECT_LT(3 * given_up.total_iterations, whole.total_iterations);
+
+  // A window of 60 deg around 180 deg, inside the range, fails nowhere: the
+  // flag changes nothing there.
+  options.range = rad(60);
+  const EquilibriumSummary inside = assemble(model, ws, kPi);
+  ASSERT_EQ(inside.status, SolveStatus::converged);
+  CycleSummary free_walk, flagged;
+  cycle_energy(model, ws, kPi, inside.state, options, free_walk);
+  ASSERT_EQ(free_walk.failed_samples, 0);
+  cycle_energy(model, ws, kPi, inside.state, options, flagged, {.failed_sample = true});
+  EXPECT_FALSE(flagged.abandoned);
+  EXPECT_EQ(flagged.E_mean, free_walk.E_mean);
+}
+
 // cycle_energy_from_nearby against the walk: the long-link loop's cycle
 // re-solved at a1 a little further gives every sample's energy and angles of
 // the walk at that geometry (to the solve's tolerance); a nearby cycle with a

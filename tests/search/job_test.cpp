@@ -43,6 +43,8 @@ ftol_rel = 1e-12
 ftol_abs = 1e-20
 stopval = 1e-24
 max_evaluations = 250
+progress_window = 40
+progress_factor = 3
 time_limit_s = 12.5
 reuse_nearby_cycle = false
 
@@ -117,6 +119,8 @@ TEST(Job, ParsesEveryTableInTheDocumentedUnits) {
   EXPECT_EQ(job.optimizer.ftol_abs, 1e-20);
   EXPECT_EQ(job.optimizer.stopval, 1e-24);
   EXPECT_EQ(job.optimizer.max_evaluations, 250);
+  EXPECT_EQ(job.optimizer.progress_window, 40);
+  EXPECT_EQ(job.optimizer.progress_factor, 3.0);
   EXPECT_EQ(job.optimizer.time_limit, 12.5);
   EXPECT_FALSE(job.optimizer.reuse_nearby_cycle);
   EXPECT_EQ(job.search.starts, 1000);
@@ -145,6 +149,7 @@ TEST(Job, EmptyFileGivesTheDocumentedDefaults) {
   EXPECT_EQ(job.space.lower_bounds()[8], -1.0);
   EXPECT_EQ(job.optimizer.algorithm, "gauss-newton");
   EXPECT_TRUE(job.optimizer.reuse_nearby_cycle);
+  EXPECT_EQ(job.optimizer.progress_window, 0);  // the progress stop is off
   EXPECT_EQ(job.search.starts, 100);
   EXPECT_FALSE(job.steering.nontrivial);
   EXPECT_TRUE(job.steering.deflate.empty());
@@ -315,6 +320,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadJob{"algorithm", "[optimizer]\nalgorithm = \"LD_FAST\"\n", 2, "optimizer.algorithm", "unknown algorithm"},
         BadJob{"stogo", "[optimizer]\nalgorithm = \"GD_STOGO\"\n", 2, "optimizer.algorithm", "Debian"},
         BadJob{"max_eval", "[optimizer]\nmax_evaluations = 0\n", 2, "optimizer.max_evaluations", "[1, 1e8]"},
+        BadJob{"progress_window", "[optimizer]\nprogress_window = -1\n", 2, "optimizer.progress_window", "[0, 1e8]"},
+        BadJob{"progress_window_type", "[optimizer]\nprogress_window = 2.5\n", 2, "optimizer.progress_window",
+               "an integer"},
+        BadJob{"progress_factor", "[optimizer]\nprogress_factor = 1\n", 2, "optimizer.progress_factor", "> 1"},
         BadJob{"time_negative", "[optimizer]\ntime_limit_s = -1\n", 2, "optimizer.time_limit_s", ">= 0"},
         BadJob{"reuse_nearby_cycle", "[optimizer]\nreuse_nearby_cycle = \"yes\"\n", 2, "optimizer.reuse_nearby_cycle",
                "true or false"},

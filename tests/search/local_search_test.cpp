@@ -1,12 +1,14 @@
 #include "loopfarm/search/local_search.hpp"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <nlopt.h>
 
 #include "loopfarm/search/job.hpp"
+#include "progress_watch.hpp"
 #include "search_fixtures.hpp"
 #include "test_support.hpp"
 
@@ -107,6 +109,60 @@ TEST(LocalSearch, EveryLimitMapsToItsStatus) {
   Job job = bennett_job("GD_STOGO", 10);
   const LocalSearchSummary s = minimise(job, x0);
   EXPECT_EQ(s.status, SearchStatus::invalid_args) << s.message;
+}
+
+// The progress stop's arithmetic on a hand-made series: the best value after
+// e evaluations against the best W evaluations before, over a factor F.
+TEST(ProgressWatch, ComparesTheBestValueWithTheBestOneWindowBefore) {
+  OptimizerSection optimizer;
+  optimizer.max_evaluations = 20;
+  optimizer.progress_window = 3;
+  optimizer.progress_factor = 10.0;
+  detail::ProgressWatch watch(optimizer);
+  EXPECT_FALSE(watch.too_slow(1, 1.0));  // fewer than W evaluations
+  EXPECT_FALSE(watch.too_slow(2, 0.5));
+  EXPECT_FALSE(watch.too_slow(3, 0.2));   // nothing 3 evaluations before the first
+  EXPECT_FALSE(watch.too_slow(4, 0.05));  // 0.05 <= 1.0 / 10
+  EXPECT_FALSE(watch.too_slow(5, 0.04));  // 0.04 <= 0.5 / 10
+  // A worse value leaves the best at 0.04, above 0.2 / 10.
+  EXPECT_TRUE(watch.too_slow(6, 1.0));
+
+  // Evaluations the caller did not report (rejected trials) keep the best
+  // before them; an infinite value (no assembly) counts as no progress.
+  detail::ProgressWatch gaps(optimizer);
+  EXPECT_FALSE(gaps.too_slow(1, 1.0));
+  EXPECT_FALSE(gaps.too_slow(4, 0.01));  // against 1.0, the best after evaluation 1
+  // 0.01 against 1.0, still the best after evaluation 3:
+  EXPECT_FALSE(gaps.too_slow(6, std::numeric_limits<double>::infinity()));
+  EXPECT_TRUE(gaps.too_slow(7, 0.005));  // against 0.01, the best since evaluation 4
+
+  optimizer.progress_window = 0;  // off
+  detail::ProgressWatch off(optimizer);
+  for (int e = 1; e <= 20; ++e) EXPECT_FALSE(off.too_slow(e, 1.0)) << e;
+}
+
+// Both drivers stop on it: asked for a factor no search achieves, they stop
+// as soon as a window has passed; with a window of 5 evaluations and a factor
+// of 10 the quadratically converging Bennett search is not stopped.
+TEST(LocalSearch, TheProgressStopEndsCreepingSearchesOnly) {
+  const Eigen::VectorXd x0 = perturbed_paper_point();
+  for (const std::string algorithm : {"gauss-newton", "LD_LBFGS", "LN_BOBYQA"}) {
+    Job job = bennett_job(algorithm, 400);
+    job.optimizer.progress_window = 2;
+    job.optimizer.progress_factor = 1e300;
+    const LocalSearchSummary s = minimise(job, x0);
+    EXPECT_EQ(s.status, SearchStatus::slow_progress) << algorithm << " " << s.message;
+    // At the third evaluation, the first with one two evaluations before it;
+    // NLopt's driver then re-evaluates its best point.
+    EXPECT_LE(s.evaluations, 4) << algorithm;
+    EXPECT_TRUE(std::isfinite(s.value)) << algorithm;
+  }
+  Job job = bennett_job("gauss-newton", 400);
+  job.optimizer.progress_window = 5;
+  job.optimizer.progress_factor = 10.0;
+  const LocalSearchSummary s = minimise(job, x0);
+  EXPECT_EQ(s.status, SearchStatus::stopval_reached) << s.message;
+  EXPECT_LT(std::abs(bennett_condition(s.x)), 1e-12);
 }
 
 TEST(LocalSearch, EveryAlgorithmAJobMayNameRunsAndNoneIsRejectedByNlopt) {

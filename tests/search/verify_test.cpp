@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "loopfarm/core/assembly.hpp"
+#include "loopfarm/core/cycle.hpp"
 #include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
@@ -151,6 +152,55 @@ TEST(Verify, MotionWindowIsAFullTurnForACrankAndInsideTheRangeForARocker) {
   // Not verified: no window.
   const LoopGeometry rigid = random_loop(4, 1);
   EXPECT_FALSE(motion_window(rigid, verify_motion(rigid, nullptr), 0.0).has_value());
+}
+
+// A full turn whose default start is a singular pose: an L-shaped
+// Goldberg-type 6R (Bennett loops fused at psi = pi, to 12 digits) whose
+// circuit passes two, at inputs 0 and 180 deg. A cycle of 32 samples from
+// 0 deg has a sample on each, leaves the motion there and is no zero
+// (E_mean 3.7e-4); the window moved off them is one. A start asked for, or
+// no sample count, keeps 0.
+TEST(Verify, AFullTurnStartsOffTheSingularPosesOfItsCircuit) {
+  const std::vector<double> a = {2.569615506024, 1, 0.6, 1.7, 1.969615506024, 2.7};
+  const std::vector<double> alpha = {97.4576031237, 30, 17.4576031237, 58.2116693829, 80, 88.2116693829};
+  const std::vector<double> d(6, 0.0);
+  const LoopGeometry g = LoopGeometry::from_degrees(a, alpha, d);
+  const VerificationSummary v = verify_motion(g, nullptr);
+  ASSERT_TRUE(v.verified);
+  ASSERT_TRUE(v.full_turn);
+  const Circuit& c = v.motion.circuits[static_cast<size_t>(v.circuit)];
+  ASSERT_FALSE(c.bifurcations.empty());
+  const int N = 32;
+  const double h = 2 * kPi / N;
+  const std::optional<MotionWindow> moved = motion_window(g, v, std::nullopt, {}, N);
+  ASSERT_TRUE(moved.has_value());
+  EXPECT_NE(moved->theta0, 0.0);
+  EXPECT_LE(std::abs(moved->theta0), h);
+  for (const Bifurcation& b : c.bifurcations) {
+    EXPECT_GE(std::abs(std::remainder(b.theta[0] - moved->theta0, h)), 0.25 * h - 1e-12) << deg(b.theta[0]);
+  }
+  EXPECT_LT(closure_residual(g, moved->pose).cwiseAbs().maxCoeff(), 1e-10);
+  const std::optional<MotionWindow> at0 = motion_window(g, v, std::nullopt);
+  ASSERT_TRUE(at0.has_value());
+  EXPECT_EQ(at0->theta0, 0.0);
+  const std::optional<MotionWindow> asked = motion_window(g, v, 0.0, {}, N);
+  ASSERT_TRUE(asked.has_value());
+  EXPECT_EQ(asked->theta0, 0.0);
+
+  // The cycle energy, an independent reading of the motion: zero from the
+  // moved start, not from 0.
+  auto cycle_energy_from = [&](const MotionWindow& w) {
+    const LoopModel model(g);
+    EquilibriumWorkspace ws(model);
+    const EquilibriumSummary assembled = assemble_from_angles(model, ws, w.pose);
+    CycleOptions options;
+    options.samples = N;
+    CycleSummary cycle;
+    cycle_energy(model, ws, w.theta0, assembled.state, options, cycle);
+    return cycle.E_mean;
+  };
+  EXPECT_LT(cycle_energy_from(*moved), 1e-20);
+  EXPECT_GT(cycle_energy_from(*at0), 1e-6);
 }
 
 TEST(Verify, SphericalCrankTurnsFully) {

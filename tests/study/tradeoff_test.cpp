@@ -47,12 +47,14 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
   o.algorithms = {"gauss-newton", "LD_LBFGS"};
   o.zero_thresholds = {1e-12, 1e-20};
   o.ftol_rels = {0.0, 1e-3};              // 0 is the base's
+  o.progress_windows = {0, 40};           // 0 is the base's
   o.reuse_nearby_cycles = {true, false};  // true is the base's
   o.ranges_deg = {360, 90};               // 360 is the base's
   o.analysis_steps = {64, 360};           // 64 is the default's
   const auto configurations = tradeoff_configurations(base, o);
-  // base, samples 8 and 32, range 90, tolerance, full, LBFGS, ftol 1e-3, no reuse, 1e-20, analysis steps 360
-  ASSERT_EQ(configurations.size(), 11u);
+  // base, samples 8 and 32, range 90, tolerance, full, LBFGS, ftol 1e-3, window 40, no reuse, 1e-20,
+  // analysis steps 360
+  ASSERT_EQ(configurations.size(), 12u);
   EXPECT_EQ(configurations[0].name(), "base");
   int changed_samples = 0;
   for (const TradeoffConfiguration& c : configurations) {
@@ -63,6 +65,8 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
     EXPECT_EQ(c.job.loop.range != base.loop.range, c.axis == "range_deg") << c.name();
     EXPECT_EQ(c.job.search.zero_threshold != base.search.zero_threshold, c.axis == "zero_threshold") << c.name();
     EXPECT_EQ(c.job.optimizer.ftol_rel != base.optimizer.ftol_rel, c.axis == "ftol_rel") << c.name();
+    EXPECT_EQ(c.job.optimizer.progress_window != base.optimizer.progress_window, c.axis == "progress_window")
+        << c.name();
     EXPECT_EQ(c.job.optimizer.reuse_nearby_cycle != base.optimizer.reuse_nearby_cycle, c.axis == "reuse_nearby_cycle")
         << c.name();
     EXPECT_EQ(c.job.loop.objective, "mean") << c.name();
@@ -223,6 +227,7 @@ TEST(Tradeoff, InvalidOptionsAreRejectedByName) {
             std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.starts = 0; }).find("starts"), std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.ftol_rels = {-1.0}; }).find("ftol_rels"), std::string::npos);
+  EXPECT_NE(with([](TradeoffOptions& o) { o.progress_windows = {-1}; }).find("progress_windows"), std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.ranges_deg = {400.0}; }).find("ranges_deg"), std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.objectives = {"median"}; }).find("median"), std::string::npos);
   EXPECT_NE(with([](TradeoffOptions& o) { o.ground_truth.cases_per_family = -1; }), "");

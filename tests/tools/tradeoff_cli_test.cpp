@@ -123,6 +123,7 @@ TEST_F(TradeoffCli, BadOptionsExitWithCode2NamingTheFlagAndLeaveFilesAlone) {
       {{"{dir}/job.toml", "--objectives", "mean,median"}, "--objectives"},
       {{"{dir}/job.toml", "--zero-thresholds", "nan"}, "--zero-thresholds"},
       {{"{dir}/job.toml", "--ftol-rels", "0,0"}, "--ftol-rels"},
+      {{"{dir}/job.toml", "--progress-windows", "40.5"}, "--progress-windows"},
       {{"{dir}/job.toml", "--reuse-nearby-cycles", "true,yes"}, "--reuse-nearby-cycles"},
       {{"{dir}/job.toml", "--reuse-nearby-cycles", "false,false"}, "--reuse-nearby-cycles"},
       {{"{dir}/job.toml", "--closure-tolerances", "0.1"}, "--closure-tolerances"},

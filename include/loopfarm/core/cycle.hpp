@@ -96,6 +96,10 @@ struct CycleSummary {
 struct CycleCeiling {
   double mean = std::numeric_limits<double>::infinity();
   double max = std::numeric_limits<double>::infinity();
+  // A failed sample abandons the cycle too, for a caller that rejects every
+  // cycle with one: its energy is wherever the solve stopped, no bound on
+  // anything, and the walk would go on bisecting towards the samples after it.
+  bool failed_sample = false;
 };
 
 // Where the stiff-limit equilibrium path folds (a sample with status

@@ -122,7 +122,12 @@ struct OptimizerSection {
   // 1e-13, near round-off (a zero polished further gains nothing).
   double stopval = 1e-26;
   int max_evaluations = 500;  // cycle evaluations per start
-  double time_limit = 30.0;   // seconds per start; 0: none
+  // Stop a start once its best objective has fallen by less than a factor of
+  // progress_factor over its last progress_window evaluations (0: not used):
+  // a start creeping towards a minimum it would not reach in its budget.
+  int progress_window = 0;
+  double progress_factor = 10.0;
+  double time_limit = 30.0;  // seconds per start; 0: none
   // Start each evaluation's cycle from the last one's samples instead of
   // walking it from the assembly (ObjectiveOptions::reuse_nearby_cycle).
   bool reuse_nearby_cycle = true;

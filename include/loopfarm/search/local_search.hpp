@@ -23,6 +23,7 @@ enum class SearchStatus {
   ftol_reached,      // the objective stopped changing (ftol_rel / ftol_abs)
   xtol_reached,      // the step became negligible (xtol_rel), or the projected gradient vanished
   maxeval_reached,   // max_evaluations spent
+  slow_progress,     // the best objective fell by less than progress_factor over progress_window evaluations
   maxtime_reached,   // time_limit spent
   roundoff_limited,  // NLopt: no further progress possible in floating point (x kept)
   stalled,           // Gauss-Newton: no damped step decreased the objective

@@ -99,8 +99,11 @@ class CycleObjective {
   // empty): a local search that rejects such points anyway pays only for the
   // samples that told. The deflation factor is known before the cycle and
   // the travel factor is at least 1, so the samples solved so far bound F
-  // from below. An abandoned evaluation counts as failed: the next one starts
-  // from the cycle before it.
+  // from below. A cycle with a failed sample is given up as well, at that
+  // sample: its energy is wherever the solve stopped (often near zero, never
+  // a zero), so a search with a ceiling does not step onto such points. An
+  // abandoned evaluation counts as failed: the next one starts from the
+  // cycle before it.
   ObjectiveValue evaluate_residuals(const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd* jacobian,
                                     double ceiling = std::numeric_limits<double>::infinity());
 

@@ -88,7 +88,11 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
 // the input turns fully; otherwise a window inside the input's range, centred
 // on theta0 when theta0 lies inside it (else on the middle of the range),
 // reaching 90 % of the way to the nearer dead point on either side. theta0
-// defaults to the given pose's input when that pose is on the motion, else 0.
+// defaults to the given pose's input when that pose is on the motion, else 0;
+// for a full turn of `samples` samples (> 0) the default is moved off 0, by
+// at most one sample spacing, where a sample would lie within a quarter
+// spacing of a singular pose the circuit passes: the equilibrium solve at a
+// singular pose can leave the motion, and the cycle is then no zero.
 struct MotionWindow {
   double theta0 = 0.0;  // [rad] the cycle's start
   double range = 0.0;   // [rad] 2 pi for a full turn
@@ -96,6 +100,7 @@ struct MotionWindow {
 };
 // Empty when the loop is not verified (or no pose is found at theta0).
 std::optional<MotionWindow> motion_window(const LoopGeometry& geometry, const VerificationSummary& verification,
-                                          std::optional<double> theta0, const VerificationOptions& options = {});
+                                          std::optional<double> theta0, const VerificationOptions& options = {},
+                                          int samples = 0);
 
 }  // namespace loopfarm

@@ -51,6 +51,9 @@ struct TradeoffOptions {
   // The local search's relative-decrease stop ([optimizer] ftol_rel; 0: off):
   // ends starts that creep towards a non-zero minimum.
   std::vector<double> ftol_rels = {0.0, 1e-4, 1e-3, 1e-2};
+  // The progress stop's window ([optimizer] progress_window; 0: off), with
+  // the base job's progress_factor: ends starts that creep over many steps.
+  std::vector<int> progress_windows = {0};
   // Whether each evaluation's cycle starts from the last one's samples
   // ([optimizer] reuse_nearby_cycle).
   std::vector<bool> reuse_nearby_cycles = {true, false};
@@ -67,7 +70,7 @@ struct TradeoffOptions {
 // One configuration: the base job with at most one choice changed.
 struct TradeoffConfiguration {
   // "base", "samples", "range_deg", "closure_tolerance", "compliance", "objective", "algorithm", "ftol_rel",
-  // "reuse_nearby_cycle", "zero_threshold", "analysis_steps"
+  // "progress_window", "reuse_nearby_cycle", "zero_threshold", "analysis_steps"
   std::string axis;
   std::string value;  // the value on that axis, as text ("16", "1e-08", "LD_LBFGS")
   Job job;
