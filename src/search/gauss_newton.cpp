@@ -25,7 +25,6 @@ namespace {
 
 constexpr double kInitialDampingScale = 1e-3;  // mu0 = this * max diag(JᵀJ)
 constexpr double kMaxDamping = 1e20;           // relative to the scaling: give up beyond
-constexpr const char* kSlowProgress = "objective fell by less than progress_factor over progress_window evaluations";
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -87,7 +86,8 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
   for (int iteration = 1;; ++iteration) {
     if (current.value <= opt.stopval) return finish(SearchStatus::stopval_reached, "objective below stopval");
     if (evaluations() >= opt.max_evaluations) return finish(SearchStatus::maxeval_reached, "max_evaluations reached");
-    if (progress.too_slow(evaluations(), current.value)) return finish(SearchStatus::slow_progress, kSlowProgress);
+    if (progress.too_slow(evaluations(), current.value))
+      return finish(SearchStatus::slow_progress, detail::ProgressWatch::kMessage);
     if (opt.time_limit > 0 && seconds_since(start_time) >= opt.time_limit) {
       return finish(SearchStatus::maxtime_reached, "time limit reached");
     }
@@ -181,7 +181,8 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
           return finish(SearchStatus::xtol_reached, "step vanished at the bounds");
         if (evaluations() >= opt.max_evaluations)
           return finish(SearchStatus::maxeval_reached, "max_evaluations reached");
-        if (progress.too_slow(evaluations(), current.value)) return finish(SearchStatus::slow_progress, kSlowProgress);
+        if (progress.too_slow(evaluations(), current.value))
+          return finish(SearchStatus::slow_progress, detail::ProgressWatch::kMessage);
         if (opt.time_limit > 0 && seconds_since(start_time) >= opt.time_limit) {
           return finish(SearchStatus::maxtime_reached, "time limit reached");
         }

@@ -112,10 +112,7 @@ Job parse_table(const toml::table& root, const std::string& file) {
                    } else if (k == "stiffness_ratio") {
                      job.loop.stiffness_ratio = r.positive(node, full, true);
                    } else if (k == "samples") {
-                     const long long n = r.integer(node, full);
-                     if (n < 4 || n > 100000)
-                       r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [4, 100000]");
-                     job.loop.samples = static_cast<int>(n);
+                     job.loop.samples = r.integer_in(node, full, 4, 100000, "in [4, 100000]");
                    } else if (k == "range_deg") {
                      const double range = r.number(node, full);
                      if (!(range > 0.0 && range <= 360.0)) {
@@ -170,15 +167,10 @@ Job parse_table(const toml::table& root, const std::string& file) {
                    } else if (k == "stopval") {
                      job.optimizer.stopval = r.number(node, full);
                    } else if (k == "max_evaluations") {
-                     const long long n = r.integer(node, full);
-                     if (n <= 0 || n > 100000000)
-                       r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [1, 1e8]");
-                     job.optimizer.max_evaluations = static_cast<int>(n);
+                     job.optimizer.max_evaluations = r.integer_in(node, full, 1, 100000000, "in [1, 1e8]");
                    } else if (k == "progress_window") {
-                     const long long n = r.integer(node, full);
-                     if (n < 0 || n > 100000000)
-                       r.fail(node.source(), full, "got " + std::to_string(n) + "; must be in [0, 1e8] (0: not used)");
-                     job.optimizer.progress_window = static_cast<int>(n);
+                     job.optimizer.progress_window =
+                         r.integer_in(node, full, 0, 100000000, "in [0, 1e8] (0: not used)");
                    } else if (k == "progress_factor") {
                      const double f = r.number(node, full);
                      if (!(f > 1.0)) r.fail(node.source(), full, "got " + format(f) + "; must be > 1");

@@ -65,6 +65,14 @@ struct Reader {
     return i->get();
   }
 
+  // An integer in [lo, hi]; `allowed` says so in the message ("in [1, 1e8]").
+  int integer_in(const toml::node& node, const std::string& key, long long lo, long long hi,
+                 const std::string& allowed) const {
+    const long long n = integer(node, key);
+    if (n < lo || n > hi) fail(node.source(), key, "got " + std::to_string(n) + "; must be " + allowed);
+    return static_cast<int>(n);
+  }
+
   bool boolean(const toml::node& node, const std::string& key) const {
     const auto* b = node.as_boolean();
     if (b == nullptr) fail(node.source(), key, "expected true or false, got " + describe(node));

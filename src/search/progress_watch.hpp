@@ -14,6 +14,10 @@ namespace loopfarm::detail {
 
 class ProgressWatch {
  public:
+  // What a search stopped by it says (LocalSearchSummary::message).
+  static constexpr const char* kMessage =
+      "objective fell by less than progress_factor over progress_window evaluations";
+
   // Sized once for the start's whole budget; off when window is 0.
   explicit ProgressWatch(const OptimizerSection& optimizer)
       : window_(optimizer.progress_window), factor_(optimizer.progress_factor) {
