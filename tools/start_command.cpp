@@ -58,6 +58,13 @@ void print_story(const Job& job, const StartSummary& s) {
               readable(job.search.zero_threshold).c_str());
   if (s.zero) {
     std::printf("analysis                %s s\n", readable(s.analysis_seconds).c_str());
+    const GeometryPolishSummary& p = s.candidate.polish;
+    if (p.iterations > 0) {
+      std::printf("polish onto the motion  %s: closure %s -> %s at %d poses in %d iterations, moved %s of L\n",
+                  p.converged ? "converged" : "failed", readable(p.initial_residual).c_str(),
+                  readable(p.final_residual).c_str(), p.poses_used, p.iterations, readable(p.displacement).c_str());
+      if (p.converged) print_geometry("polished geometry", s.candidate.geometry);
+    }
     print_candidate(s.candidate);
     if (s.candidate.verification.verified) print_local_dimension(s.candidate.local_dimension);
   }
@@ -81,6 +88,23 @@ nlohmann::ordered_json start_record(const StartSummary& s) {
   record["branch_jumps"] = s.branch_jumps;
   record["initial_geometry"] = geometry_json(s.initial_geometry);
   record["final_geometry"] = geometry_json(s.final_geometry);
+  // The same keys for every start (they are CSV columns): null but for a zero.
+  const GeometryPolishSummary& p = s.candidate.polish;
+  const auto when_zero = [&](const nlohmann::ordered_json& value) { return s.zero ? value : nlohmann::ordered_json(); };
+  nlohmann::ordered_json polish;
+  polish["converged"] = when_zero(p.converged);
+  polish["iterations"] = when_zero(p.iterations);
+  polish["poses"] = when_zero(p.poses_used);
+  polish["initial_residual"] = when_zero(p.initial_residual);
+  polish["final_residual"] = when_zero(p.final_residual);
+  polish["displacement"] = when_zero(p.displacement);
+  polish["message"] = when_zero(p.message);
+  record["polish"] = polish;
+  nlohmann::ordered_json polished = geometry_json(s.candidate.geometry);
+  if (!s.zero) {
+    for (auto& value : polished) value = nullptr;
+  }
+  record["polished_geometry"] = polished;
   add_candidate_json(record, s.candidate, s.zero);
   return record;
 }

@@ -48,7 +48,10 @@ double cycle_window(const JointRange& r, double theta0) {
   const double middle = 0.5 * (r.lo + r.hi);
   const double image = middle + std::remainder(theta0 - middle, kTwoPi);
   if (!(image > r.lo && image < r.hi)) return 0.0;
-  return 1.8 * std::min(image - r.lo, r.hi - image);
+  // A range of 2 pi would mean a full turn (CycleOptions::range), which a
+  // rocker does not make: a rocker whose input swings through more than a
+  // turn gets the window of one whose dead points are a turn apart.
+  return std::min(0.9 * kTwoPi, 1.8 * std::min(image - r.lo, r.hi - image));
 }
 
 std::optional<MotionStart> motion_start(const LoopGeometry& geometry, double theta0, const JointVector* near,

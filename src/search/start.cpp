@@ -50,6 +50,7 @@ CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVec
                                     VerificationSummary verification, const Eigen::MatrixXd& jacobian,
                                     const StartOptions& options) {
   CandidateAnalysis out;
+  out.geometry = geometry;
   out.verification = std::move(verification);
   // The family is read on the verified motion: from the given pose when it
   // lies on it, else from a pose of the circuit that moves.
@@ -80,7 +81,7 @@ CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVec
 }
 
 CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& pose, const Eigen::MatrixXd& jacobian,
-                               double theta0, const StartOptions& options) {
+                               double theta0, const StartOptions& options, const PolishDirections* directions) {
   // A zero's pose is on its motion (the cycle went through it with no
   // energy): only the circuit through it is traced, with every joint's
   // extremes solved for (its ranges exact whatever the step), first in steps
@@ -93,6 +94,7 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
   through_pose.steps_per_turn = options.analysis_steps_per_turn;
   through_pose.stop_below_singular_ratio = options.regular_circuit_ratio;
   VerificationSummary verification = verify_motion(geometry, pose, through_pose);
+  VerificationOptions verified_by = through_pose;
   const std::vector<Circuit>& circuits = verification.motion.circuits;
   const bool regular = std::all_of(circuits.begin(), circuits.end(), [&](const Circuit& c) {
     return c.least_singular_ratio >= options.regular_circuit_ratio;
@@ -107,6 +109,7 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
     through_pose.all_extremes = false;
     through_pose.stop_below_singular_ratio = 0.0;
     verification = verify_motion(geometry, pose, through_pose);
+    verified_by = through_pose;
   }
   if (!verification.verified) {
     // The circuit through the search's pose cannot always be followed from
@@ -119,8 +122,49 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
     VerificationOptions whole = options.verification;
     whole.theta0 = theta0;
     verification = verify_motion(geometry, pose, whole);
+    verified_by = whole;
   }
-  return analyse_candidate(geometry, pose, std::move(verification), jacobian, options);
+  if (!verification.verified) return analyse_candidate(geometry, pose, std::move(verification), jacobian, options);
+
+  // The geometry polished onto the motion it approximates (geometry_polish.hpp),
+  // at poses spread along the verified circuit.
+  const Circuit& circuit = verification.motion.circuits[static_cast<size_t>(verification.circuit)];
+  std::vector<JointVector> poses;
+  const size_t count = circuit.points.size();
+  const size_t wanted = std::min(count, static_cast<size_t>(std::max(1, options.polish_poses)));
+  for (size_t i = 0; i < wanted; ++i) poses.push_back(circuit.points[(2 * i + 1) * count / (2 * wanted)]);
+  GeometryPolishSummary polish;
+  if (circuit.freedoms >= 1 && circuit.freedoms < geometry.joints()) {
+    polish = polish_geometry(geometry, poses, circuit.freedoms,
+                             directions ? *directions : PolishDirections::every_parameter(geometry), options.polish);
+  } else {
+    polish.geometry = geometry;
+    polish.message = "a circuit with " + std::to_string(circuit.freedoms) + " freedoms";
+  }
+  JointVector polished_pose = pose;
+  if (!polish.converged) {
+    verification.verified = false;
+    verification.limit = "not polished onto a motion: " + polish.message;
+  } else if (polish.iterations > 0) {
+    // The motion of the polished geometry, traced as the given one verified,
+    // from the polished pose nearest the given one (the given pose is off
+    // the new motion by about the polish's displacement, too far for
+    // Newton's method near a singular pose).
+    const auto distance = [&](const JointVector& p) {
+      return (p - pose).unaryExpr([](double x) { return std::abs(wrap_angle(x)); }).maxCoeff();
+    };
+    const JointVector& nearest =
+        *std::min_element(polish.poses.begin(), polish.poses.end(),
+                          [&](const JointVector& a, const JointVector& b) { return distance(a) < distance(b); });
+    // Its 2 pi image nearest the given pose: the circuit's angles are
+    // unwrapped from where its trace starts.
+    polished_pose = pose + (nearest - pose).unaryExpr([](double x) { return wrap_angle(x); });
+    verification = verify_motion(polish.geometry, polished_pose, verified_by);
+    if (!verification.verified) verification.limit = "the polished geometry: " + verification.limit;
+  }
+  CandidateAnalysis out = analyse_candidate(polish.geometry, polished_pose, std::move(verification), jacobian, options);
+  out.polish = polish;
+  return out;
 }
 
 StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& options) {
@@ -195,7 +239,14 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
     is_length.push_back(kind == static_cast<int>(ParameterKind::a) || kind == static_cast<int>(ParameterKind::d));
   }
   const Eigen::MatrixXd columns = dimensionless_columns(jacobian, is_length, length_scale(out.final_geometry));
-  out.candidate = analyse_zero(out.final_geometry, out.final_angles, columns, out.initial_angles[0], options);
+  // The polish moves the job's free parameters (ties with them), within
+  // their ranges.
+  PolishDirections directions;
+  directions.directions = job.space.geometry_jacobian();
+  directions.lower = job.space.lower_bounds() - result.x;
+  directions.upper = job.space.upper_bounds() - result.x;
+  out.candidate =
+      analyse_zero(out.final_geometry, out.final_angles, columns, out.initial_angles[0], options, &directions);
   out.analysis_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - analysis_begin).count();
   return out;
 }

@@ -230,6 +230,7 @@ StartSummary verified_summary() {
   s.zero = true;
   s.final_geometry = geometry(4, 2.0);
   s.final_angles = values(4, 0.1, 0.2);
+  s.candidate.geometry = geometry(4, 2.0 + 1e-9);  // polished onto the motion
   VerificationSummary& v = s.candidate.verification;
   v.assembled = v.verified = true;
   v.full_turn = false;
@@ -266,7 +267,8 @@ TEST(MakeStartRecord, VerifiedZeroCarriesItsAnalysis) {
   EXPECT_EQ(r.seconds, 0.25);
   EXPECT_TRUE(r.zero);
   EXPECT_TRUE(r.verified);
-  expect_same_geometry(r.final_geometry, s.final_geometry);
+  // A verified zero's geometry is the one polished onto its motion.
+  expect_same_geometry(r.final_geometry, s.candidate.geometry);
   expect_same_vector(r.final_angles, s.final_angles);
   const CandidateRecord& c = r.candidate;
   EXPECT_EQ(c.family, "bennett");
@@ -313,6 +315,7 @@ TEST(MakeStartRecord, UnverifiedOrNonZeroStartsHaveNoCandidate) {
     EXPECT_TRUE(r.candidate.canonical_key.empty());
     EXPECT_EQ(r.candidate.canonical_geometry.joints(), 0);
     EXPECT_TRUE(r.candidate.singular_values.empty());
+    expect_same_geometry(r.final_geometry, s.final_geometry);  // where the search stopped
   }
 }
 

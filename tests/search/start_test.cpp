@@ -274,6 +274,40 @@ TEST(AnalyseZero, ANearMissIsNotVerifiedAndItsCurveIsNotTracedAgainFromEverySeed
   EXPECT_GT(traced, 0);
 }
 
+// Zeros of the generic 6R job the search finds only to about 1e-7 of L: the
+// rigid loop closes to 1e-11 along the circuit through the search's pose,
+// which the tracer follows, but `loopfarm verify` (every circuit, over the
+// whole turn) loses the thin tube of near-closed poses elsewhere. The
+// analysis polishes the geometry onto its motion, within the job's ranges;
+// the polished geometry is what `loopfarm verify` verifies. Start 1569 runs
+// away from its geometry when polished: refused, as `loopfarm verify`
+// refuses it.
+TEST(RunStart, AZeroFoundTo1e7IsPolishedOntoItsMotionAndVerifiedAsLoopfarmVerifyDoes) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/generic-6r.toml");
+  const StartSummary s = run_start(job, 567);
+  ASSERT_TRUE(s.zero);
+  const GeometryPolishSummary& p = s.candidate.polish;
+  ASSERT_TRUE(p.converged) << p.message;
+  EXPECT_GT(p.iterations, 0);
+  EXPECT_GT(p.displacement, 1e-9);
+  EXPECT_LT(p.displacement, 1e-6);
+  EXPECT_TRUE(s.candidate.verification.verified) << s.candidate.verification.limit;
+  const Eigen::VectorXd x = job.space.free_values(s.candidate.geometry);
+  EXPECT_TRUE((x.array() >= job.space.lower_bounds().array()).all());
+  EXPECT_TRUE((x.array() <= job.space.upper_bounds().array()).all());
+  EXPECT_FALSE(verify_motion(s.final_geometry, nullptr).verified);
+  const VerificationSummary polished = verify_motion(s.candidate.geometry, nullptr);
+  EXPECT_TRUE(polished.verified);
+  EXPECT_LT(polished.worst_residual, 1e-11);
+
+  const StartSummary refused = run_start(job, 1569);
+  ASSERT_TRUE(refused.zero);
+  EXPECT_FALSE(refused.candidate.polish.converged);
+  EXPECT_FALSE(refused.candidate.verification.verified);
+  EXPECT_NE(refused.candidate.verification.limit.find("not polished"), std::string::npos);
+  EXPECT_FALSE(verify_motion(refused.final_geometry, nullptr).verified);
+}
+
 // Zeros of the rocker job whose circuit cannot be followed from the search's
 // pose (starts 299 and 1464: theta0 lies in a gap of the input's range that
 // the window's samples step over, so the pose at theta0 does not close;

@@ -154,6 +154,39 @@ TEST(Verify, MotionWindowIsAFullTurnForACrankAndInsideTheRangeForARocker) {
   EXPECT_FALSE(motion_window(rigid, verify_motion(rigid, nullptr), 0.0).has_value());
 }
 
+// A rocker whose input swings through more than a turn between its dead
+// points (a bennett_dyads 6R of the generic 6R job, its input over 416 deg):
+// its cycle window is that of a rocker whose dead points are a turn apart,
+// 324 deg, not 1.8 times the way to the nearer dead point (which asked the
+// cycle for 374 deg and failed). The cycle over the window follows the
+// motion: its energy is zero.
+TEST(Verify, ARockerSwingingThroughMoreThanATurnGetsTheWindowOfATurnBetweenDeadPoints) {
+  const double a[] = {0.531611382243285,  1.173779822696756,  1.315477649410536,
+                      0.7218931340907394, 0.5352769675940152, 1.315477649410539};
+  const double alpha_deg[] = {-12.28377446671099, -28.01825782690044, -123.2978087118279,
+                              -17.43639602091413, -12.83742180167185, -123.297808711828};
+  const double d[] = {-0.136483596754084,  -2.145571247316673e-16, -0.1364835967540891,
+                      -0.1299244019654296, 1.858529268899931e-16,  -0.1299244019654251};
+  const LoopGeometry g = LoopGeometry::from_degrees(a, alpha_deg, d);
+  const VerificationSummary v = verify_motion(g, nullptr);
+  ASSERT_TRUE(v.verified);
+  EXPECT_FALSE(v.full_turn);
+  EXPECT_GT(v.range_hi - v.range_lo, 2 * kPi);
+  const std::optional<MotionWindow> w = motion_window(g, v, std::nullopt);
+  ASSERT_TRUE(w.has_value());
+  EXPECT_EQ(w->range, 0.9 * 2 * kPi);
+  EXPECT_LT(closure_residual(scaled(g, length_scale(g)), w->pose).cwiseAbs().maxCoeff(), 1e-12);
+  const LoopModel model(g);
+  EquilibriumWorkspace ws(model);
+  const EquilibriumSummary assembled = assemble_from_angles(model, ws, w->pose);
+  CycleOptions options;
+  options.range = w->range;
+  CycleSummary cycle;
+  cycle_energy(model, ws, w->theta0, assembled.state, options, cycle);
+  EXPECT_EQ(cycle.failed_samples, 0);
+  EXPECT_LT(cycle.E_mean, 1e-20);
+}
+
 // A full turn whose default start is a singular pose: an L-shaped
 // Goldberg-type 6R (Bennett loops fused at psi = pi, to 12 digits) whose
 // circuit passes two, at inputs 0 and 180 deg. A cycle of 32 samples from

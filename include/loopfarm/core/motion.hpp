@@ -173,7 +173,10 @@ bool pose_at_input(const LoopGeometry& geometry, const Circuit& circuit, double 
 // a circuit covers while staying on it: a full turn (2 pi) when the input
 // turns fully; otherwise a window centred on theta0 reaching 90 % of the way
 // to the nearer dead point on either side (the margin keeps the cycle's
-// samples off the fold, where the elastic equilibrium path turns back). 0
+// samples off the fold, where the elastic equilibrium path turns back), and
+// at most 324 deg, the window of a rocker whose dead points are a turn apart
+// (the input of some rockers swings through more than a turn; a range of
+// 2 pi would be a full turn, CycleOptions::range). 0
 // when no 2 pi image of theta0 lies strictly inside the input's range.
 double cycle_window(const JointRange& input_range, double theta0);
 

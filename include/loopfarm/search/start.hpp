@@ -9,6 +9,7 @@
 #include <functional>
 #include <string>
 
+#include "loopfarm/core/geometry_polish.hpp"
 #include "loopfarm/search/canonical.hpp"
 #include "loopfarm/search/classify.hpp"
 #include "loopfarm/search/job.hpp"
@@ -34,12 +35,22 @@ struct StartOptions {
   // ranges read off its points (docs/guide/motion.md).
   int analysis_steps_per_turn = 64;
   double regular_circuit_ratio = 1e-2;
+  // A verified zero's geometry is polished onto its motion at this many
+  // poses spread along the verified circuit (polish_geometry), and its
+  // motion traced again on the polished geometry; a zero the polish cannot
+  // bring to round-off is a near miss, not verified.
+  int polish_poses = 128;
+  GeometryPolishOptions polish;
   std::function<void(const SearchTraceRow&)> trace;
 };
 
 // What is known of a zero: its rigid verification, family, canonical form
 // and the local dimension of the zero set.
 struct CandidateAnalysis {
+  // The geometry all of it is of: a zero's geometry polished onto its motion
+  // (analyse_zero), else the geometry given.
+  LoopGeometry geometry;
+  GeometryPolishSummary polish;  // analyse_zero's polish (iterations 0: none was run or needed)
   VerificationSummary verification;
   Classification classification;
   CanonicalForm canonical;
@@ -79,16 +90,25 @@ struct StartSummary {
   int branch_jumps = 0;
   bool zero = false;  // E_mean <= the job's zero threshold
 
-  CandidateAnalysis candidate;  // for zeros only (`zero`); otherwise default
+  // For zeros only (`zero`); otherwise default. Its geometry is
+  // final_geometry polished onto the motion, along the job's free parameters.
+  CandidateAnalysis candidate;
 };
 
 // A zero's analysis as run_start does it: the circuit through `pose` traced
 // in coarse steps, again in steps of 1 deg when it is not regular or cannot
 // be followed (StartOptions::analysis_steps_per_turn), and when neither
 // verifies, every circuit as `loopfarm verify` finds them, the one covering
-// `theta0` (the start's drawn input angle) preferred.
+// `theta0` (the start's drawn input angle) preferred. A verified geometry is
+// then polished onto its motion along `directions` (by default every
+// parameter, lengths kept >= 0) and, when the polish moved it, verified
+// again as it was the first time; the classification, canonical form and
+// CandidateAnalysis::geometry are of the polished geometry. A zero whose
+// polish does not converge is not verified (VerificationSummary::limit says
+// why).
 CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& pose, const Eigen::MatrixXd& jacobian,
-                               double theta0, const StartOptions& options);
+                               double theta0, const StartOptions& options,
+                               const PolishDirections* directions = nullptr);
 
 // The steering of a job as objective options (deflation terms from the
 // families' distance functions).
