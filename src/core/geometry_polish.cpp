@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 
 #include "closure_solver.hpp"
@@ -19,6 +20,10 @@ namespace loopfarm {
 using namespace detail;
 
 namespace {
+
+// Fixed-capacity types for the per-pose work (no heap allocation per pose).
+using PoseSvd = Eigen::JacobiSVD<Matrix6J>;
+using ParameterColumns = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 3 * kMaxJoints>;
 
 std::string format(double value) {
   char text[32];
@@ -53,9 +58,10 @@ Eigen::VectorXd solve_free(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, c
   if (free.empty()) return dx;
   Eigen::MatrixXd Af(A.rows(), static_cast<int>(free.size()));
   for (size_t j = 0; j < free.size(); ++j) Af.col(static_cast<int>(j)) = A.col(free[j]);
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Af, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  svd.setThreshold(rank_tolerance);
-  const Eigen::VectorXd x = svd.solve(rhs);
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(Af.rows(), Af.cols());
+  cod.setThreshold(rank_tolerance);
+  cod.compute(Af);
+  const Eigen::VectorXd x = cod.solve(rhs);
   for (size_t j = 0; j < free.size(); ++j) dx[free[j]] = x[static_cast<int>(j)];
   return dx;
 }
@@ -133,7 +139,7 @@ GeometryPolishSummary polish_geometry(const LoopGeometry& geometry, std::span<co
   out.poses.clear();
   for (const JointVector& p : poses) {
     closure_jacobians(g, p, J);
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(J.theta));
+    const PoseSvd svd(J.theta);
     const auto& s = svd.singularValues();
     if (s[rank - 1] >= options.min_singular_ratio * s[0]) out.poses.push_back(p);
   }
@@ -148,6 +154,13 @@ GeometryPolishSummary polish_geometry(const LoopGeometry& geometry, std::span<co
 
   Eigen::MatrixXd A(out.poses_used * left, k);
   Eigen::VectorXd b(out.poses_used * left);
+  // Each pose's linearisation, kept for its part of the step.
+  struct Linearisation {
+    Vector6 F;
+    ParameterColumns BD;  // d F / d dx
+    PoseSvd svd;          // of d F / d theta
+  };
+  std::vector<Linearisation> at(static_cast<size_t>(out.poses_used));
   Eigen::VectorXd total = Eigen::VectorXd::Zero(k);
   double best = out.initial_residual;
   int since_halved = 0;
@@ -156,15 +169,18 @@ GeometryPolishSummary polish_geometry(const LoopGeometry& geometry, std::span<co
     ++out.iterations;
     // The step system: each pose's residual in its left null space.
     for (int i = 0; i < out.poses_used; ++i) {
+      Linearisation& l = at[static_cast<size_t>(i)];
       const JointVector& p = out.poses[static_cast<size_t>(i)];
       closure_jacobians(g, p, J);
-      const Vector6 F = closure_residual(g, p);
-      Eigen::Matrix<double, 6, Eigen::Dynamic> B(6, 3 * n);
+      l.F = closure_residual(g, p);
+      ParameterColumns B(6, 3 * n);
       B << J.a, J.alpha, J.d;
-      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(J.theta), Eigen::ComputeFullU);
-      const Eigen::MatrixXd U2 = svd.matrixU().rightCols(left);
-      A.middleRows(i * left, left) = U2.transpose() * B * D;
-      b.segment(i * left, left) = -U2.transpose() * F;
+      l.BD.resize(6, k);
+      l.BD.noalias() = B * D;
+      l.svd.compute(J.theta, Eigen::ComputeFullU | Eigen::ComputeThinV);
+      const auto U2 = l.svd.matrixU().rightCols(left);
+      A.middleRows(i * left, left).noalias() = U2.transpose() * l.BD;
+      b.segment(i * left, left).noalias() = -U2.transpose() * l.F;
     }
     // A component that would cross its bound is held at the bound and the
     // others solved again.
@@ -189,14 +205,11 @@ GeometryPolishSummary polish_geometry(const LoopGeometry& geometry, std::span<co
     // The poses' part of the Gauss-Newton step: each pose moves to undo what
     // is left of its residual, within its closure Jacobian's range.
     for (int i = 0; i < out.poses_used; ++i) {
+      const Linearisation& l = at[static_cast<size_t>(i)];
+      const Vector6 predicted = l.F + l.BD * dx;
+      const auto& s = l.svd.singularValues();
       JointVector& p = out.poses[static_cast<size_t>(i)];
-      closure_jacobians(g, p, J);
-      Eigen::Matrix<double, 6, Eigen::Dynamic> B(6, 3 * n);
-      B << J.a, J.alpha, J.d;
-      const Vector6 predicted = closure_residual(g, p) + B * change;
-      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(J.theta), Eigen::ComputeThinU | Eigen::ComputeThinV);
-      const auto& s = svd.singularValues();
-      for (int r = 0; r < rank; ++r) p -= svd.matrixV().col(r) * (svd.matrixU().col(r).dot(predicted) / s[r]);
+      for (int r = 0; r < rank; ++r) p -= l.svd.matrixV().col(r) * (l.svd.matrixU().col(r).dot(predicted) / s[r]);
     }
     add_step(g, change);
     total += dx;

@@ -80,37 +80,52 @@ CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVec
   return out;
 }
 
-CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& pose, const Eigen::MatrixXd& jacobian,
-                               double theta0, const StartOptions& options, const PolishDirections* directions) {
-  // A zero's pose is on its motion (the cycle went through it with no
-  // energy): only the circuit through it is traced, with every joint's
-  // extremes solved for (its ranges exact whatever the step), first in steps
-  // that grow with the curve's straightness up to analysis_steps_per_turn.
-  // The coarse walk gives up where it nears a singular pose: the circuit is
-  // traced finely there anyway.
+namespace {
+
+// A zero's pose is on its motion (the cycle went through it with no energy):
+// only the circuit through it is traced, with every joint's extremes solved
+// for (its ranges exact whatever the step), first in steps that grow with
+// the curve's straightness up to analysis_steps_per_turn. The coarse walk
+// gives up where it nears a singular pose: the circuit is traced finely
+// there anyway.
+VerificationSummary trace_through_pose(const LoopGeometry& geometry, const JointVector& pose,
+                                       const StartOptions& options) {
   VerificationOptions through_pose = options.verification;
   through_pose.all_circuits = false;
   through_pose.all_extremes = true;
   through_pose.steps_per_turn = options.analysis_steps_per_turn;
   through_pose.stop_below_singular_ratio = options.regular_circuit_ratio;
   VerificationSummary verification = verify_motion(geometry, pose, through_pose);
-  VerificationOptions verified_by = through_pose;
   const std::vector<Circuit>& circuits = verification.motion.circuits;
   const bool regular = std::all_of(circuits.begin(), circuits.end(), [&](const Circuit& c) {
     return c.least_singular_ratio >= options.regular_circuit_ratio;
   });
-  if (!verification.verified || !regular) {
-    // Near a singular pose (branches crossing, a loop folding flat) a coarse
-    // step can cross to another branch, or over a point where the circuit
-    // ends: the circuit is traced again in steps of 1 deg, the other joints'
-    // ranges read off its points (extremes solved for near a singular pose
-    // cost many corrector calls each).
-    through_pose.steps_per_turn = std::max(360, options.analysis_steps_per_turn);
-    through_pose.all_extremes = false;
-    through_pose.stop_below_singular_ratio = 0.0;
-    verification = verify_motion(geometry, pose, through_pose);
-    verified_by = through_pose;
-  }
+  if (verification.verified && regular) return verification;
+  // Near a singular pose (branches crossing, a loop folding flat) a coarse
+  // step can cross to another branch, or over a point where the circuit
+  // ends: the circuit is traced again in steps of 1 deg, the other joints'
+  // ranges read off its points (extremes solved for near a singular pose
+  // cost many corrector calls each).
+  through_pose.steps_per_turn = std::max(360, options.analysis_steps_per_turn);
+  through_pose.all_extremes = false;
+  through_pose.stop_below_singular_ratio = 0.0;
+  return verify_motion(geometry, pose, through_pose);
+}
+
+// `loopfarm verify`'s analysis of every circuit, the one covering theta0
+// preferred.
+VerificationSummary trace_whole_motion(const LoopGeometry& geometry, const JointVector& pose, double theta0,
+                                       const StartOptions& options) {
+  VerificationOptions whole = options.verification;
+  whole.theta0 = theta0;
+  return verify_motion(geometry, pose, whole);
+}
+
+}  // namespace
+
+CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& pose, const Eigen::MatrixXd& jacobian,
+                               double theta0, const StartOptions& options, const PolishDirections* directions) {
+  VerificationSummary verification = trace_through_pose(geometry, pose, options);
   if (!verification.verified) {
     // The circuit through the search's pose cannot always be followed from
     // it: a window's samples may step over a gap in the input's range that
@@ -119,24 +134,35 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
     // be traced with a joint held whose curve ends. A zero that is not
     // verified so is analysed as `loopfarm verify` does it: every circuit,
     // the one covering theta0 preferred.
-    VerificationOptions whole = options.verification;
-    whole.theta0 = theta0;
-    verification = verify_motion(geometry, pose, whole);
-    verified_by = whole;
+    verification = trace_whole_motion(geometry, pose, theta0, options);
   }
   if (!verification.verified) return analyse_candidate(geometry, pose, std::move(verification), jacobian, options);
 
   // The geometry polished onto the motion it approximates (geometry_polish.hpp),
   // at poses spread along the verified circuit.
   const Circuit& circuit = verification.motion.circuits[static_cast<size_t>(verification.circuit)];
-  std::vector<JointVector> poses;
+  const PolishDirections every = directions ? PolishDirections{} : PolishDirections::every_parameter(geometry);
+  const PolishDirections& along = directions ? *directions : every;
+  // Poses for 8 closure equations per free parameter (a pose gives 6 - (n - f)),
+  // between 32 and polish_poses: 32 for a 4R, all of them for a 6R.
+  const int n = geometry.joints();
+  const int per_pose = std::max(1, 6 - (n - circuit.freedoms));
+  const int enough = static_cast<int>((8 * along.directions.cols() + per_pose - 1) / per_pose);
   const size_t count = circuit.points.size();
-  const size_t wanted = std::min(count, static_cast<size_t>(std::max(1, options.polish_poses)));
+  const size_t wanted = std::min(count, static_cast<size_t>(std::clamp(enough, std::min(32, options.polish_poses),
+                                                                       std::max(1, options.polish_poses))));
+  std::vector<JointVector> poses;
   for (size_t i = 0; i < wanted; ++i) poses.push_back(circuit.points[(2 * i + 1) * count / (2 * wanted)]);
   GeometryPolishSummary polish;
-  if (circuit.freedoms >= 1 && circuit.freedoms < geometry.joints()) {
-    polish = polish_geometry(geometry, poses, circuit.freedoms,
-                             directions ? *directions : PolishDirections::every_parameter(geometry), options.polish);
+  if (circuit.worst_residual <= options.polish.target_residual) {
+    // Every traced point closes to round-off already (the tracer measured
+    // it, as the polish would): nothing to polish.
+    polish.converged = true;
+    polish.geometry = geometry;
+    polish.poses_used = static_cast<int>(count);
+    polish.initial_residual = polish.final_residual = circuit.worst_residual;
+  } else if (circuit.freedoms >= 1 && circuit.freedoms < n) {
+    polish = polish_geometry(geometry, poses, circuit.freedoms, along, options.polish);
   } else {
     polish.geometry = geometry;
     polish.message = "a circuit with " + std::to_string(circuit.freedoms) + " freedoms";
@@ -146,20 +172,25 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
     verification.verified = false;
     verification.limit = "not polished onto a motion: " + polish.message;
   } else if (polish.iterations > 0) {
-    // The motion of the polished geometry, traced as the given one verified,
-    // from the polished pose nearest the given one (the given pose is off
-    // the new motion by about the polish's displacement, too far for
-    // Newton's method near a singular pose).
-    const auto distance = [&](const JointVector& p) {
-      return (p - pose).unaryExpr([](double x) { return std::abs(wrap_angle(x)); }).maxCoeff();
-    };
-    const JointVector& nearest =
-        *std::min_element(polish.poses.begin(), polish.poses.end(),
-                          [&](const JointVector& a, const JointVector& b) { return distance(a) < distance(b); });
-    // Its 2 pi image nearest the given pose: the circuit's angles are
-    // unwrapped from where its trace starts.
-    polished_pose = pose + (nearest - pose).unaryExpr([](double x) { return wrap_angle(x); });
-    verification = verify_motion(polish.geometry, polished_pose, verified_by);
+    // The motion of the polished geometry, traced through the given pose
+    // (the circuit's angles are unwrapped from where its trace starts), which
+    // Newton's method brings onto it from about the polish's displacement
+    // away. Near a singular pose it may not: then from the polished pose
+    // nearest the given one, which lies on the circuit verified, so that its
+    // trace needs no search of the whole motion but where it cannot be
+    // followed.
+    verification = trace_through_pose(polish.geometry, pose, options);
+    if (!verification.verified) {
+      const auto distance = [&](const JointVector& p) {
+        return (p - pose).unaryExpr([](double x) { return std::abs(wrap_angle(x)); }).maxCoeff();
+      };
+      const JointVector& nearest =
+          *std::min_element(polish.poses.begin(), polish.poses.end(),
+                            [&](const JointVector& a, const JointVector& b) { return distance(a) < distance(b); });
+      polished_pose = pose + (nearest - pose).unaryExpr([](double x) { return wrap_angle(x); });
+      verification = trace_through_pose(polish.geometry, polished_pose, options);
+      if (!verification.verified) verification = trace_whole_motion(polish.geometry, polished_pose, theta0, options);
+    }
     if (!verification.verified) verification.limit = "the polished geometry: " + verification.limit;
   }
   CandidateAnalysis out = analyse_candidate(polish.geometry, polished_pose, std::move(verification), jacobian, options);

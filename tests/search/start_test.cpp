@@ -306,6 +306,15 @@ TEST(RunStart, AZeroFoundTo1e7IsPolishedOntoItsMotionAndVerifiedAsLoopfarmVerify
   EXPECT_FALSE(refused.candidate.verification.verified);
   EXPECT_NE(refused.candidate.verification.limit.find("not polished"), std::string::npos);
   EXPECT_FALSE(verify_motion(refused.final_geometry, nullptr).verified);
+
+  // Start 2245: a near-trivial loop whose closure Jacobian is near singular
+  // all along its circuit (its fifth singular value about 1e-6 of the
+  // largest): no pose is regular enough to polish with, and it is refused.
+  const StartSummary singular = run_start(job, 2245);
+  ASSERT_TRUE(singular.zero);
+  EXPECT_FALSE(singular.candidate.verification.verified);
+  EXPECT_NE(singular.candidate.polish.message.find("regular poses"), std::string::npos)
+      << singular.candidate.polish.message;
 }
 
 // Zeros of the rocker job whose circuit cannot be followed from the search's

@@ -35,10 +35,12 @@ struct StartOptions {
   // ranges read off its points (docs/guide/motion.md).
   int analysis_steps_per_turn = 64;
   double regular_circuit_ratio = 1e-2;
-  // A verified zero's geometry is polished onto its motion at this many
-  // poses spread along the verified circuit (polish_geometry), and its
-  // motion traced again on the polished geometry; a zero the polish cannot
-  // bring to round-off is a near miss, not verified.
+  // A verified zero's geometry is polished onto its motion (polish_geometry)
+  // at poses spread along the verified circuit, as many as give 8 closure
+  // equations per free parameter but at least 32 and at most polish_poses
+  // (a 6R's 18 parameters take 128, a 4R's 12 take 32), and its motion is
+  // traced again on the polished geometry; a zero the polish cannot bring to
+  // round-off is a near miss, not verified.
   int polish_poses = 128;
   GeometryPolishOptions polish;
   std::function<void(const SearchTraceRow&)> trace;
