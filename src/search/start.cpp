@@ -144,7 +144,7 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
   const PolishDirections every = directions ? PolishDirections{} : PolishDirections::every_parameter(geometry);
   const PolishDirections& along = directions ? *directions : every;
   // Poses for 8 closure equations per free parameter (a pose gives 6 - (n - f)),
-  // between 32 and polish_poses: 32 for a 4R, all of them for a 6R.
+  // between 32 and polish_poses: 32 for a 4R's 12 parameters, 128 for a 6R's 18.
   const int n = geometry.joints();
   const int per_pose = std::max(1, 6 - (n - circuit.freedoms));
   const int enough = static_cast<int>((8 * along.directions.cols() + per_pose - 1) / per_pose);
