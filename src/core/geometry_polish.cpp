@@ -234,8 +234,8 @@ GeometryPolishSummary polish_geometry(const LoopGeometry& geometry, std::span<co
       break;
     }
     best = std::min(best, out.final_residual);
-    if (out.final_residual <= 0.5 * halved_from) {
-      halved_from = out.final_residual;
+    if (best <= 0.5 * halved_from) {
+      halved_from = best;
       since_halved = 0;
     } else if (++since_halved >= options.stall_iterations) {
       break;
