@@ -6,10 +6,11 @@
 // directions allowed is refused; bounds hold.
 #include "loopfarm/core/geometry_polish.hpp"
 
+#include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
