@@ -145,7 +145,7 @@ StartRecord make_start_record(const StartSummary& summary) {
   r.zero = summary.zero;
   r.verified = summary.zero && summary.candidate.verification.verified;
   // A verified zero's geometry is the one polished onto its motion (the
-  // search's end moved by about 1e-8 of L), which is what was verified.
+  // search's end moved by at most 1e-4 of L), which is what was verified.
   r.final_geometry = r.verified ? summary.candidate.geometry : summary.final_geometry;
   r.final_angles = summary.final_angles;
   // Only a verified zero becomes a candidate; anything else keeps the empty

@@ -181,13 +181,15 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
     // followed.
     verification = trace_through_pose(polish.geometry, pose, options);
     if (!verification.verified) {
-      const auto distance = [&](const JointVector& p) {
-        return (p - pose).unaryExpr([](double x) { return std::abs(wrap_angle(x)); }).maxCoeff();
+      // Differences from the given pose, each angle's nearest 2 pi image.
+      const auto from_pose = [&](const JointVector& p) -> JointVector {
+        return (p - pose).unaryExpr([](double x) { return wrap_angle(x); });
       };
+      const auto distance = [&](const JointVector& p) { return from_pose(p).cwiseAbs().maxCoeff(); };
       const JointVector& nearest =
           *std::min_element(polish.poses.begin(), polish.poses.end(),
                             [&](const JointVector& a, const JointVector& b) { return distance(a) < distance(b); });
-      polished_pose = pose + (nearest - pose).unaryExpr([](double x) { return wrap_angle(x); });
+      polished_pose = pose + from_pose(nearest);
       verification = trace_through_pose(polish.geometry, polished_pose, options);
       if (!verification.verified) verification = trace_whole_motion(polish.geometry, polished_pose, theta0, options);
     }
