@@ -122,12 +122,21 @@ std::vector<JointVector> find_assemblies(const LoopGeometry& geometry, double in
 }
 
 MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* pose, const MotionOptions& o) {
+  return analyse_motion(geometry, pose, {}, o);
+}
+
+MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* pose,
+                              std::span<const JointVector> more_poses, const MotionOptions& o) {
   o.validate();
   validate_geometry(geometry);
   const int n = geometry.joints();
   if (o.input_joint >= n) throw std::invalid_argument("analyse_motion: input_joint beyond the loop's joints");
   if (pose && pose->size() != n) throw std::invalid_argument("analyse_motion: pose has the wrong number of angles");
   if (pose && !pose->allFinite()) throw std::invalid_argument("analyse_motion: a pose angle is not finite");
+  for (const JointVector& p : more_poses) {
+    if (p.size() != n) throw std::invalid_argument("analyse_motion: a further pose has the wrong number of angles");
+    if (!p.allFinite()) throw std::invalid_argument("analyse_motion: a further pose's angle is not finite");
+  }
   const LoopGeometry g = scaled(geometry, length_scale(geometry));
   MotionAnalysis out;
   out.input_joint = o.input_joint;
@@ -195,6 +204,17 @@ MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* p
     out.given_pose_closes = c.converged;
     out.given_pose = x;
     if (c.converged) take({x, true}, true);
+  }
+  // Further closed poses when the given pose's circuit is not whole, each
+  // traced unless it lies on a circuit traced or at an isolated pose found
+  // (take()).
+  const bool given_whole = out.given_circuit >= 0 && out.circuits[static_cast<size_t>(out.given_circuit)].closed();
+  for (const JointVector& p : given_whole ? std::span<const JointVector>() : more_poses) {
+    JointVector x = p;
+    const ClosureSystem free_system(g, {}, x);
+    const Correction c = correct(free_system, x, n, 0.5, o);
+    out.least_residual = std::min(out.least_residual, c.residual);
+    if (c.converged) take({x, false}, false);
   }
 
   // Assemblies at input angles over the turn, then with every joint free

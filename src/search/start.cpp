@@ -82,20 +82,22 @@ CandidateAnalysis analyse_candidate(const LoopGeometry& geometry, const JointVec
 
 namespace {
 
-// A zero's pose is on its motion (the cycle went through it with no energy):
-// only the circuit through it is traced, with every joint's extremes solved
-// for (its ranges exact whatever the step), first in steps that grow with
-// the curve's straightness up to analysis_steps_per_turn. The coarse walk
-// gives up where it nears a singular pose: the circuit is traced finely
-// there anyway.
+// A zero's pose is usually on its motion (the cycle went through it with no
+// energy): only the circuit through it is traced, then, if that one does not
+// move, the circuits through the cycle's other samples (a cycle may close at
+// a few isolated poses and follow a motion at its other samples), with every
+// joint's extremes solved for (its ranges exact whatever the step), first in
+// steps that grow with the curve's straightness up to
+// analysis_steps_per_turn. The coarse walk gives up where it nears a
+// singular pose: the circuit is traced finely there anyway.
 VerificationSummary trace_through_pose(const LoopGeometry& geometry, const JointVector& pose,
-                                       const StartOptions& options) {
+                                       std::span<const JointVector> cycle_poses, const StartOptions& options) {
   VerificationOptions through_pose = options.verification;
   through_pose.all_circuits = false;
   through_pose.all_extremes = true;
   through_pose.steps_per_turn = options.analysis_steps_per_turn;
   through_pose.stop_below_singular_ratio = options.regular_circuit_ratio;
-  VerificationSummary verification = verify_motion(geometry, pose, through_pose);
+  VerificationSummary verification = verify_motion(geometry, pose, cycle_poses, through_pose);
   const std::vector<Circuit>& circuits = verification.motion.circuits;
   const bool regular = std::all_of(circuits.begin(), circuits.end(), [&](const Circuit& c) {
     return c.least_singular_ratio >= options.regular_circuit_ratio;
@@ -109,7 +111,7 @@ VerificationSummary trace_through_pose(const LoopGeometry& geometry, const Joint
   through_pose.steps_per_turn = std::max(360, options.analysis_steps_per_turn);
   through_pose.all_extremes = false;
   through_pose.stop_below_singular_ratio = 0.0;
-  return verify_motion(geometry, pose, through_pose);
+  return verify_motion(geometry, pose, cycle_poses, through_pose);
 }
 
 // `loopfarm verify`'s analysis of every circuit, the one covering theta0
@@ -121,15 +123,80 @@ VerificationSummary trace_whole_motion(const LoopGeometry& geometry, const Joint
   return verify_motion(geometry, pose, whole);
 }
 
+// The geometry polished onto the motion it approximates (geometry_polish.hpp),
+// at poses spread along `circuit`'s points: as many as give 8 closure
+// equations per free parameter (a pose gives 6 - (n - f)), between 32 and
+// polish_poses (32 for a 4R's 12 parameters, 128 for a 6R's 18).
+GeometryPolishSummary polish_along(const LoopGeometry& geometry, const Circuit& circuit, const PolishDirections& along,
+                                   const StartOptions& options) {
+  GeometryPolishSummary polish;
+  const int n = geometry.joints();
+  const size_t count = circuit.points.size();
+  if (circuit.worst_residual <= options.polish.target_residual) {
+    // Every traced point closes to round-off already (the tracer measured
+    // it, as the polish would): nothing to polish.
+    polish.converged = true;
+    polish.geometry = geometry;
+    polish.poses_used = static_cast<int>(count);
+    polish.initial_residual = polish.final_residual = circuit.worst_residual;
+    return polish;
+  }
+  if (circuit.freedoms < 1 || circuit.freedoms >= n) {
+    polish.geometry = geometry;
+    polish.message = "a circuit with " + std::to_string(circuit.freedoms) + " freedoms";
+    return polish;
+  }
+  const int per_pose = std::max(1, 6 - (n - circuit.freedoms));
+  const int enough = static_cast<int>((8 * along.directions.cols() + per_pose - 1) / per_pose);
+  const size_t wanted = std::min(count, static_cast<size_t>(std::clamp(enough, std::min(32, options.polish_poses),
+                                                                       std::max(1, options.polish_poses))));
+  std::vector<JointVector> poses;
+  for (size_t i = 0; i < wanted; ++i) poses.push_back(circuit.points[(2 * i + 1) * count / (2 * wanted)]);
+  return polish_geometry(geometry, poses, circuit.freedoms, along, options.polish);
+}
+
+struct PolishedMotion {
+  VerificationSummary verification;
+  JointVector pose;  // the pose its trace went through
+};
+
+// The motion of a polished geometry, traced through the given pose (and the
+// cycle's), which Newton's method brings onto it from about the polish's
+// displacement away. Near a singular pose it may not: then from the polished
+// pose nearest the given one, which lies on the circuit polished along, so
+// that its trace needs no search of the whole motion but where it cannot be
+// followed.
+PolishedMotion trace_polished(const GeometryPolishSummary& polish, const JointVector& pose,
+                              std::span<const JointVector> cycle_poses, double theta0, const StartOptions& options) {
+  PolishedMotion out{trace_through_pose(polish.geometry, pose, cycle_poses, options), pose};
+  if (out.verification.verified || polish.poses.empty()) return out;
+  // Differences from the given pose, each angle's nearest 2 pi image (the
+  // circuit's angles are unwrapped from where its trace starts).
+  const auto from_pose = [&](const JointVector& p) -> JointVector {
+    return (p - pose).unaryExpr([](double x) { return wrap_angle(x); });
+  };
+  const auto distance = [&](const JointVector& p) { return from_pose(p).cwiseAbs().maxCoeff(); };
+  const JointVector& nearest =
+      *std::min_element(polish.poses.begin(), polish.poses.end(),
+                        [&](const JointVector& a, const JointVector& b) { return distance(a) < distance(b); });
+  out.pose = pose + from_pose(nearest);
+  out.verification = trace_through_pose(polish.geometry, out.pose, {}, options);
+  if (!out.verification.verified) out.verification = trace_whole_motion(polish.geometry, out.pose, theta0, options);
+  return out;
+}
+
 }  // namespace
 
 CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& pose, const Eigen::MatrixXd& jacobian,
-                               double theta0, const StartOptions& options, const PolishDirections* directions) {
-  VerificationSummary verification = trace_through_pose(geometry, pose, options);
+                               double theta0, const StartOptions& options, const PolishDirections* directions,
+                               std::span<const JointVector> cycle_poses) {
+  const PolishDirections every = directions ? PolishDirections{} : PolishDirections::every_parameter(geometry);
+  const PolishDirections& along = directions ? *directions : every;
+  VerificationSummary verification = trace_through_pose(geometry, pose, cycle_poses, options);
   if (!verification.verified) {
-    // The circuit through the search's pose cannot always be followed from
-    // it: a window's samples may step over a gap in the input's range that
-    // holds theta0 (the pose at theta0 is then elastic, not closed), the
+    // The circuits through the search's poses cannot always be followed
+    // from them: a window's samples may step over a gap in the input's range
+    // that holds theta0 (the pose at theta0 is then elastic, not closed), the
     // tracer may stall near a singular pose, or a loop with two freedoms may
     // be traced with a joint held whose curve ends. A zero that is not
     // verified so is analysed as `loopfarm verify` does it: every circuit,
@@ -138,61 +205,16 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
   }
   if (!verification.verified) return analyse_candidate(geometry, pose, std::move(verification), jacobian, options);
 
-  // The geometry polished onto the motion it approximates (geometry_polish.hpp),
-  // at poses spread along the verified circuit.
   const Circuit& circuit = verification.motion.circuits[static_cast<size_t>(verification.circuit)];
-  const PolishDirections every = directions ? PolishDirections{} : PolishDirections::every_parameter(geometry);
-  const PolishDirections& along = directions ? *directions : every;
-  // Poses for 8 closure equations per free parameter (a pose gives 6 - (n - f)),
-  // between 32 and polish_poses: 32 for a 4R's 12 parameters, 128 for a 6R's 18.
-  const int n = geometry.joints();
-  const int per_pose = std::max(1, 6 - (n - circuit.freedoms));
-  const int enough = static_cast<int>((8 * along.directions.cols() + per_pose - 1) / per_pose);
-  const size_t count = circuit.points.size();
-  const size_t wanted = std::min(count, static_cast<size_t>(std::clamp(enough, std::min(32, options.polish_poses),
-                                                                       std::max(1, options.polish_poses))));
-  std::vector<JointVector> poses;
-  for (size_t i = 0; i < wanted; ++i) poses.push_back(circuit.points[(2 * i + 1) * count / (2 * wanted)]);
-  GeometryPolishSummary polish;
-  if (circuit.worst_residual <= options.polish.target_residual) {
-    // Every traced point closes to round-off already (the tracer measured
-    // it, as the polish would): nothing to polish.
-    polish.converged = true;
-    polish.geometry = geometry;
-    polish.poses_used = static_cast<int>(count);
-    polish.initial_residual = polish.final_residual = circuit.worst_residual;
-  } else if (circuit.freedoms >= 1 && circuit.freedoms < n) {
-    polish = polish_geometry(geometry, poses, circuit.freedoms, along, options.polish);
-  } else {
-    polish.geometry = geometry;
-    polish.message = "a circuit with " + std::to_string(circuit.freedoms) + " freedoms";
-  }
+  const GeometryPolishSummary polish = polish_along(geometry, circuit, along, options);
   JointVector polished_pose = pose;
   if (!polish.converged) {
     verification.verified = false;
     verification.limit = "not polished onto a motion: " + polish.message;
   } else if (polish.iterations > 0) {
-    // The motion of the polished geometry, traced through the given pose
-    // (the circuit's angles are unwrapped from where its trace starts), which
-    // Newton's method brings onto it from about the polish's displacement
-    // away. Near a singular pose it may not: then from the polished pose
-    // nearest the given one, which lies on the circuit verified, so that its
-    // trace needs no search of the whole motion but where it cannot be
-    // followed.
-    verification = trace_through_pose(polish.geometry, pose, options);
-    if (!verification.verified) {
-      // Differences from the given pose, each angle's nearest 2 pi image.
-      const auto from_pose = [&](const JointVector& p) -> JointVector {
-        return (p - pose).unaryExpr([](double x) { return wrap_angle(x); });
-      };
-      const auto distance = [&](const JointVector& p) { return from_pose(p).cwiseAbs().maxCoeff(); };
-      const JointVector& nearest =
-          *std::min_element(polish.poses.begin(), polish.poses.end(),
-                            [&](const JointVector& a, const JointVector& b) { return distance(a) < distance(b); });
-      polished_pose = pose + from_pose(nearest);
-      verification = trace_through_pose(polish.geometry, polished_pose, options);
-      if (!verification.verified) verification = trace_whole_motion(polish.geometry, polished_pose, theta0, options);
-    }
+    PolishedMotion polished = trace_polished(polish, pose, cycle_poses, theta0, options);
+    verification = std::move(polished.verification);
+    polished_pose = polished.pose;
     if (!verification.verified) verification.limit = "the polished geometry: " + verification.limit;
   }
   CandidateAnalysis out = analyse_candidate(polish.geometry, polished_pose, std::move(verification), jacobian, options);
@@ -278,8 +300,12 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   directions.directions = job.space.geometry_jacobian();
   directions.lower = job.space.lower_bounds() - result.x;
   directions.upper = job.space.upper_bounds() - result.x;
-  out.candidate =
-      analyse_zero(out.final_geometry, out.final_angles, columns, out.initial_angles[0], options, &directions);
+  // Every sample of the cycle closes (its energy is zero): where the motion
+  // does not pass the start pose, it may pass the others.
+  std::vector<JointVector> cycle_poses;
+  for (const CycleSample& sample : unsteered.cycle().samples) cycle_poses.push_back(sample.state.theta);
+  out.candidate = analyse_zero(out.final_geometry, out.final_angles, columns, out.initial_angles[0], options,
+                               &directions, cycle_poses);
   out.analysis_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - analysis_begin).count();
   return out;
 }

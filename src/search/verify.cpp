@@ -120,13 +120,10 @@ void VerificationOptions::validate() const {
 
 JointVector VerificationSummary::pose() const { return joint_angles.empty() ? JointVector() : joint_angles.front(); }
 
-VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector& start_angles,
-                                  const VerificationOptions& options) {
-  return verify_motion(geometry, &start_angles, options);
-}
+namespace {
 
-VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector* start_angles,
-                                  const VerificationOptions& options) {
+VerificationSummary verify(const LoopGeometry& geometry, const JointVector* start_angles,
+                           std::span<const JointVector> more_poses, const VerificationOptions& options) {
   options.validate();
   validate_geometry(geometry);
   const int n = geometry.joints();
@@ -148,7 +145,7 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
     motion.scan_inputs = 0;
     motion.free_guesses = 0;
   }
-  out.motion = analyse_motion(geometry, start_angles, motion);
+  out.motion = analyse_motion(geometry, start_angles, more_poses, motion);
   const MotionAnalysis& m = out.motion;
   out.assembled = m.given_pose_closes;
   out.circuit = reported_circuit(m, options);
@@ -216,6 +213,23 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
         std::string(out.limit.empty() ? "" : "; ") + std::to_string(c.freedoms) + " freedoms: traced with joints held";
   }
   return out;
+}
+
+}  // namespace
+
+VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector* start_angles,
+                                  const VerificationOptions& options) {
+  return verify(geometry, start_angles, {}, options);
+}
+
+VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector& start_angles,
+                                  const VerificationOptions& options) {
+  return verify(geometry, &start_angles, {}, options);
+}
+
+VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector& start_angles,
+                                  std::span<const JointVector> more_poses, const VerificationOptions& options) {
+  return verify(geometry, &start_angles, more_poses, options);
 }
 
 std::optional<MotionWindow> motion_window(const LoopGeometry& geometry, const VerificationSummary& v,

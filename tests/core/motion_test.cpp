@@ -157,6 +157,51 @@ TEST(Motion, PlanarCrankRockerHasTwoMirrorCircuitsWithTheRockerRangeOfTheLawOfCo
   }
 }
 
+// Further closed poses (a zero's cycle samples) are traced where the given
+// pose's circuit is not whole, each unless it lies on a circuit traced: the
+// crank-rocker's two mirror circuits from one assembly of each, and from a
+// third on the first; none where the given pose's circuit closes.
+TEST(Motion, FurtherPosesAreTracedOnlyWhereTheGivenPoseHasNoWholeCircuit) {
+  const LoopGeometry g = planar_four_bar(1.0, 3.0, 2.5, 3.5);
+  const std::vector<JointVector> at_30 = find_assemblies(g, rad(30));
+  const std::vector<JointVector> at_100 = find_assemblies(g, rad(100));
+  ASSERT_EQ(at_30.size(), 2u);
+  ASSERT_EQ(at_100.size(), 2u);
+  MotionOptions no_search;
+  no_search.scan_inputs = 0;
+  no_search.free_guesses = 0;
+
+  const std::vector<JointVector> both = {at_30[1], at_30[0], at_100[0], at_100[1]};
+  const MotionAnalysis from_further = analyse_motion(g, nullptr, both, no_search);
+  ASSERT_EQ(from_further.circuits.size(), 2u);
+  EXPECT_EQ(from_further.given_circuit, -1);
+  EXPECT_EQ(from_further.seeds, 0);
+  for (const Circuit& c : from_further.circuits) {
+    EXPECT_TRUE(c.closed());
+    EXPECT_LT(max_residual(g, c), 1e-12);
+  }
+  // The first circuit is the one through the first further pose.
+  EXPECT_LT((from_further.circuits[0].points.front() - at_30[1]).cwiseAbs().maxCoeff(), 1e-9);
+
+  const MotionAnalysis whole = analyse_motion(g, &at_30[0], both, no_search);
+  ASSERT_EQ(whole.circuits.size(), 1u);
+  EXPECT_EQ(whole.given_circuit, 0);
+  EXPECT_TRUE(whole.circuits[0].closed());
+
+  // A given pose far from closing is not traced; the further poses are.
+  const JointVector apart = at_30[0] + JointVector::Constant(4, 1.5);
+  const MotionAnalysis off = analyse_motion(g, &apart, {&at_30[0], 1}, no_search);
+  EXPECT_FALSE(off.given_pose_closes);
+  ASSERT_EQ(off.circuits.size(), 1u);
+  EXPECT_EQ(off.given_circuit, -1);
+
+  const std::vector<JointVector> short_pose = {JointVector::Zero(3)};
+  EXPECT_THROW(analyse_motion(g, nullptr, short_pose, no_search), std::invalid_argument);
+  std::vector<JointVector> nan_pose = {at_30[0]};
+  nan_pose[0][2] = std::nan("");
+  EXPECT_THROW(analyse_motion(g, nullptr, nan_pose, no_search), std::invalid_argument);
+}
+
 TEST(Motion, PlanarTripleRockerRangeIsTheClosedFormToAMicroDegree) {
   // a = (3, 1, 2.5, 2): delta^2 = 13 + 12 cos theta1 must lie in
   // [(2.5 - 1)^2, (2.5 + 1)^2], so theta1 in [acos(-0.0625), acos(-0.896)]

@@ -308,13 +308,14 @@ TEST(RunStart, AZeroFoundTo1e7IsPolishedOntoItsMotionAndVerifiedAsLoopfarmVerify
   EXPECT_FALSE(verify_motion(refused.final_geometry, nullptr).verified);
 
   // Start 2245: a near-trivial loop whose closure Jacobian is near singular
-  // all along its circuit (its fifth singular value about 1e-6 of the
-  // largest): no pose is regular enough to polish with, and it is refused.
+  // all along its circuits (its fifth singular value below 1e-6 of the
+  // largest): its circuit closes to 6e-10, not to round-off, and polished
+  // along its few regular poses it no longer moves. It is refused.
   const StartSummary singular = run_start(job, 2245);
   ASSERT_TRUE(singular.zero);
   EXPECT_FALSE(singular.candidate.verification.verified);
-  EXPECT_NE(singular.candidate.polish.message.find("regular poses"), std::string::npos)
-      << singular.candidate.polish.message;
+  EXPECT_NE(singular.candidate.verification.limit.find("polish"), std::string::npos)
+      << singular.candidate.verification.limit;
 }
 
 // Zeros of the rocker job whose circuit cannot be followed from the search's
@@ -334,6 +335,42 @@ TEST(RunStart, AZeroWhoseCircuitCannotBeFollowedFromItsPoseIsVerifiedFromTheWhol
     EXPECT_FALSE(verify_motion(s.final_geometry, s.final_angles, through_pose).verified) << index;
     EXPECT_TRUE(s.candidate.verification.verified) << index;
     EXPECT_EQ(s.candidate.classification.family, Family::bricard_trihedral) << index;
+  }
+}
+
+// Start 1074 of the generic 6R job: its cycle closes at three isolated poses
+// (the start pose among them; each sample adds one condition on 18
+// parameters) and follows a trivial motion (joints 1 and 4 turning about
+// coincident axes) at its other thirteen samples. The analysis verifies the
+// motion from those samples, with no search of the whole motion; `loopfarm
+// verify`'s search of the whole motion finds the same trivial loop.
+TEST(RunStart, AZeroWhoseStartPoseIsIsolatedIsVerifiedFromItsOtherCycleSamples) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/generic-6r.toml");
+  const StartSummary s = run_start(job, 1074);
+  ASSERT_TRUE(s.zero);
+  VerificationOptions through_pose;
+  through_pose.all_circuits = false;
+  const VerificationSummary alone = verify_motion(s.final_geometry, s.final_angles, through_pose);
+  EXPECT_FALSE(alone.verified);
+  EXPECT_EQ(alone.motion.isolated_poses.size(), 1u);
+
+  const VerificationSummary& v = s.candidate.verification;
+  ASSERT_TRUE(v.verified) << v.limit;
+  EXPECT_FALSE(v.on_motion);
+  EXPECT_EQ(v.motion.seeds, 0);  // no assembly search: the circuit came from a sample
+  EXPECT_EQ(s.candidate.classification.family, Family::trivial);
+
+  const VerificationSummary whole = verify_motion(s.final_geometry, nullptr);
+  ASSERT_TRUE(whole.verified);
+  EXPECT_GT(whole.motion.seeds, 0);
+  const Classification by_whole = classify(s.final_geometry, whole.pose(),
+                                           {whole.joint_travel.data(), static_cast<size_t>(whole.joint_travel.size())},
+                                           StartOptions{}.classification);
+  EXPECT_EQ(by_whole.family, Family::trivial);
+  // The same motion: the same joints turn fully, the others are frozen.
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_EQ(v.joint_travel[k] > 1.0, whole.joint_travel[k] > 1.0) << k;
+    EXPECT_NEAR(v.joint_travel[k], whole.joint_travel[k], 1e-6) << k;
   }
 }
 

@@ -39,6 +39,7 @@
 #pragma once
 
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -212,5 +213,14 @@ struct MotionAnalysis {
 // Every circuit found from `pose` (may be null), from assemblies at
 // options.scan_inputs input angles and from assemblies with every joint free.
 MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* pose, const MotionOptions& options = {});
+// The same with `more_poses` traced, when the circuit through `pose` does
+// not close on itself, after it and before any assembly search: in order,
+// each that closes (after polishing) and lies on no circuit traced and at no
+// isolated pose found before it. They are other poses known to close, such
+// as the samples of a cycle with no energy, whose motion may not pass
+// through `pose` (a cycle can close at a few isolated poses and follow a
+// motion at its other samples).
+MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* pose,
+                              std::span<const JointVector> more_poses, const MotionOptions& options = {});
 
 }  // namespace loopfarm

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 
 #include "loopfarm/core/geometry_polish.hpp"
@@ -97,11 +98,13 @@ struct StartSummary {
   CandidateAnalysis candidate;
 };
 
-// A zero's analysis as run_start does it: the circuit through `pose` traced
-// in coarse steps, again in steps of 1 deg when it is not regular or cannot
-// be followed (StartOptions::analysis_steps_per_turn), and when neither
-// verifies, every circuit as `loopfarm verify` finds them, the one covering
-// `theta0` (the start's drawn input angle) preferred. A verified geometry is
+// A zero's analysis as run_start does it: the circuit through `pose`, and
+// when that one does not move, the circuits through `cycle_poses` (the
+// other closed poses of its cycle), traced in coarse steps, again in steps
+// of 1 deg when they are not regular or cannot be followed
+// (StartOptions::analysis_steps_per_turn), and when neither verifies, every
+// circuit as `loopfarm verify` finds them, the one covering `theta0` (the
+// start's drawn input angle) preferred. A verified geometry is
 // then polished onto its motion along `directions` (by default every
 // parameter, lengths kept >= 0) and, when the polish moved it, verified
 // again as it was the first time; the classification, canonical form and
@@ -109,8 +112,8 @@ struct StartSummary {
 // polish does not converge is not verified (VerificationSummary::limit says
 // why).
 CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& pose, const Eigen::MatrixXd& jacobian,
-                               double theta0, const StartOptions& options,
-                               const PolishDirections* directions = nullptr);
+                               double theta0, const StartOptions& options, const PolishDirections* directions = nullptr,
+                               std::span<const JointVector> cycle_poses = {});
 
 // The steering of a job as objective options (deflation terms from the
 // families' distance functions).

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,12 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
 // The same with a pose.
 VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector& start_angles,
                                   const VerificationOptions& options = {});
+// The same with further closed poses traced, when the circuit through the
+// start pose does not close on itself, before any search of the whole motion
+// (analyse_motion's `more_poses`): a circuit through one of them is reported
+// when the one through the start pose does not move.
+VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVector& start_angles,
+                                  std::span<const JointVector> more_poses, const VerificationOptions& options = {});
 
 // Where a cycle of the elastic model driven along the reported motion
 // starts and what input range it covers: over a full turn from theta0 when
