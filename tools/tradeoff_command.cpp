@@ -35,6 +35,7 @@ struct TradeoffArguments {
   std::string zero_thresholds = "1e-8,1e-12,1e-16,1e-20,1e-24";
   std::string ftol_rels = "0,1e-4,1e-3,1e-2";
   std::string progress_windows = "0";
+  std::string checkpoints = "0";
   std::string reuse_nearby_cycles = "true,false";
   std::string analysis_steps = "64,128,360";
   std::string csv;
@@ -134,6 +135,22 @@ TradeoffOptions read_options(const TradeoffArguments& args) {
            [](double v) { return v >= 0 && v <= 100000000 && v == std::floor(v); }, "a whole number in [0, 1e8]")) {
     o.progress_windows.push_back(static_cast<int>(w));
   }
+  o.checkpoints.clear();
+  for (const std::string& word : parse_word_list(args.checkpoints, "--checkpoints")) {
+    // "0" (off) or "EVALUATIONS:OBJECTIVE".
+    const size_t colon = word.find(':');
+    if (colon == std::string::npos) {
+      if (word != "0") throw UsageError("--checkpoints", quote_text(word) + " is not 0 or EVALUATIONS:OBJECTIVE");
+      o.checkpoints.emplace_back(0, 0.0);
+      continue;
+    }
+    const long long evaluations = bounded_integer(word.substr(0, colon), "--checkpoints", 1, 100000000);
+    const double objective = parse_number(word.substr(colon + 1), "--checkpoints");
+    if (!(objective > 0.0)) {
+      throw UsageError("--checkpoints", quote_text(word) + ": the objective must be > 0");
+    }
+    o.checkpoints.emplace_back(static_cast<int>(evaluations), objective);
+  }
   o.reuse_nearby_cycles.clear();
   for (const std::string& r : parse_word_list(args.reuse_nearby_cycles, "--reuse-nearby-cycles")) {
     if (r != "true" && r != "false") {
@@ -226,6 +243,7 @@ const char* axis_colour(const std::string& axis) {
                                                                 {"algorithm", "#d55e00"},
                                                                 {"ftol_rel", "#cc79a7"},
                                                                 {"progress_window", "#44aa99"},
+                                                                {"checkpoint", "#aa4499"},
                                                                 {"reuse_nearby_cycle", "#999933"},
                                                                 {"zero_threshold", "#332288"},
                                                                 {"analysis_steps", "#777777"}};
@@ -442,6 +460,11 @@ Subcommand add_tradeoff_command(CLI::App& parent) {
       ->capture_default_str();
   app->add_option("--progress-windows", args->progress_windows,
                   "progress stops of the local search tried, in evaluations (0: off), with the job's progress_factor")
+      ->type_name("LIST")
+      ->capture_default_str();
+  app->add_option("--checkpoints", args->checkpoints,
+                  "checkpoints of the local search tried, EVALUATIONS:OBJECTIVE (0: off): a start still above the "
+                  "objective after that many evaluations stops")
       ->type_name("LIST")
       ->capture_default_str();
   app->add_option("--reuse-nearby-cycles", args->reuse_nearby_cycles,

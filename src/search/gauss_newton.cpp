@@ -86,8 +86,7 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
   for (int iteration = 1;; ++iteration) {
     if (current.value <= opt.stopval) return finish(SearchStatus::stopval_reached, "objective below stopval");
     if (evaluations() >= opt.max_evaluations) return finish(SearchStatus::maxeval_reached, "max_evaluations reached");
-    if (progress.too_slow(evaluations(), current.value))
-      return finish(SearchStatus::slow_progress, detail::ProgressWatch::kMessage);
+    if (progress.too_slow(evaluations(), current.value)) return finish(SearchStatus::slow_progress, progress.message());
     if (opt.time_limit > 0 && seconds_since(start_time) >= opt.time_limit) {
       return finish(SearchStatus::maxtime_reached, "time limit reached");
     }
@@ -182,7 +181,7 @@ LocalSearchSummary minimize_gauss_newton(CycleObjective& objective, const Eigen:
         if (evaluations() >= opt.max_evaluations)
           return finish(SearchStatus::maxeval_reached, "max_evaluations reached");
         if (progress.too_slow(evaluations(), current.value))
-          return finish(SearchStatus::slow_progress, detail::ProgressWatch::kMessage);
+          return finish(SearchStatus::slow_progress, progress.message());
         if (opt.time_limit > 0 && seconds_since(start_time) >= opt.time_limit) {
           return finish(SearchStatus::maxtime_reached, "time limit reached");
         }

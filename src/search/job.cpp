@@ -142,45 +142,53 @@ Job parse_table(const toml::table& root, const std::string& file) {
   job.space = read_space(r, space_node ? space_node->as_table() : nullptr, job.loop.joints);
 
   if (const toml::table* t = section("optimizer")) {
-    for_each_key(r, *t, "optimizer",
-                 {"algorithm", "xtol_rel", "ftol_rel", "ftol_abs", "stopval", "max_evaluations", "progress_window",
-                  "progress_factor", "time_limit_s", "reuse_nearby_cycle"},
-                 [&](const std::string& k, const std::string& full, const toml::node& node) {
-                   if (k == "algorithm") {
-                     job.optimizer.algorithm = r.string(node, full);
-                     const std::string& a = job.optimizer.algorithm;
-                     if (a == "GD_STOGO" || a == "GD_STOGO_RAND" || a == "GN_AGS") {
-                       r.fail(node.source(), full, "\"" + a + "\" is not built into Debian's NLopt");
-                     }
-                     if (!is_known_algorithm(a)) {
-                       r.fail(node.source(), full,
-                              "unknown algorithm \"" + a +
-                                  "\"; expected \"gauss-newton\" or an "
-                                  "NLopt name such as \"LD_LBFGS\" or \"LN_BOBYQA\"");
-                     }
-                   } else if (k == "xtol_rel") {
-                     job.optimizer.xtol_rel = r.positive(node, full, false);
-                   } else if (k == "ftol_rel") {
-                     job.optimizer.ftol_rel = r.positive(node, full, false);
-                   } else if (k == "ftol_abs") {
-                     job.optimizer.ftol_abs = r.positive(node, full, false);
-                   } else if (k == "stopval") {
-                     job.optimizer.stopval = r.number(node, full);
-                   } else if (k == "max_evaluations") {
-                     job.optimizer.max_evaluations = r.integer_in(node, full, 1, 100000000, "in [1, 1e8]");
-                   } else if (k == "progress_window") {
-                     job.optimizer.progress_window =
-                         r.integer_in(node, full, 0, 100000000, "in [0, 1e8] (0: not used)");
-                   } else if (k == "progress_factor") {
-                     const double f = r.number(node, full);
-                     if (!(f > 1.0)) r.fail(node.source(), full, "got " + format(f) + "; must be > 1");
-                     job.optimizer.progress_factor = f;
-                   } else if (k == "time_limit_s") {
-                     job.optimizer.time_limit = r.positive(node, full, false);
-                   } else if (k == "reuse_nearby_cycle") {
-                     job.optimizer.reuse_nearby_cycle = r.boolean(node, full);
-                   }
-                 });
+    for_each_key(
+        r, *t, "optimizer",
+        {"algorithm", "xtol_rel", "ftol_rel", "ftol_abs", "stopval", "max_evaluations", "progress_window",
+         "progress_factor", "checkpoint_evaluations", "checkpoint_objective", "time_limit_s", "reuse_nearby_cycle"},
+        [&](const std::string& k, const std::string& full, const toml::node& node) {
+          if (k == "algorithm") {
+            job.optimizer.algorithm = r.string(node, full);
+            const std::string& a = job.optimizer.algorithm;
+            if (a == "GD_STOGO" || a == "GD_STOGO_RAND" || a == "GN_AGS") {
+              r.fail(node.source(), full, "\"" + a + "\" is not built into Debian's NLopt");
+            }
+            if (!is_known_algorithm(a)) {
+              r.fail(node.source(), full,
+                     "unknown algorithm \"" + a +
+                         "\"; expected \"gauss-newton\" or an "
+                         "NLopt name such as \"LD_LBFGS\" or \"LN_BOBYQA\"");
+            }
+          } else if (k == "xtol_rel") {
+            job.optimizer.xtol_rel = r.positive(node, full, false);
+          } else if (k == "ftol_rel") {
+            job.optimizer.ftol_rel = r.positive(node, full, false);
+          } else if (k == "ftol_abs") {
+            job.optimizer.ftol_abs = r.positive(node, full, false);
+          } else if (k == "stopval") {
+            job.optimizer.stopval = r.number(node, full);
+          } else if (k == "max_evaluations") {
+            job.optimizer.max_evaluations = r.integer_in(node, full, 1, 100000000, "in [1, 1e8]");
+          } else if (k == "progress_window") {
+            job.optimizer.progress_window = r.integer_in(node, full, 0, 100000000, "in [0, 1e8] (0: not used)");
+          } else if (k == "progress_factor") {
+            const double f = r.number(node, full);
+            if (!(f > 1.0)) r.fail(node.source(), full, "got " + format(f) + "; must be > 1");
+            job.optimizer.progress_factor = f;
+          } else if (k == "checkpoint_evaluations") {
+            job.optimizer.checkpoint_evaluations = r.integer_in(node, full, 0, 100000000, "in [0, 1e8] (0: not used)");
+          } else if (k == "checkpoint_objective") {
+            job.optimizer.checkpoint_objective = r.positive(node, full, true);
+          } else if (k == "time_limit_s") {
+            job.optimizer.time_limit = r.positive(node, full, false);
+          } else if (k == "reuse_nearby_cycle") {
+            job.optimizer.reuse_nearby_cycle = r.boolean(node, full);
+          }
+        });
+    if (job.optimizer.checkpoint_evaluations > 0 && !(job.optimizer.checkpoint_objective > 0.0)) {
+      r.fail(t->get("checkpoint_evaluations")->source(), "optimizer.checkpoint_evaluations",
+             "needs optimizer.checkpoint_objective, the objective a start must be below by then");
+    }
   }
   if (const toml::table* t = section("search")) {
     for_each_key(r, *t, "search", {"starts", "seed", "zero_threshold"},

@@ -159,7 +159,7 @@ LocalSearchSummary minimize_nlopt(CycleObjective& objective, const Eigen::Vector
     // Whatever the algorithm made of the forced stop (Luksan's LBFGS reports
     // a failure), the progress stop ended it.
     summary.status = SearchStatus::slow_progress;
-    summary.message = detail::ProgressWatch::kMessage;
+    summary.message = progress.message();
   }
   summary.evaluations = objective.evaluations() - context.first_evaluation;
   summary.iterations = summary.evaluations;

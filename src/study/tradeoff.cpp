@@ -102,6 +102,14 @@ void TradeoffOptions::validate() const {
   for (int w : progress_windows) {
     if (w < 0 || w > 100000000) fail("progress_windows: each must be in [0, 1e8], got " + std::to_string(w));
   }
+  for (const auto& [evaluations, objective] : checkpoints) {
+    if (evaluations < 0 || evaluations > 100000000) {
+      fail("checkpoints: each one's evaluations must be in [0, 1e8], got " + std::to_string(evaluations));
+    }
+    if (evaluations > 0 && !(objective > 0.0)) {
+      fail("checkpoints: each one's objective must be > 0, got " + format_number(objective));
+    }
+  }
   for (int steps : analysis_steps) {
     if (steps < 64 || steps > 100000)
       fail("analysis_steps: each must be in [64, 100000], got " + std::to_string(steps));
@@ -164,6 +172,15 @@ std::vector<TradeoffConfiguration> tradeoff_configurations(const Job& base, cons
   for (int w : options.progress_windows) {
     if (w == base.optimizer.progress_window) continue;
     add("progress_window", std::to_string(w), [w](Job& job) { job.optimizer.progress_window = w; });
+  }
+  for (const auto& [evaluations, objective] : options.checkpoints) {
+    const OptimizerSection& o = base.optimizer;
+    if (evaluations == o.checkpoint_evaluations && (evaluations == 0 || objective == o.checkpoint_objective)) continue;
+    const std::string value = evaluations == 0 ? "0" : std::to_string(evaluations) + ":" + format_number(objective);
+    add("checkpoint", value, [evaluations, objective](Job& job) {
+      job.optimizer.checkpoint_evaluations = evaluations;
+      job.optimizer.checkpoint_objective = evaluations == 0 ? 0.0 : objective;
+    });
   }
   for (bool r : options.reuse_nearby_cycles) {
     if (r == base.optimizer.reuse_nearby_cycle) continue;

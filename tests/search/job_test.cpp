@@ -45,6 +45,8 @@ stopval = 1e-24
 max_evaluations = 250
 progress_window = 40
 progress_factor = 3
+checkpoint_evaluations = 20
+checkpoint_objective = 1e-6
 time_limit_s = 12.5
 reuse_nearby_cycle = false
 
@@ -121,6 +123,8 @@ TEST(Job, ParsesEveryTableInTheDocumentedUnits) {
   EXPECT_EQ(job.optimizer.max_evaluations, 250);
   EXPECT_EQ(job.optimizer.progress_window, 40);
   EXPECT_EQ(job.optimizer.progress_factor, 3.0);
+  EXPECT_EQ(job.optimizer.checkpoint_evaluations, 20);
+  EXPECT_EQ(job.optimizer.checkpoint_objective, 1e-6);
   EXPECT_EQ(job.optimizer.time_limit, 12.5);
   EXPECT_FALSE(job.optimizer.reuse_nearby_cycle);
   EXPECT_EQ(job.search.starts, 1000);
@@ -149,7 +153,8 @@ TEST(Job, EmptyFileGivesTheDocumentedDefaults) {
   EXPECT_EQ(job.space.lower_bounds()[8], -1.0);
   EXPECT_EQ(job.optimizer.algorithm, "gauss-newton");
   EXPECT_TRUE(job.optimizer.reuse_nearby_cycle);
-  EXPECT_EQ(job.optimizer.progress_window, 0);  // the progress stop is off
+  EXPECT_EQ(job.optimizer.progress_window, 0);         // the progress stop is off
+  EXPECT_EQ(job.optimizer.checkpoint_evaluations, 0);  // and the checkpoint
   EXPECT_EQ(job.search.starts, 100);
   EXPECT_FALSE(job.steering.nontrivial);
   EXPECT_TRUE(job.steering.deflate.empty());
@@ -324,6 +329,12 @@ INSTANTIATE_TEST_SUITE_P(
         BadJob{"progress_window_type", "[optimizer]\nprogress_window = 2.5\n", 2, "optimizer.progress_window",
                "an integer"},
         BadJob{"progress_factor", "[optimizer]\nprogress_factor = 1\n", 2, "optimizer.progress_factor", "> 1"},
+        BadJob{"checkpoint_evaluations", "[optimizer]\ncheckpoint_evaluations = -3\n", 2,
+               "optimizer.checkpoint_evaluations", "[0, 1e8]"},
+        BadJob{"checkpoint_alone", "[optimizer]\ncheckpoint_evaluations = 20\n", 2, "optimizer.checkpoint_evaluations",
+               "needs optimizer.checkpoint_objective"},
+        BadJob{"checkpoint_objective", "[optimizer]\ncheckpoint_evaluations = 20\ncheckpoint_objective = 0\n", 3,
+               "optimizer.checkpoint_objective", "> 0"},
         BadJob{"time_negative", "[optimizer]\ntime_limit_s = -1\n", 2, "optimizer.time_limit_s", ">= 0"},
         BadJob{"reuse_nearby_cycle", "[optimizer]\nreuse_nearby_cycle = \"yes\"\n", 2, "optimizer.reuse_nearby_cycle",
                "true or false"},

@@ -141,6 +141,56 @@ TEST(ProgressWatch, ComparesTheBestValueWithTheBestOneWindowBefore) {
   for (int e = 1; e <= 20; ++e) EXPECT_FALSE(off.too_slow(e, 1.0)) << e;
 }
 
+// The checkpoint: the best value so far against checkpoint_objective, from
+// checkpoint_evaluations evaluations on.
+TEST(ProgressWatch, TheCheckpointComparesTheBestValueSoFarFromItsEvaluationsOn) {
+  OptimizerSection optimizer;
+  optimizer.max_evaluations = 20;
+  optimizer.checkpoint_evaluations = 4;
+  optimizer.checkpoint_objective = 1e-6;
+  detail::ProgressWatch above(optimizer);
+  EXPECT_FALSE(above.too_slow(1, 1.0));
+  EXPECT_FALSE(above.too_slow(3, 1e-3));  // before the checkpoint
+  EXPECT_TRUE(above.too_slow(5, 2e-6));   // the first report at or after it, still above
+  EXPECT_NE(std::string(above.message()).find("checkpoint"), std::string::npos);
+
+  detail::ProgressWatch below(optimizer);
+  EXPECT_FALSE(below.too_slow(2, 5e-7));  // below before the checkpoint: the best counts
+  for (int e = 3; e <= 20; ++e) EXPECT_FALSE(below.too_slow(e, 1.0)) << e;
+
+  detail::ProgressWatch never_finite(optimizer);  // no assembly at all: above
+  EXPECT_FALSE(never_finite.too_slow(1, std::numeric_limits<double>::infinity()));
+  EXPECT_TRUE(never_finite.too_slow(4, std::numeric_limits<double>::infinity()));
+
+  optimizer.checkpoint_evaluations = 0;  // off
+  detail::ProgressWatch off(optimizer);
+  for (int e = 1; e <= 20; ++e) EXPECT_FALSE(off.too_slow(e, 1.0)) << e;
+}
+
+// Both drivers stop on the checkpoint: an objective no start reaches in 3
+// evaluations stops each at its third (NLopt's driver then re-evaluates its
+// best point); one the Bennett search passes does not stop it.
+TEST(LocalSearch, TheCheckpointEndsSearchesStillAboveItsObjective) {
+  const Eigen::VectorXd x0 = perturbed_paper_point();
+  for (const std::string algorithm : {"gauss-newton", "LD_LBFGS", "LN_BOBYQA"}) {
+    Job job = bennett_job(algorithm, 400);
+    job.optimizer.checkpoint_evaluations = 3;
+    job.optimizer.checkpoint_objective = 1e-300;
+    const LocalSearchSummary s = minimise(job, x0);
+    EXPECT_EQ(s.status, SearchStatus::slow_progress) << algorithm << " " << s.message;
+    EXPECT_NE(s.message.find("checkpoint"), std::string::npos) << s.message;
+    EXPECT_LE(s.evaluations, 4) << algorithm;
+  }
+  Job job = bennett_job("gauss-newton", 400);
+  const LocalSearchSummary free_run = minimise(job, x0);
+  ASSERT_EQ(free_run.status, SearchStatus::stopval_reached);
+  job.optimizer.checkpoint_evaluations = free_run.evaluations;
+  job.optimizer.checkpoint_objective = 1e-20;
+  const LocalSearchSummary s = minimise(job, x0);
+  EXPECT_EQ(s.status, SearchStatus::stopval_reached) << s.message;
+  EXPECT_EQ(s.evaluations, free_run.evaluations);
+}
+
 // Both drivers stop on it: asked for a factor no search achieves, they stop
 // as soon as a window has passed; with a window of 5 evaluations and a factor
 // of 10 the quadratically converging Bennett search is not stopped.

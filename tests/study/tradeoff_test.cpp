@@ -46,15 +46,16 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
   o.objectives = {"mean"};            // the base's: no configuration
   o.algorithms = {"gauss-newton", "LD_LBFGS"};
   o.zero_thresholds = {1e-12, 1e-20};
-  o.ftol_rels = {0.0, 1e-3};              // 0 is the base's
-  o.progress_windows = {0, 40};           // 0 is the base's
-  o.reuse_nearby_cycles = {true, false};  // true is the base's
-  o.ranges_deg = {360, 90};               // 360 is the base's
-  o.analysis_steps = {64, 360};           // 64 is the default's
+  o.ftol_rels = {0.0, 1e-3};               // 0 is the base's
+  o.progress_windows = {0, 40};            // 0 is the base's
+  o.checkpoints = {{0, 0.0}, {20, 1e-6}};  // 0 (off) is the base's
+  o.reuse_nearby_cycles = {true, false};   // true is the base's
+  o.ranges_deg = {360, 90};                // 360 is the base's
+  o.analysis_steps = {64, 360};            // 64 is the default's
   const auto configurations = tradeoff_configurations(base, o);
-  // base, samples 8 and 32, range 90, tolerance, full, LBFGS, ftol 1e-3, window 40, no reuse, 1e-20,
-  // analysis steps 360
-  ASSERT_EQ(configurations.size(), 12u);
+  // base, samples 8 and 32, range 90, tolerance, full, LBFGS, ftol 1e-3, window 40, checkpoint 20:1e-6,
+  // no reuse, 1e-20, analysis steps 360
+  ASSERT_EQ(configurations.size(), 13u);
   EXPECT_EQ(configurations[0].name(), "base");
   int changed_samples = 0;
   for (const TradeoffConfiguration& c : configurations) {
@@ -69,6 +70,12 @@ TEST(Tradeoff, ConfigurationsChangeOneChoiceEachAndSkipTheBaseValue) {
         << c.name();
     EXPECT_EQ(c.job.optimizer.reuse_nearby_cycle != base.optimizer.reuse_nearby_cycle, c.axis == "reuse_nearby_cycle")
         << c.name();
+    EXPECT_EQ(c.job.optimizer.checkpoint_evaluations != base.optimizer.checkpoint_evaluations, c.axis == "checkpoint")
+        << c.name();
+    if (c.axis == "checkpoint") {
+      EXPECT_EQ(c.value, "20:1e-06");
+      EXPECT_EQ(c.job.optimizer.checkpoint_objective, 1e-6);
+    }
     EXPECT_EQ(c.job.loop.objective, "mean") << c.name();
     EXPECT_EQ(c.job.loop.closure_tolerance != base.loop.closure_tolerance, c.axis == "closure_tolerance") << c.name();
     EXPECT_EQ(c.analysis_steps_per_turn != StartOptions{}.analysis_steps_per_turn, c.axis == "analysis_steps")

@@ -127,6 +127,11 @@ struct OptimizerSection {
   // a start creeping towards a minimum it would not reach in its budget.
   int progress_window = 0;
   double progress_factor = 10.0;
+  // Stop a start whose best objective after checkpoint_evaluations
+  // evaluations is still above checkpoint_objective (0: not used): a start
+  // that far from a zero by then seldom reaches one in its budget.
+  int checkpoint_evaluations = 0;
+  double checkpoint_objective = 0.0;
   double time_limit = 30.0;  // seconds per start; 0: none
   // Start each evaluation's cycle from the last one's samples instead of
   // walking it from the assembly (ObjectiveOptions::reuse_nearby_cycle).

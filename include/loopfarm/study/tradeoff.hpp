@@ -27,6 +27,7 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "loopfarm/search/job.hpp"
@@ -54,6 +55,10 @@ struct TradeoffOptions {
   // The progress stop's window ([optimizer] progress_window; 0: off), with
   // the base job's progress_factor: ends starts that creep over many steps.
   std::vector<int> progress_windows = {0};
+  // The checkpoint ([optimizer] checkpoint_evaluations and
+  // checkpoint_objective; evaluations 0: off): ends starts still above the
+  // objective after that many evaluations.
+  std::vector<std::pair<int, double>> checkpoints = {{0, 0.0}};
   // Whether each evaluation's cycle starts from the last one's samples
   // ([optimizer] reuse_nearby_cycle).
   std::vector<bool> reuse_nearby_cycles = {true, false};
@@ -70,7 +75,7 @@ struct TradeoffOptions {
 // One configuration: the base job with at most one choice changed.
 struct TradeoffConfiguration {
   // "base", "samples", "range_deg", "closure_tolerance", "compliance", "objective", "algorithm", "ftol_rel",
-  // "progress_window", "reuse_nearby_cycle", "zero_threshold", "analysis_steps"
+  // "progress_window", "checkpoint", "reuse_nearby_cycle", "zero_threshold", "analysis_steps"
   std::string axis;
   std::string value;  // the value on that axis, as text ("16", "1e-08", "LD_LBFGS")
   Job job;
