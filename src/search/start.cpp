@@ -115,11 +115,13 @@ VerificationSummary trace_through_pose(const LoopGeometry& geometry, const Joint
 }
 
 // `loopfarm verify`'s analysis of every circuit, the one covering theta0
-// preferred.
+// preferred, with the farm's scan of assemblies (StartOptions::
+// whole_motion_scan_inputs).
 VerificationSummary trace_whole_motion(const LoopGeometry& geometry, const JointVector& pose, double theta0,
                                        const StartOptions& options) {
   VerificationOptions whole = options.verification;
   whole.theta0 = theta0;
+  whole.scan_inputs = options.whole_motion_scan_inputs;
   return verify_motion(geometry, pose, whole);
 }
 

@@ -65,8 +65,14 @@ std::string degrees(double radians) {
 }
 
 // The start of a full turn of `samples` samples nearest 0 that keeps every
-// sample a quarter of their spacing h away from the circuit's singular poses,
-// else the one of the offsets 0, +-h/16, ..., +-15 h/16 that keeps them furthest.
+// sample more than a quarter of their spacing h away from the circuit's
+// singular poses, else the one of the offsets 0, +-h/16, ..., +-15 h/16 that
+// keeps them furthest. "More than" by h/64: a start exactly h/4 from a
+// singular pose puts the cycle's halved steps onto it, where the equilibrium
+// solve can cross to another branch (the 6R of
+// Verify.AFullTurnStartsOffTheSingularPosesOfItsCircuit, whose singular poses
+// lie at 0 and 180 deg to within 3e-12 rad), and a singular pose located at
+// -1.6e-12 or at +2.6e-12 rad would decide between h/4 and 5h/16.
 double full_turn_start(const Circuit& c, int input, int samples) {
   if (samples <= 0 || c.bifurcations.empty()) return 0.0;
   const double h = 2.0 * kPi / samples;
@@ -79,8 +85,9 @@ double full_turn_start(const Circuit& c, int input, int samples) {
     }
     return least;
   };
+  const double enough = 0.25 * h + h / 64;
   double best = 0.0, best_clearance = clearance(0.0);
-  for (int step = 1; step < 16 && best_clearance < 0.25 * h; ++step) {
+  for (int step = 1; step < 16 && best_clearance < enough; ++step) {
     for (const double theta0 : {step * h / 16, -step * h / 16}) {
       const double here = clearance(theta0);
       if (here > best_clearance) {
@@ -101,6 +108,7 @@ MotionOptions VerificationOptions::motion() const {
   m.max_step = 2.0 * kPi / steps_per_turn;
   m.all_extremes = all_extremes;
   m.stop_below_singular_ratio = stop_below_singular_ratio;
+  m.scan_inputs = scan_inputs;
   return m;
 }
 
@@ -114,6 +122,7 @@ void VerificationOptions::validate() const {
   if (!(min_input_travel > 0.0 && min_input_travel < 2.0 * kPi)) {
     throw std::invalid_argument("VerificationOptions: min_input_travel must be in (0, 2 pi)");
   }
+  if (scan_inputs < 0) throw std::invalid_argument("VerificationOptions: scan_inputs must be >= 0");
   if (theta0 && !std::isfinite(*theta0)) throw std::invalid_argument("VerificationOptions: theta0 is not finite");
   motion().validate();
 }

@@ -324,6 +324,18 @@ TEST(Verify, BadInputThrows) {
   EXPECT_THROW(verify_motion(g, bennett_angles(g, rad(120)), coarse), std::invalid_argument);
   coarse.steps_per_turn = 64;
   EXPECT_TRUE(verify_motion(g, bennett_angles(g, rad(120)), coarse).verified);
+  VerificationOptions no_scan;
+  no_scan.scan_inputs = -1;
+  EXPECT_THROW(verify_motion(g, nullptr, no_scan), std::invalid_argument);
+  // Without the scan at fixed inputs the guesses with every joint free find
+  // the Bennett loop's circuit, from fewer seeds.
+  no_scan.scan_inputs = 0;
+  const VerificationSummary free_only = verify_motion(g, nullptr, no_scan);
+  const VerificationSummary scanned = verify_motion(g, nullptr);
+  EXPECT_TRUE(free_only.verified);
+  EXPECT_TRUE(free_only.full_turn);
+  EXPECT_LT(free_only.motion.seeds, scanned.motion.seeds);
+  EXPECT_EQ(free_only.motion.circuits.size(), scanned.motion.circuits.size());
 }
 
 }  // namespace

@@ -24,6 +24,13 @@ struct StartOptions {
   // `loopfarm verify`'s options; also a zero's analysis from every circuit
   // when the circuit through its pose cannot be followed (analyse_zero).
   VerificationOptions verification;
+  // That analysis of every circuit seeks assemblies at this many input
+  // angles over the turn (VerificationOptions::scan_inputs), `loopfarm
+  // verify` at verification.scan_inputs. The zeros that reach it are mostly
+  // near misses, on which the scan at fixed inputs costs two thirds of their
+  // analysis; on the six jobs in jobs/ the guesses with every joint free
+  // verified every zero the scan did (docs/guide/motion.md).
+  int whole_motion_scan_inputs = 0;
   ClassifyOptions classification;
   double rank_tolerance = 1e-6;  // local_dimension's relative singular-value threshold
   // A zero's analysis (analyse_zero) traces the circuit through its pose in

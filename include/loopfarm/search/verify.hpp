@@ -34,6 +34,10 @@ struct VerificationOptions {
   // [rad] The least input travel of a moving circuit that does not close.
   double min_input_travel = 3.14159265358979323846 / 180.0;
   bool all_circuits = true;
+  // With all_circuits: input angles over the turn at which assemblies are
+  // sought, besides the guesses with every joint free (MotionOptions::
+  // scan_inputs; 0: those guesses only).
+  int scan_inputs = 24;
   // Solve for every joint's extremes on the circuit (their ranges exact), or
   // only the input's dead points (the other ranges from the traced points,
   // to within a step).
@@ -97,9 +101,9 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
 // reaching 90 % of the way to the nearer dead point on either side. theta0
 // defaults to the given pose's input when that pose is on the motion, else 0;
 // for a full turn of `samples` samples (> 0) the default is moved off 0, by
-// at most one sample spacing, where a sample would lie within a quarter
-// spacing of a singular pose the circuit passes: the equilibrium solve at a
-// singular pose can leave the motion, and the cycle is then no zero.
+// less than one sample spacing, where a sample would lie within a quarter
+// spacing (and h/64) of a singular pose the circuit passes: the equilibrium
+// solve at a singular pose can leave the motion, and the cycle is then no zero.
 struct MotionWindow {
   double theta0 = 0.0;  // [rad] the cycle's start
   double range = 0.0;   // [rad] 2 pi for a full turn
