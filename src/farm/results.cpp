@@ -192,6 +192,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::bennett_dyads:
       case Family::sarrus:
       case Family::bricard_octahedral_plane:
+      case Family::waldron_hybrid:
       case Family::degenerate:
       case Family::unclassified:
         break;

@@ -166,6 +166,23 @@ std::string special_detail(Family family, const LoopGeometry& g) {
                   w.alpha[2] * 180.0 / kPi, w.d[0] / L, w.d[3] / L);
     return buffer;
   }
+  if (family == Family::waldron_hybrid) {
+    // The dyads' Bennett ratios and how far apart the two loops' feet lie on
+    // the fourth axis (Waldron's slide), from the fit of the best representation.
+    const Best best = best_over_representations<Family::waldron_hybrid>(g, false);
+    const LoopGeometry w = detail::apply(*best.representation, g);
+    const WrittenOut written(w);
+    const WaldronFit fit = waldron_fit(waldron_parameters(written));
+    const double L = length_scale(w);
+    char buffer[320];
+    std::snprintf(buffer, sizeof buffer,
+                  "Bennett dyads (links 1-2 and 4-5 of the best representation, |sin alpha| / a = %.4g and %.4g / L) "
+                  "closed by one fourth axis, fixed in links 3 and 6 (Waldron's hybrid), the two Bennett loops' "
+                  "feet on it %.4g L apart",
+                  std::abs(std::sin(w.alpha[0])) / w.a[0] * L, std::abs(std::sin(w.alpha[3])) / w.a[3] * L,
+                  std::abs(fit.feet));
+    return buffer;
+  }
   if (family != Family::goldberg && family != Family::myard) {
     switch (family) {
       case Family::bricard_line_symmetric:

@@ -40,6 +40,8 @@ const char* to_string(Family family) {
       return "sarrus";
     case Family::bricard_octahedral_plane:
       return "bricard_octahedral_plane";
+    case Family::waldron_hybrid:
+      return "waldron_hybrid";
   }
   return "unknown";
 }
@@ -66,6 +68,7 @@ int family_joints(Family family) {
     case Family::bennett_dyads:
     case Family::sarrus:
     case Family::bricard_octahedral_plane:
+    case Family::waldron_hybrid:
       return 6;
     case Family::planar:
     case Family::spherical:
@@ -113,6 +116,12 @@ std::optional<int> family_dimension(Family family, int joints) {
       // The octahedron's two vertices in the plane and two off it, less the
       // plane's motions and the flex (docs/guide/families.md).
       return 6;
+    case Family::waldron_hybrid:
+      // Two Bennett loops (three parameters each, the scale included) and
+      // the second's turn and slide along the shared axis and its phase:
+      // 18 parameters, 9 conditions; local_dimension reads 9 on members
+      // (docs/guide/families.md).
+      return 9;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
     case Family::unclassified:

@@ -619,6 +619,219 @@ void bennett_dyads_conditions(const RepresentationView& w, Sink& c) {
         });
 }
 
+// Waldron's hybrid 6R (docs/guide/families.md): two Bennett loops B C D A
+// and G F E A sharing the joint axis A, links AB and AE fused into one body
+// and DA and GA into another, joint A removed: the 6R B C D G F E. In one
+// representation: links 1, 2 (joints 1-3) are a Bennett dyad, links 4, 5
+// (joints 4-6) another, and links 3 (D -> G) and 6 (E -> B) are the fused
+// bodies. Each dyad closes into a Bennett loop (b, beta), (a, alpha),
+// (b, beta), (a, alpha) through one fourth axis A, which the fused bodies
+// both carry; the fit finds it in each of them, from the geometry alone.
+
+// The fourth axis in one fused link. The link carries axes U and V (unit
+// directions u, v, in the link's frame); A leaves U at U's foot pu along a
+// normal of length l and twist lambda (the link U -> A of a Bennett loop,
+// no offset at U) and reaches V at V's foot pv along a normal of length m,
+// twist mu (the link A -> V, no offset at V). Its direction z makes the
+// angle lambda with u and mu with v: the common lines of two cones, up to
+// two. For each, the line A placed from U and the one placed from V are
+// parallel: `apart` is their distance over L (where the cones do not meet,
+// the nearest direction, its miss in radians added in quadrature), `slide`
+// the signed distance along z from the first's foot to the second's, in the
+// geometry's units.
+struct FusedLinkFit {
+  std::array<double, 2> apart{};
+  std::array<double, 2> slide{};
+};
+
+inline FusedLinkFit fourth_axis_in_link(const Vector3& pu, const Vector3& u, double l, double sin_l, double cos_l,
+                                        const Vector3& pv, const Vector3& v, double m, double sin_m, double cos_m,
+                                        double L) {
+  FusedLinkFit out;
+  const Vector3 uxv = u.cross(v);
+  const double s2 = uxv.squaredNorm(), c = u.dot(v);
+  // Parallel axes U and V, or a link A would share an axis with: no fourth
+  // axis this fit can place (a Waldron loop needs neither); a residual of 1
+  // (one L apart), whatever the scale.
+  if (!(s2 > 1e-24) || !(std::abs(sin_l) > 1e-12) || !(std::abs(sin_m) > 1e-12)) {
+    out.apart = {1.0, 1.0};
+    return out;
+  }
+  // z = x u + y v + w (u x v) / |u x v| with z . u = cos_l, z . v = cos_m, |z| = 1.
+  const double x = (cos_l - c * cos_m) / s2, y = (cos_m - c * cos_l) / s2;
+  const double w2 = 1.0 - (x * cos_l + y * cos_m);
+  const double miss = w2 < 0.0 ? std::sqrt(-w2) : 0.0;
+  const double w = w2 > 0.0 ? std::sqrt(w2) : 0.0;
+  const Vector3 normal = uxv / std::sqrt(s2);
+  for (size_t k = 0; k < 2; ++k) {
+    const Vector3 z = (x * u + y * v + (k == 0 ? w : -w) * normal).normalized();
+    // Link U -> A: z = cos_l u - sin_l (u x x_UA), and x_UA = (u x x_UA) x u.
+    const Vector3 x_ua = ((cos_l * u - z) / sin_l).cross(u);
+    // Link A -> V: v = cos_m z - sin_m (z x x_AV), and x_AV = (z x x_AV) x z.
+    const Vector3 x_av = ((cos_m * z - v) / sin_m).cross(z);
+    const Vector3 gap = (pv - m * x_av) - (pu + l * x_ua);
+    const double along = gap.dot(z);
+    out.apart[k] = std::hypot((gap - along * z).norm() / L, miss);
+    out.slide[k] = along;
+  }
+  return out;
+}
+
+// One representation's parameters as the fit reads them.
+struct WaldronParameters {
+  std::array<double, 6> a{}, sin{}, cos{}, d{};
+  double L = 1.0;
+};
+
+// The fit of one representation, lengths over L: in link 3 (joints D = 3,
+// G = 4) the fourth axis closing dyad 1 (D -> A as link 1, from link 2's
+// foot on axis 3) against the one closing dyad 2 (A -> G as link 5, to
+// link 4's foot on axis 4); in link 6 (joints E = 6, B = 1) the one closing
+// dyad 2 (E -> A as link 4, from link 5's foot on axis 6) against dyad 1's
+// (A -> B as link 2, to link 1's foot on axis 1); and the two loops' feet on
+// A: from dyad 1's to dyad 2's along A in link 3, back in link 6, the same
+// distance once A is one joint axis of both bodies. The direction of A is
+// dyad 1's in both links (an axis flip of a dyad-2 joint makes it so in
+// another representation). Of the two directions in each link, the pair
+// with the least sum of squares.
+struct WaldronFit {
+  double link3 = 0.0;  // the two fourth axes in link 3 apart / L
+  double link6 = 0.0;  // likewise in link 6
+  double slide = 0.0;  // (slide in link 3 + slide in link 6) / L: zero on a member
+  double feet = 0.0;   // dyad 2's foot on A minus dyad 1's, along A / L (link 3's)
+};
+
+inline WaldronFit waldron_fit(const WaldronParameters& p) {
+  const Vector3 z = Vector3::UnitZ();
+  // Link 3: axis 3 along z through the link's foot, axis 4 through (a3, 0, 0).
+  const Vector3 v3(0.0, -p.sin[2], p.cos[2]);
+  const FusedLinkFit in3 =
+      fourth_axis_in_link(-p.d[2] * z, z, p.a[0], p.sin[0], p.cos[0], Vector3(p.a[2], 0.0, 0.0) + p.d[3] * v3, v3,
+                          p.a[4], p.sin[4], p.cos[4], p.L);
+  // Link 6: axis 6 along z, axis 1 through (a6, 0, 0).
+  const Vector3 v6(0.0, -p.sin[5], p.cos[5]);
+  const FusedLinkFit in6 =
+      fourth_axis_in_link(-p.d[5] * z, z, p.a[3], p.sin[3], p.cos[3], Vector3(p.a[5], 0.0, 0.0) + p.d[0] * v6, v6,
+                          p.a[1], p.sin[1], p.cos[1], p.L);
+  WaldronFit best;
+  double least = kInf;
+  for (size_t i = 0; i < 2; ++i) {
+    for (size_t j = 0; j < 2; ++j) {
+      // In link 6 the slide runs from dyad 2's foot to dyad 1's.
+      const WaldronFit f{in3.apart[i], in6.apart[j], (in3.slide[i] + in6.slide[j]) / p.L, in3.slide[i] / p.L};
+      const double sum = f.link3 * f.link3 + f.link6 * f.link6 + f.slide * f.slide;
+      if (sum < least) {
+        least = sum;
+        best = f;
+      }
+    }
+  }
+  return best;
+}
+
+template <class RepresentationView>
+WaldronParameters waldron_parameters(const RepresentationView& w) {
+  WaldronParameters p;
+  for (int k = 0; k < 6; ++k) {
+    const auto i = static_cast<size_t>(k);
+    p.a[i] = w.a(k);
+    p.sin[i] = w.sin_alpha(k);
+    p.cos[i] = w.cos_alpha(k);
+    p.d[i] = w.d(k);
+  }
+  p.L = w.scale().L;
+  return p;
+}
+
+// The gradient of one of the fit's values (which: 0 link3, 1 link6, 2
+// slide) with respect to the representation's (a, alpha, d), by central
+// differences (the fit has no closed form to differentiate): steps of 1e-6
+// L on lengths and offsets, 1e-6 rad on twists, each side evaluated with
+// its own L.
+inline GeometryVector waldron_fit_gradient(const WaldronParameters& p, const std::array<double, 6>& alpha, int which) {
+  const int n = 6;
+  GeometryVector g = GeometryVector::Zero(3 * n);
+  const auto value = [which](const WaldronFit& f) { return which == 0 ? f.link3 : which == 1 ? f.link6 : f.slide; };
+  for (int q = 0; q < 3 * n; ++q) {
+    const auto k = static_cast<size_t>(q % n);
+    const double h = q < n || q >= 2 * n ? 1e-6 * p.L : 1e-6;
+    std::array<double, 2> side{};
+    for (size_t s = 0; s < 2; ++s) {
+      WaldronParameters r = p;
+      const double step = s == 0 ? h : -h;
+      if (q < n) {
+        r.a[k] += step;
+      } else if (q < 2 * n) {
+        r.sin[k] = std::sin(alpha[k] + step);
+        r.cos[k] = std::cos(alpha[k] + step);
+      } else {
+        r.d[k] += step;
+      }
+      double mean_square = 0.0;
+      for (size_t i = 0; i < 6; ++i) mean_square += r.a[i] * r.a[i] + r.d[i] * r.d[i];
+      mean_square /= n;
+      r.L = mean_square > 0.0 ? std::sqrt(mean_square) : 1.0;
+      side[s] = value(waldron_fit(r));
+    }
+    g[q] = (side[0] - side[1]) / (2.0 * h);
+  }
+  return g;
+}
+
+// |sin(alpha_i)| / a_i = |sin(alpha_j)| / a_j, as (a_i |sin alpha_j| - a_j
+// |sin alpha_i|) / L: a Bennett dyad in either setup (the setups differ by an
+// axis flip, and the fourth axis is a line either way).
+template <class RepresentationView, class Sink>
+void add_bennett_ratio(const RepresentationView& w, Sink& c, const char* text, int i, int j) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  auto product = [&] { return w.a(i) * std::abs(w.sin_alpha(j)) - w.a(j) * std::abs(w.sin_alpha(i)); };
+  c.add([&] { return std::string(text); }, [&] { return product() / s.L; },
+        [&] {
+          const double sign_i = w.sin_alpha(i) < 0.0 ? -1.0 : 1.0, sign_j = w.sin_alpha(j) < 0.0 ? -1.0 : 1.0;
+          GeometryVector g = -(product() / (s.L * s.L)) * s.dL;
+          g[i] += std::abs(w.sin_alpha(j)) / s.L;
+          g[j] += -std::abs(w.sin_alpha(i)) / s.L;
+          g[n + j] += w.a(i) * sign_j * w.cos_alpha(j) / s.L;
+          g[n + i] += -w.a(j) * sign_i * w.cos_alpha(i) / s.L;
+          return g;
+        });
+}
+
+// The conditions: the two dyads (no offset at their middle joints 2 and 5,
+// Bennett's ratio on links 1, 2 and on 4, 5) and the fit of their fourth
+// axes (waldron_fit), evaluated once, when the first of its values is read.
+template <class RepresentationView, class Sink>
+void waldron_hybrid_conditions(const RepresentationView& w, Sink& c) {
+  add_offset(w, c, "d2", 1, -1, 0.0);
+  add_offset(w, c, "d5", 4, -1, 0.0);
+  add_bennett_ratio(w, c, "a1 |sin(alpha2)| - a2 |sin(alpha1)|", 0, 1);
+  add_bennett_ratio(w, c, "a4 |sin(alpha5)| - a5 |sin(alpha4)|", 3, 4);
+  bool fitted = false;
+  WaldronParameters p;
+  WaldronFit fit;
+  const auto get = [&]() -> const WaldronFit& {
+    if (!fitted) {
+      p = waldron_parameters(w);
+      fit = waldron_fit(p);
+      fitted = true;
+    }
+    return fit;
+  };
+  const auto gradient = [&](int which) {
+    get();
+    std::array<double, 6> alpha;
+    for (int k = 0; k < 6; ++k) alpha[static_cast<size_t>(k)] = w.alpha(k);
+    return waldron_fit_gradient(p, alpha, which);
+  };
+  c.add([] { return "link 3: fourth axes of dyads 1-2 and 4-5 apart / L"; }, [&] { return get().link3; },
+        [&] { return gradient(0); });
+  c.add([] { return "link 6: fourth axes of dyads 1-2 and 4-5 apart / L"; }, [&] { return get().link6; },
+        [&] { return gradient(1); });
+  c.add([] { return "feet of the two Bennett loops on the fourth axis: link 3 against link 6 / L"; },
+        [&] { return get().slide; }, [&] { return gradient(2); });
+}
+
 // Sarrus 6R: two chains of three parallel axes, joints 2, 3, 4 and 5, 6, 1
 // of the representation: sin(alpha2) = sin(alpha3) = 0, sin(alpha5) =
 // sin(alpha6) = 0, and cos(alpha1)^2 = cos(alpha4)^2. Each chain lets the link between the chains (links 1 and
@@ -737,6 +950,7 @@ inline int condition_sets(Family family, int joints) {
     case Family::bricard_octahedral_plane:
       return 3;
     case Family::bennett_dyads:
+    case Family::waldron_hybrid:
     case Family::sarrus:
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
@@ -755,7 +969,7 @@ inline int condition_sets(Family family, int joints) {
 constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
          family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus ||
-         family == Family::bricard_octahedral_plane;
+         family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid;
 }
 
 template <Family F, class RepresentationView, class Sink>
@@ -781,6 +995,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     bennett_pair_conditions(set, w, c);
   } else if constexpr (F == Family::bennett_dyads) {
     bennett_dyads_conditions(w, c);
+  } else if constexpr (F == Family::waldron_hybrid) {
+    waldron_hybrid_conditions(w, c);
   } else if constexpr (F == Family::sarrus) {
     sarrus_conditions(w, c);
   } else if constexpr (F == Family::bricard_octahedral_plane) {

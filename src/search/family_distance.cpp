@@ -100,6 +100,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       return distance_over_representations<Family::sarrus>(geometry, gradient);
     case Family::bricard_octahedral_plane:
       return distance_over_representations<Family::bricard_octahedral_plane>(geometry, gradient);
+    case Family::waldron_hybrid:
+      return distance_over_representations<Family::waldron_hybrid>(geometry, gradient);
     case Family::degenerate:
       throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified:
@@ -134,6 +136,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::bennett_dyads:
     case Family::sarrus:
     case Family::bricard_octahedral_plane:
+    case Family::waldron_hybrid:
       best = best_for(family, geometry, true);
       break;
     case Family::degenerate:

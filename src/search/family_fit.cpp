@@ -81,6 +81,8 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
       return best_over_representations<Family::sarrus>(g, by_norm);
     case Family::bricard_octahedral_plane:
       return best_over_representations<Family::bricard_octahedral_plane>(g, by_norm);
+    case Family::waldron_hybrid:
+      return best_over_representations<Family::waldron_hybrid>(g, by_norm);
     case Family::spherical:
     case Family::degenerate:
     case Family::unclassified:
@@ -112,9 +114,13 @@ std::vector<Family> special_families(int n) {
     case 5:
       return {Family::myard, Family::goldberg, Family::goldberg_bent};
     case 6:
-      return {Family::bricard_trihedral,       Family::bricard_plane_symmetric,
-              Family::bricard_line_symmetric,  Family::bennett_pair,
-              Family::bennett_dyads,           Family::sarrus,
+      return {Family::bricard_trihedral,
+              Family::bricard_plane_symmetric,
+              Family::bricard_line_symmetric,
+              Family::bennett_pair,
+              Family::bennett_dyads,
+              Family::waldron_hybrid,
+              Family::sarrus,
               Family::bricard_octahedral_plane};
     default:
       return {};

@@ -359,10 +359,11 @@ TEST(FamilyFit, PicksTheRepresentationThatWritingEveryOneOutPicks) {
         expect_same_pick<Family::bennett_pair>(g, where, compared);
         expect_same_pick<Family::bennett_dyads>(g, where, compared);
         expect_same_pick<Family::sarrus>(g, where, compared);
+        expect_same_pick<Family::waldron_hybrid>(g, where, compared);
       }
     }
   }
-  EXPECT_EQ(compared, 2 * (300 * 3 + 60 * 5 + 24 * 8));
+  EXPECT_EQ(compared, 2 * (300 * 3 + 60 * 5 + 24 * 9));
 }
 
 // The reporting path names the best representation's conditions.

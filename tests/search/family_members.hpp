@@ -131,6 +131,36 @@ inline Posed bennett_pair_member(std::mt19937_64& rng) {
   }
 }
 
+// Waldron's hybrid 6R (constructions.hpp's waldron_hybrid_6r, built in
+// space from its mechanism, not from the classifier's fit): two random
+// Bennett loops, each in a random setup (the signs of its twists), sharing
+// the joint axis A, the second turned about A and slid along it by random
+// amounts, the fused links at a random phase.
+inline WaldronHybrid6R random_waldron(std::mt19937_64& rng) {
+  for (;;) {
+    WaldronHybrid6R p;
+    p.b = uniform(rng, 0.5, 2.0);
+    p.beta = twist(rng);
+    p.alpha = twist(rng);
+    p.e = uniform(rng, 0.5, 2.0);
+    p.epsilon = twist(rng);
+    p.gamma = twist(rng);
+    // The Bennett loops' other links: a = b |sin alpha / sin beta|, c = e |sin gamma / sin epsilon|.
+    const double a = p.b * std::abs(std::sin(p.alpha) / std::sin(p.beta));
+    const double c = p.e * std::abs(std::sin(p.gamma) / std::sin(p.epsilon));
+    if (a < 0.3 || a > 4.0 || c < 0.3 || c > 4.0) continue;
+    p.turn = uniform(rng, -kPi, kPi);
+    p.slide = uniform(rng, -0.8, 0.8);
+    p.phase = uniform(rng, -kPi, kPi);
+    return p;
+  }
+}
+
+inline Posed waldron_member(std::mt19937_64& rng) {
+  const WaldronHybrid6R p = random_waldron(rng);
+  return waldron_hybrid_6r(p, uniform(rng, -kPi, kPi));
+}
+
 // Myard 5R: Goldberg from two mirror-image Bennett loops, the shared link a
 // right-angle twist: (a, alpha, b, pi/2) and (a, -alpha, b, pi/2).
 inline Posed myard_member(std::mt19937_64& rng, double phi) {

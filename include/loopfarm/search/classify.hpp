@@ -26,6 +26,11 @@
 //              removed and nothing fused: moves with two degrees of freedom
 //   bennett_dyads (n = 6) two Bennett dyads with equal (cos alpha + cos
 //              beta) / kappa joined by two equal links (docs/guide/families.md)
+//   waldron_hybrid (n = 6) Waldron's hybrid: two Bennett dyads (links 1-2
+//              and 4-5 of a representation, no offset at joints 2 and 5)
+//              whose fourth axes, found in the fused links 3 and 6, are one
+//              line, the two Bennett loops' feet on it the same distance
+//              apart in both links (a fit of the construction)
 //   sarrus     (n = 6) two chains of three parallel axes: sin(alpha) = 0 for
 //              two pairs of consecutive links (2, 3 and 5, 6 of a
 //              representation) and cos^2(alpha1) = cos^2(alpha4); the link
@@ -82,6 +87,9 @@ enum class Family {
   // 6R: every a_i = 0, the axes' meeting points a Bricard octahedron
   // symmetric in a plane through two opposite vertices (his second type)
   bricard_octahedral_plane,
+  // 6R: Waldron's hybrid, two Bennett loops sharing a joint axis, fused
+  // links, the shared joint removed
+  waldron_hybrid,
 };
 const char* to_string(Family family);
 
@@ -105,6 +113,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::bennett_dyads,
     Family::sarrus,
     Family::bricard_octahedral_plane,
+    Family::waldron_hybrid,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -159,8 +168,8 @@ struct Classification {
   std::vector<Family> fitting;
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
-  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads, sarrus,
-  // bricard_octahedral_plane (the order they are tried).
+  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads,
+  // waldron_hybrid, sarrus, bricard_octahedral_plane (the order they are tried).
   std::vector<FamilyCheck> checks;
 };
 
@@ -186,8 +195,9 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 // The numeric path, called on every evaluation of a steered search: it builds
 // no names and, after the first call for a joint count (which builds that
 // count's table of representations), allocates nothing. Also goldberg, myard and
-// goldberg_bent (n = 5) and the three Bricard families (n = 6), their conditions as
-// classify() lists them. Throws std::invalid_argument for an invalid
+// goldberg_bent (n = 5) and the 6R families, their conditions as classify()
+// lists them (waldron_hybrid's fit differentiated by central differences).
+// Throws std::invalid_argument for an invalid
 // geometry, a family for another joint count (Bennett with n != 4, ...),
 // Family::degenerate (its conditions depend on which axes are merged) or
 // Family::unclassified.
