@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "bonds_command.hpp"
 #include "cli_support.hpp"
 #include "energy_command.hpp"
 #include "groundtruth_command.hpp"
@@ -65,11 +66,11 @@ int run_loopfarm(int argc, char** argv) {
 
   // Every subcommand, in the order --help lists them.
   const std::vector<loopfarm::cli::Subcommand> commands{
-      loopfarm::cli::add_energy_command(app),   loopfarm::cli::add_verify_command(app),
-      loopfarm::cli::add_motion_command(app),   loopfarm::cli::add_start_command(app),
-      loopfarm::cli::add_run_command(app),      loopfarm::cli::add_merge_command(app),
-      loopfarm::cli::add_report_command(app),   loopfarm::cli::add_groundtruth_command(app),
-      loopfarm::cli::add_tradeoff_command(app),
+      loopfarm::cli::add_energy_command(app),      loopfarm::cli::add_verify_command(app),
+      loopfarm::cli::add_motion_command(app),      loopfarm::cli::add_bonds_command(app),
+      loopfarm::cli::add_start_command(app),       loopfarm::cli::add_run_command(app),
+      loopfarm::cli::add_merge_command(app),       loopfarm::cli::add_report_command(app),
+      loopfarm::cli::add_groundtruth_command(app), loopfarm::cli::add_tradeoff_command(app),
   };
 
   // CLI11 would call a mistyped subcommand "missing"; name it instead.
