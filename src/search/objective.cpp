@@ -96,7 +96,11 @@ bool CycleObjective::run_cycle_at(const Eigen::VectorXd& x, double ceiling) {
   // sample gives the cycle up too (evaluate_residuals).
   CycleCeiling energy_ceiling;
   if (ceiling < std::numeric_limits<double>::infinity()) {
-    deflation_ = deflation(nullptr);
+    // With its gradient: the search differentiates the points it accepts,
+    // and writing out the closest representation of each family once more
+    // costs far less than finding it again.
+    deflation_log_gradient_.setZero(3 * geometry_.joints());
+    deflation_ = deflation(&deflation_log_gradient_);
     const double bound = ceiling / deflation_ * (1.0 + 1e-12);
     (options_.measure == CycleMeasure::mean ? energy_ceiling.mean : energy_ceiling.max) = bound;
     energy_ceiling.failed_sample = true;
@@ -187,7 +191,12 @@ double CycleObjective::deflation(GeometryVector* log_gradient) const {
 double CycleObjective::steering(const Eigen::MatrixXd* angle_jacobian, GeometryVector* gradient) const {
   const int n = geometry_.joints();
   GeometryVector log_gradient = GeometryVector::Zero(3 * n);  // d log M / dp
-  double factor = gradient || std::isnan(deflation_) ? deflation(gradient ? &log_gradient : nullptr) : deflation_;
+  double factor = deflation_;
+  if (std::isnan(deflation_)) {
+    factor = deflation(gradient ? &log_gradient : nullptr);
+  } else if (gradient) {
+    log_gradient = deflation_log_gradient_;
+  }
   if (options_.nontrivial) {
     const std::vector<JointTravel> travel = joint_travel(cycle_, n);
     const double t0 = options_.min_travel;
@@ -218,6 +227,11 @@ ObjectiveValue CycleObjective::cycle_value() const {
   v.failed_samples = cycle_.failed_samples;
   v.branch_jumps = cycle_.branch_jumps;
   return v;
+}
+
+ObjectiveValue CycleObjective::last_cycle_value() const {
+  if (!last_ok_) return ObjectiveValue{};
+  return cycle_value();
 }
 
 int CycleObjective::measured_sample() const {

@@ -13,6 +13,12 @@
 namespace loopfarm {
 namespace {
 
+// A start whose searched cycle is within this factor of the zero threshold
+// is evaluated again without steering before it is judged: the re-solved
+// energy of a cycle may differ from the searched one by the solves'
+// tolerance, which matters only next to the threshold.
+constexpr double kZeroRecheckFactor = 1e6;
+
 Family family_from_name(const std::string& name) {
   // Every family family_distance measures (the job parser has checked the
   // name and the joint count; family_distance checks the count again).
@@ -267,9 +273,21 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
 
   // The final point without steering: its true energy and pose, on the
   // branch the search followed to it (which an assembly from the start's
-  // angles at the final geometry may miss).
-  unsteered.continue_from(objective);
-  const ObjectiveValue final_value = unsteered.evaluate(result.x, nullptr);
+  // angles at the final geometry may miss). Steering scales the energy but
+  // does not change the cycle, so where the search's last evaluation is at
+  // its result (both local searches leave it there) that cycle is the
+  // answer. A start that may be a zero is evaluated again without steering,
+  // as its analysis needs that objective's Jacobian and cycle: the re-solved
+  // energy decides, so a verdict never rests on which cycle was solved last.
+  const ObjectiveValue searched = objective.last_x() == result.x ? objective.last_cycle_value() : ObjectiveValue{};
+  const bool maybe_zero = !searched.ok || (searched.E_mean <= kZeroRecheckFactor * job.search.zero_threshold &&
+                                           searched.failed_samples == 0);
+  const CycleObjective& final_cycle = maybe_zero ? unsteered : objective;
+  ObjectiveValue final_value = searched;
+  if (maybe_zero) {
+    unsteered.continue_from(objective);
+    final_value = unsteered.evaluate(result.x, nullptr);
+  }
   if (!final_value.ok) {
     out.E_mean = std::numeric_limits<double>::quiet_NaN();
     out.E_max = out.E_mean;
@@ -279,10 +297,10 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   out.E_max = final_value.E_max;
   out.failed_samples = final_value.failed_samples;
   out.branch_jumps = final_value.branch_jumps;
-  out.final_angles = unsteered.start_state().theta;
+  out.final_angles = final_cycle.start_state().theta;
   // A failed sample's energy is that of wherever its solve stopped, often
   // near zero (docs/quality/stability.md, S4): a cycle with one is never a zero.
-  out.zero = out.E_mean <= job.search.zero_threshold && out.failed_samples == 0;
+  out.zero = maybe_zero && out.E_mean <= job.search.zero_threshold && out.failed_samples == 0;
   if (!out.zero) return out;
 
   // The analysis: the local dimension from the cycle's Jacobian, then the

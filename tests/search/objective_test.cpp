@@ -123,14 +123,21 @@ double twist_gap(const LoopGeometry& g, GeometryVector* gradient) {
   return gap;
 }
 
-TEST(Objective, SteeredGradientAndJacobianAgreeWithCentralDifferences) {
-  TiedFixture f;
+// Steered by both means, each far from a factor of 1: a deflation by the
+// twist gap and a travel term with a large t0.
+ObjectiveOptions strongly_steered(const TiedFixture& f) {
   ObjectiveOptions options = ObjectiveOptions::from_loop(f.job.loop);
   options.deflation.push_back({"twist gap", twist_gap});
   options.deflation_power = 2.0;
   options.deflation_shift = 0.5;
   options.nontrivial = true;
   options.min_travel = rad(60);  // large, so that the travel term is far from 1
+  return options;
+}
+
+TEST(Objective, SteeredGradientAndJacobianAgreeWithCentralDifferences) {
+  TiedFixture f;
+  ObjectiveOptions options = strongly_steered(f);
   // Every evaluation from the assembly, so that the value and the residuals
   // at x0 come from the same cycle to the last bit (a cycle reused from the
   // differences' neighbours agrees to the solve's tolerance only).
@@ -342,6 +349,36 @@ TEST(Objective, AnEvaluationAboveItsCeilingIsAbandonedWithALowerBound) {
     ASSERT_TRUE(again.ok);
     EXPECT_NEAR(again.value, at_x1.value, 1e-10 * at_x1.value);
   }
+}
+
+// A trial evaluated under a ceiling keeps the deflation's gradient it
+// computed for the bound: the Jacobian the search then asks for at that
+// point is the one a whole evaluation there gives, to the last bit (both
+// cycles walked afresh from the assembly), and agrees with central
+// differences of the residuals.
+TEST(Objective, AJacobianAfterACeilingIsTheWholeEvaluationsJacobian) {
+  TiedFixture f;
+  ObjectiveOptions options = strongly_steered(f);
+  options.reuse_nearby_cycle = false;
+  CycleObjective whole(f.job.space, options, f.theta);
+  CycleObjective bounded(f.job.space, options, f.theta);
+  const Eigen::VectorXd x1 = f.x0() + 0.01 * f.path_direction();
+  Eigen::VectorXd r_whole, r_bounded;
+  Eigen::MatrixXd J_whole, J_bounded;
+  const ObjectiveValue a = whole.evaluate_residuals(x1, r_whole, &J_whole);
+  const ObjectiveValue b = bounded.evaluate_residuals(x1, r_bounded, &J_bounded, 10.0 * a.value);
+  ASSERT_TRUE(a.ok && b.ok);
+  ASSERT_GT(a.steering_factor, 1.5);
+  EXPECT_EQ(a.value, b.value);
+  EXPECT_EQ(r_whole, r_bounded);
+  EXPECT_EQ(J_whole, J_bounded);
+  // And in the search's order of calls: values under a ceiling at another
+  // point and then at x1, then the Jacobian on its own.
+  ASSERT_TRUE(bounded.evaluate_residuals(f.x0(), r_bounded, nullptr, 10.0 * a.value).ok);
+  ASSERT_TRUE(bounded.evaluate_residuals(x1, r_bounded, nullptr, 10.0 * a.value).ok);
+  bounded.residual_jacobian(J_bounded);
+  EXPECT_EQ(J_whole, J_bounded);
+  EXPECT_GT(J_whole.cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(Objective, DeflationLiftsTheZerosOfTheDeflatedFamilyOnly) {

@@ -7,11 +7,15 @@
 
 #include <gtest/gtest.h>
 
+#include "loopfarm/core/assembly.hpp"
 #include "loopfarm/core/constructions.hpp"
+#include "loopfarm/core/cycle.hpp"
+#include "loopfarm/core/equilibrium.hpp"
 #include "loopfarm/core/motion.hpp"
 #include "loopfarm/core/sample_loops.hpp"
 #include "loopfarm/search/classify.hpp"
 #include "loopfarm/search/job.hpp"
+#include "loopfarm/search/objective.hpp"
 #include "loopfarm/search/start.hpp"
 #include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
@@ -431,6 +435,36 @@ TEST(RunStart, GaussNewtonGivesUpTrialsAboveTheAcceptanceCeiling) {
   EXPECT_GT(accepted, 0);
   EXPECT_GT(rejected, 0);
   EXPECT_GT(abandoned, rejected / 2) << abandoned << " of " << rejected;
+}
+
+// A start reports the unsteered energy of its final geometry, whichever
+// cycle it was read from (the search's own, where the start is no zero): a
+// cycle walked afresh from the start's final angles at its final geometry
+// agrees, and a zero's energy is that of a cycle evaluated without steering.
+TEST(RunStart, TheReportedEnergyIsTheFinalGeometrysUnsteeredCycle) {
+  const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/default.toml");
+  const ObjectiveOptions plain = ObjectiveOptions::from_loop(job.loop);
+  int compared = 0, zeros = 0;
+  for (std::uint64_t index = 0; index < 24; ++index) {
+    const StartSummary s = run_start(job, index);
+    if (!std::isfinite(s.E_mean) || s.failed_samples > 0 || s.branch_jumps > 0) continue;
+    const LoopModel model(s.final_geometry, plain.equilibrium);
+    EquilibriumWorkspace ws(model);
+    const EquilibriumSummary start = assemble_from_angles(model, ws, s.final_angles);
+    ASSERT_EQ(start.status, SolveStatus::converged) << index;
+    EXPECT_LT((start.state.theta - s.final_angles).cwiseAbs().maxCoeff(), 1e-8) << index;
+    CycleSummary cycle;
+    cycle_energy(model, ws, s.final_angles[0], start.state, plain.cycle, cycle);
+    ASSERT_EQ(cycle.failed_samples, 0) << index;
+    EXPECT_NEAR(cycle.E_mean, s.E_mean, 1e-8 * s.E_mean + 1e-22) << index;
+    EXPECT_NEAR(cycle.E_max, s.E_max, 1e-8 * s.E_max + 1e-22) << index;
+    EXPECT_EQ(s.zero, s.E_mean <= job.search.zero_threshold) << index;
+    ++compared;
+    zeros += s.zero;
+  }
+  EXPECT_GE(compared, 16);
+  EXPECT_GE(zeros, 3);
+  EXPECT_LE(zeros, compared - 3);
 }
 
 // Non-triviality moves a search off a frozen-joint minimum: start 46 of the

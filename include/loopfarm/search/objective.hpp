@@ -122,6 +122,9 @@ class CycleObjective {
   // The last evaluation's x, and whether it succeeded.
   const Eigen::VectorXd& last_x() const { return last_x_; }
   bool last_ok() const { return last_ok_; }
+  // The last evaluation's cycle energies and counts, unsteered (M = 1);
+  // ok only when that evaluation succeeded.
+  ObjectiveValue last_cycle_value() const;
   // The last evaluation's geometry, assembled start state and cycle.
   const LoopGeometry& geometry() const { return geometry_; }
   const EquilibriumState& start_state() const { return start_; }
@@ -168,9 +171,11 @@ class CycleObjective {
   Eigen::VectorXd last_x_;
   bool last_ok_ = false;
   LoopGeometry geometry_;
-  // The deflation product at geometry_, where run_cycle_at needed it for a
-  // ceiling (NaN otherwise): steering() without gradients reuses it.
+  // The deflation product at geometry_ and d log(product) / d(a, alpha, d),
+  // where run_cycle_at needed it for a ceiling (NaN otherwise): steering()
+  // reuses both.
   double deflation_ = std::numeric_limits<double>::quiet_NaN();
+  GeometryVector deflation_log_gradient_;
   std::unique_ptr<LoopModel> model_;  // of the last evaluation
   std::unique_ptr<EquilibriumWorkspace> workspace_;
   EquilibriumState start_;
