@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <limits>
 #include <map>
@@ -17,6 +18,7 @@
 #include "geometry_options.hpp"
 #include "loopfarm/farm/candidate_pose.hpp"
 #include "loopfarm/farm/results_database.hpp"
+#include "loopfarm/farm/stop_flag.hpp"
 #include "loopfarm/search/bond_relations.hpp"
 #include "loopfarm/search/classify.hpp"
 #include "loopfarm/search/verify.hpp"
@@ -27,6 +29,37 @@ namespace {
 
 constexpr double kDegreesPerRadian = 180.0 / 3.14159265358979323846;
 constexpr const char* kDefaultFamily = "unclassified";
+// --family's name for every family.
+constexpr const char* kEveryFamily = "all";
+
+// Set by SIGINT and SIGTERM while --store measures: it stops before the next
+// candidate and writes nothing.
+StopFlag g_stop;
+
+extern "C" void on_bonds_stop_signal(int signal) {
+  g_stop.request(signal);
+  // A second signal ends the process at once (nothing is written before the
+  // measuring ends, so nothing is lost either).
+  std::signal(signal, SIG_DFL);
+}
+
+void install_stop_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_bonds_stop_signal;
+  sigemptyset(&action.sa_mask);
+  for (int signal : {SIGINT, SIGTERM}) sigaction(signal, &action, nullptr);
+}
+
+std::string signal_name(int signal) {
+  switch (signal) {
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    default:
+      return "signal " + std::to_string(signal);
+  }
+}
 
 struct BondsArguments {
   std::string database;
@@ -39,10 +72,16 @@ struct BondsArguments {
   std::string frozen_travel_deg;
   std::string family;
   std::string limit = "0";
+  bool store = false;
+  bool recompute = false;
   FormatChoice format;
   CLI::Option* family_option = nullptr;
   CLI::Option* limit_option = nullptr;
   CLI::Option* theta0_option = nullptr;
+  CLI::Option* store_option = nullptr;
+  CLI::Option* recompute_option = nullptr;
+  // The measuring options --store keeps at their defaults.
+  std::vector<CLI::Option*> measuring_options;
 };
 
 std::string g(double value, int digits = 3) {
@@ -214,7 +253,9 @@ int run_geometry(const BondsArguments& args, const Settings& settings) {
 
 struct CandidateBonds {
   long long id = 0;
+  long long first_run = 0, first_start = 0;  // the representative measured
   std::string family;
+  std::optional<std::string> stored;  // the fingerprint the database holds
   bool verified = false;
   std::string fingerprint;  // empty when not measured
   std::string note;         // why not
@@ -231,7 +272,10 @@ struct CandidateBonds {
 CandidateBonds measure(const CandidateRow& row, const Settings& settings) {
   CandidateBonds out;
   out.id = row.id;
+  out.first_run = row.first_run;
+  out.first_start = row.first_start;
   out.family = row.family;
+  out.stored = row.bond_fingerprint;
   LoopGeometry geometry;
   try {
     geometry = candidate_geometry(row);
@@ -274,27 +318,54 @@ CandidateBonds measure(const CandidateRow& row, const Settings& settings) {
   throw EnvironmentError(error.what());
 }
 
+// "the unclassified candidates", "every candidate".
+std::string selection_text(const std::string& family) {
+  return family.empty() ? "every candidate" : "the " + family + " candidates";
+}
+
+// The text line of a measured candidate: the stored fingerprint too when it
+// differs from the one just measured.
+void print_candidate_line(const CandidateBonds& m) {
+  std::string result = m.fingerprint.empty() ? "(" + m.note + ")" : m.fingerprint;
+  if (m.stored && *m.stored != m.fingerprint) {
+    result += "  (stored: " + (m.stored->empty() ? std::string("none") : *m.stored) + ")";
+  }
+  std::printf("%-7lld %-22s %-9s %-9s %-9s %s\n", m.id, m.family.c_str(),
+              g(m.trace_seconds + m.bond_seconds, 2).c_str(), g(m.largest_related, 2).c_str(),
+              g(m.least_rejected, 2).c_str(), result.c_str());
+  std::fflush(stdout);
+}
+
+nlohmann::ordered_json text_or_null(const std::optional<std::string>& text) {
+  return text ? nlohmann::ordered_json(*text) : nlohmann::ordered_json(nullptr);
+}
+
 int run_database(const BondsArguments& args, const Settings& settings) {
-  const std::string family = args.family.empty() ? kDefaultFamily : args.family;
-  if (!family_from_string(family)) {
+  // Empty: every family.
+  const std::string family =
+      args.family.empty() ? kDefaultFamily : (args.family == kEveryFamily ? std::string() : args.family);
+  if (!family.empty() && !family_from_string(family)) {
     std::string names;
     for (Family f : kAllFamilies) names += (names.empty() ? "" : ", ") + std::string(to_string(f));
-    throw UsageError("--family", "got " + quote_text(family) + "; expected one of " + names);
+    throw UsageError("--family", "got " + quote_text(family) + "; expected one of " + names + ", or " + kEveryFamily);
   }
   const long long limit = parse_integer(args.limit, "--limit");
   if (limit < 0) throw UsageError("--limit", "got " + args.limit + "; must be >= 0 (0: every candidate)");
 
+  // --store opens the file for writing first, so that a file it would refuse
+  // (read-only, a newer schema) costs no measuring.
   std::optional<ResultsDatabase> db;
   try {
-    db.emplace(ResultsDatabase::open(args.database, DatabaseMode::read));
+    db.emplace(ResultsDatabase::open(args.database, args.store ? DatabaseMode::update : DatabaseMode::read));
   } catch (const DatabaseError& error) {
     throw UsageError("DB", error.what());
   }
   std::vector<CandidateRow> rows;
   std::string present;
+  std::int64_t selected = 0;
   try {
     const ResultsDatabase::Snapshot snapshot = db->snapshot();
-    bool held = false;
+    bool held = family.empty();
     for (const FamilyCount& f : db->family_counts()) {
       held = held || f.family == family;
       present += (present.empty() ? "" : ", ") + f.family + " (" + grouped(f.candidates) + ")";
@@ -305,6 +376,9 @@ int run_database(const BondsArguments& args, const Settings& settings) {
     }
     CandidateFilter filter;
     filter.family = family;
+    selected = db->candidate_count(filter);
+    // --store measures only what is not stored yet, unless told to measure again.
+    filter.without_fingerprint = args.store && !args.recompute;
     filter.limit = limit > 0 ? limit : -1;
     rows = db->candidates(filter);
   } catch (const DatabaseError& error) {
@@ -313,24 +387,46 @@ int run_database(const BondsArguments& args, const Settings& settings) {
 
   const bool json = args.format.format == OutputFormat::json;
   if (!json) {
-    if (rows.empty()) {
-      std::printf("no %s candidate in %s (%s)\n", family.c_str(), args.database.c_str(),
+    if (selected == 0) {
+      std::printf("no %s in %s (%s)\n", family.empty() ? "candidate" : (family + " candidate").c_str(),
+                  args.database.c_str(),
                   present.empty() ? "it holds no candidate" : ("families present: " + present).c_str());
+      return kExitSuccess;
+    }
+    if (rows.empty()) {
+      std::printf(
+          "%s of %s (%s) have their bond fingerprints stored already; nothing to measure (--recompute "
+          "measures them again)\n",
+          selection_text(family).c_str(), args.database.c_str(), grouped(selected).c_str());
       return kExitSuccess;
     }
     std::printf("%-7s %-22s %-9s %-9s %-9s %s\n", "id", "family", "seconds", "related", "rejected", "fingerprint");
   }
+  if (args.store) install_stop_handlers();
   // Each candidate traced and measured in turn; the text lists it at once.
   std::vector<CandidateBonds> measured;
   for (const CandidateRow& row : rows) {
+    if (g_stop.requested()) break;
     measured.push_back(measure(row, settings));
-    const CandidateBonds& m = measured.back();
-    if (!json) {
-      std::printf("%-7lld %-22s %-9s %-9s %-9s %s\n", m.id, m.family.c_str(),
-                  g(m.trace_seconds + m.bond_seconds, 2).c_str(), g(m.largest_related, 2).c_str(),
-                  g(m.least_rejected, 2).c_str(),
-                  m.fingerprint.empty() ? ("(" + m.note + ")").c_str() : m.fingerprint.c_str());
-      std::fflush(stdout);
+    if (!json) print_candidate_line(measured.back());
+  }
+  if (g_stop.requested()) {
+    std::fprintf(stderr,
+                 "loopfarm bonds: stopped by %s after %zu of %zu candidates; nothing was written to %s (run the "
+                 "command again to measure them)\n",
+                 signal_name(g_stop.signal()).c_str(), measured.size(), rows.size(), args.database.c_str());
+    return kExitStopped;
+  }
+
+  std::optional<FingerprintStoreSummary> stored;
+  if (args.store) {
+    // One transaction: every fingerprint measured, or none.
+    std::vector<BondFingerprint> fingerprints;
+    for (const CandidateBonds& m : measured) fingerprints.push_back({m.id, m.first_run, m.first_start, m.fingerprint});
+    try {
+      stored = db->store_bond_fingerprints(fingerprints);
+    } catch (const DatabaseError& error) {
+      rethrow_read_error(error);
     }
   }
 
@@ -346,7 +442,7 @@ int run_database(const BondsArguments& args, const Settings& settings) {
   if (json) {
     nlohmann::ordered_json record;
     record["database"] = args.database;
-    record["family"] = family;
+    record["family"] = family.empty() ? std::string(kEveryFamily) : family;
     record["max_degree"] = settings.bonds.max_degree;
     record["tolerance"] = settings.bonds.tolerance;
     nlohmann::ordered_json candidates = nlohmann::ordered_json::array();
@@ -357,6 +453,7 @@ int run_database(const BondsArguments& args, const Settings& settings) {
       c["verified"] = m.verified;
       c["fingerprint"] =
           m.fingerprint.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(m.fingerprint);
+      c["stored_fingerprint"] = text_or_null(m.stored);
       c["note"] = m.note.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(m.note);
       c["rows"] = m.rows;
       c["worst_closure"] = m.worst_closure;
@@ -372,6 +469,11 @@ int run_database(const BondsArguments& args, const Settings& settings) {
       list.push_back({{"fingerprint", fingerprint}, {"count", ids.size()}, {"candidates", ids}});
     }
     record["classes"] = list;
+    if (stored) {
+      record["stored"] = {{"written", stored->stored}, {"skipped", stored->skipped}, {"upgraded", stored->upgraded}};
+    } else {
+      record["stored"] = nullptr;
+    }
     write_record(stdout, record, OutputFormat::json);
     return kExitSuccess;
   }
@@ -383,6 +485,16 @@ int run_database(const BondsArguments& args, const Settings& settings) {
     std::string list;
     for (const long long id : ids) list += (list.empty() ? "" : ", ") + std::to_string(id);
     std::printf("  %-5zu %s\n        candidates %s\n", ids.size(), fingerprint.c_str(), list.c_str());
+  }
+  if (stored) {
+    std::printf(
+        "stored %s in %s%s%s\n", count_of(stored->stored, "bond fingerprint").c_str(), args.database.c_str(),
+        stored->skipped > 0
+            ? ("; " + grouped(stored->skipped) +
+               " left as they were (their representative changed or they are gone since they were read)")
+                  .c_str()
+            : "",
+        stored->upgraded ? ("; schema upgraded to version " + std::to_string(kDatabaseSchemaVersion)).c_str() : "");
   }
   return kExitSuccess;
 }
@@ -400,6 +512,24 @@ int run_bonds(const BondsArguments& args) {
   if (!database_given && (given(args.family_option) || given(args.limit_option))) {
     throw UsageError(given(args.family_option) ? "--family" : "--limit",
                      "selects candidates of a results database: give its file as DB");
+  }
+  if (!database_given && given(args.store_option)) {
+    throw UsageError("--store", "stores the fingerprints of a results database's candidates: give its file as DB");
+  }
+  if (given(args.recompute_option) && !args.store) {
+    throw UsageError("--recompute", "measures again the fingerprints --store would skip: give --store too");
+  }
+  if (args.store) {
+    // One measure for every stored fingerprint, so that equal ones compare
+    // alike; the degree bound is part of the fingerprint's text.
+    for (const CLI::Option* option : args.measuring_options) {
+      if (given(option)) {
+        throw UsageError(option->get_name(),
+                         "--store stores fingerprints measured with the default --tolerance, --rows, "
+                         "--frozen-travel-deg and --steps only, so that the stored ones compare alike; measure "
+                         "without --store to try other values");
+      }
+    }
   }
   if (!database_given && !geometry_given) {
     throw UsageError("--a",
@@ -425,10 +555,15 @@ Subcommand add_bonds_command(CLI::App& parent) {
       "  loopfarm bonds --geometry loop.toml --json\n"
       "  loopfarm bonds generic-6r.sqlite                      # every unclassified candidate, and the classes\n"
       "  loopfarm bonds generic-6r.sqlite --family bennett_dyads --limit 10\n"
+      "  loopfarm bonds generic-6r.sqlite --store              # measure and store the unclassified ones' "
+      "fingerprints\n"
       "Candidates (p, q) are tried by p + q, then max(p, q), then p; a relation holds when the smallest singular\n"
       "value of the monomials at poses spread along the circuit is at most --tolerance of the largest\n"
-      "(docs/guide/bonds.md). The database is opened read-only.\n"
-      "Exit codes: 0 done, 4 the geometry does not move (not verified), 1 failure, 2 bad input.\n");
+      "(docs/guide/bonds.md). The database is opened read-only, except with --store: the fingerprints of the\n"
+      "candidates not stored yet (all with --recompute) are written in one transaction at the end, so that an\n"
+      "error, SIGINT or SIGTERM leaves the file as it was (`loopfarm report DB --by-fingerprint` lists them).\n"
+      "Exit codes: 0 done, 4 the geometry does not move (not verified), 3 --store stopped by a signal (nothing\n"
+      "written), 1 failure, 2 bad input.\n");
   app->add_option("DB", args->database, "results database (SQLite) written by loopfarm run, instead of a geometry");
   add_geometry_options(*app, args->geometry);
   args->theta0_option =
@@ -437,28 +572,40 @@ Subcommand add_bonds_command(CLI::App& parent) {
                       "--theta-deg, else the circuit loopfarm verify reports)")
           ->type_name("DEG");
   args->geometry.theta_option->excludes(args->theta0_option);
-  app->add_option("--steps", args->steps, "tracing: the largest step along a circuit is 360/S deg (>= 64)")
-      ->type_name("S")
-      ->capture_default_str();
+  CLI::Option* steps =
+      app->add_option("--steps", args->steps, "tracing: the largest step along a circuit is 360/S deg (>= 64)")
+          ->type_name("S")
+          ->capture_default_str();
   app->add_option("--max-degree", args->max_degree, "the largest degree tried in either joint, 1 to 8")
       ->type_name("N")
       ->capture_default_str();
-  app->add_option("--tolerance", args->tolerance, "a relation: smallest singular value / largest at most this")
-      ->type_name("X")
-      ->capture_default_str();
-  app->add_option("--rows", args->rows,
-                  "poses used, spread by arclength; 0: 5 (max-degree + 1)^2, at least 3 (max-degree + 1)^2")
-      ->type_name("N")
-      ->capture_default_str();
-  app->add_option("--frozen-travel-deg", args->frozen_travel_deg,
-                  "a joint turning less than this is frozen and not fitted (default 1e-6 rad, 5.7e-05 deg)")
-      ->type_name("DEG");
+  CLI::Option* tolerance =
+      app->add_option("--tolerance", args->tolerance, "a relation: smallest singular value / largest at most this")
+          ->type_name("X")
+          ->capture_default_str();
+  CLI::Option* rows =
+      app->add_option("--rows", args->rows,
+                      "poses used, spread by arclength; 0: 5 (max-degree + 1)^2, at least 3 (max-degree + 1)^2")
+          ->type_name("N")
+          ->capture_default_str();
+  CLI::Option* frozen =
+      app->add_option("--frozen-travel-deg", args->frozen_travel_deg,
+                      "a joint turning less than this is frozen and not fitted (default 1e-6 rad, 5.7e-05 deg)")
+          ->type_name("DEG");
+  args->measuring_options = {tolerance, rows, frozen, steps};
   args->family_option =
-      app->add_option("--family", args->family, "with DB: only this family (default: unclassified)")->type_name("NAME");
+      app->add_option("--family", args->family, "with DB: only this family, or all (default: unclassified)")
+          ->type_name("NAME");
   args->limit_option =
       app->add_option("--limit", args->limit, "with DB: at most this many candidates, in the report's order; 0: all")
           ->type_name("N")
           ->capture_default_str();
+  args->store_option = app->add_flag(
+      "--store", args->store,
+      "with DB: store each measured fingerprint with its candidate (those not stored yet), in one transaction "
+      "at the end; upgrades an older database to schema version 5");
+  args->recompute_option = app->add_flag("--recompute", args->recompute,
+                                         "with --store: measure and store again the fingerprints stored already");
   add_format_option(*app, args->format, {OutputFormat::text, OutputFormat::json}, "print the relations as");
   return {app, [args] { return run_bonds(*args); }};
 }

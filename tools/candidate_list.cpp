@@ -84,6 +84,14 @@ std::vector<Field> candidate_fields(const CandidateRow& r, int joints) {
   f.integer("first_start", r.first_start);
   f.integer("local_dimension", r.local_dimension);
   f.integer("free_parameters", r.free_parameters);
+  // Null when not measured (loopfarm bonds --store), empty when measured and
+  // none (the stored geometry does not move).
+  if (r.bond_fingerprint) {
+    f.raw({"bond_fingerprint", csv_text(*r.bond_fingerprint), *r.bond_fingerprint,
+           r.bond_fingerprint->empty() ? "none (does not move)" : *r.bond_fingerprint});
+  } else {
+    f.raw({"bond_fingerprint", "", nullptr, "not measured"});
+  }
   f.number("rigid_residual", r.rigid_residual, 0.0, 2);
   f.number("family_residual", r.family_residual, 0.0, 2);
   f.number("bennett_residual", r.bennett_residual, 0.0, 2);

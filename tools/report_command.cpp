@@ -8,7 +8,8 @@
 // Here: the command's arguments, their checks and the dispatch to the
 // outputs, which live in candidate_list.hpp (the table, Markdown, CSV, JSON),
 // candidate_detail.hpp (--candidate), report_summary.hpp (--summary),
-// atlas.hpp (--atlas) and html_atlas.hpp (--html); and the --plot charts.
+// atlas.hpp (--atlas) and html_atlas.hpp (--html); the --plot charts; and the
+// classes of stored bond fingerprints (--by-fingerprint).
 #include "report_command.hpp"
 
 #include <unistd.h>
@@ -43,6 +44,11 @@ namespace {
 
 // The most rows the text table lists without --limit.
 constexpr long long kTableDefaultLimit = 50;
+// --family's name for every family.
+constexpr const char* kEveryFamily = "all";
+// The family --by-fingerprint groups without --family: the loops no known
+// family names, which the fingerprints are for.
+constexpr const char* kFingerprintFamily = "unclassified";
 // --candidate's pose: joint 1 at 90 deg unless --input-deg says otherwise,
 // away from the folded poses (every link on one line) a Bennett loop passes
 // at 0 and 180 deg, which draw as a collapsed linkage.
@@ -70,6 +76,7 @@ struct ReportArguments {
   std::string html;
   bool summary = false;
   bool wide = false;
+  bool by_fingerprint = false;
 };
 
 // A database error while reading DB: damage the open-time check could not
@@ -264,7 +271,87 @@ void list_candidates(const ResultsDatabase& db, const ReportArguments& args, con
   }
 }
 
-int run_report(const ReportArguments& args) {
+// --- the classes of stored bond fingerprints ---------------------------------------
+
+// "not measured", "none" (measured: the stored geometry does not move) or the fingerprint.
+std::string fingerprint_text(const std::optional<std::string>& fingerprint) {
+  if (!fingerprint) return "(not measured)";
+  return fingerprint->empty() ? "(none: the stored geometry does not move)" : *fingerprint;
+}
+
+void list_fingerprint_classes(const ResultsDatabase& db, const ReportArguments& args) {
+  CandidateFilter filter;
+  filter.family = args.family;
+  if (!args.max_energy.empty()) filter.max_energy = parse_number(args.max_energy, "--max-energy");
+  filter.first_run = run_filter(args);
+  const std::vector<FingerprintClass> classes = db.fingerprint_classes(filter);
+  const bool table = args.format.format == OutputFormat::text;
+  const long long limit = !args.limit.empty() ? parse_integer(args.limit, "--limit") : (table ? kTableDefaultLimit : 0);
+  const size_t shown_classes = limit > 0 ? std::min(classes.size(), static_cast<size_t>(limit)) : classes.size();
+  if (!table) {
+    std::vector<nlohmann::ordered_json> records;
+    for (size_t k = 0; k < shown_classes; ++k) {
+      const FingerprintClass& c = classes[k];
+      nlohmann::ordered_json r;
+      r["fingerprint"] = c.fingerprint ? nlohmann::ordered_json(*c.fingerprint) : nlohmann::ordered_json(nullptr);
+      r["candidates"] = c.candidates;
+      r["hits"] = c.hits;
+      r["representative"] = c.representative;
+      r["family"] = c.family;
+      r["local_dimension"] = c.local_dimension;
+      r["free_parameters"] = c.free_parameters;
+      r["E_mean"] = std::isfinite(c.E_mean) ? nlohmann::ordered_json(c.E_mean) : nlohmann::ordered_json(nullptr);
+      records.push_back(std::move(r));
+    }
+    write_records(stdout, records, args.format.format);
+    return;
+  }
+  const std::string selection = args.family.empty() ? "every candidate" : "the " + args.family + " candidates";
+  std::int64_t total = 0, measured = 0;
+  for (const FingerprintClass& c : classes) {
+    total += c.candidates;
+    if (c.fingerprint) measured += c.candidates;
+  }
+  std::printf("bond fingerprints of %s (%s, %s measured)\n", selection.c_str(), grouped(total).c_str(),
+              grouped(measured).c_str());
+  if (classes.empty()) {
+    std::printf("(no candidates match)\n");
+    return;
+  }
+  std::vector<TextColumn> columns = {{"candidates", {}}, {"hits", {}}, {"id", {}}};
+  if (args.family.empty()) columns.push_back({"family", {}});
+  columns.push_back({"dim", {}});
+  columns.push_back({"fingerprint (the table of bidegrees, docs/guide/bonds.md)", {}});
+  for (size_t k = 0; k < shown_classes; ++k) {
+    const FingerprintClass& c = classes[k];
+    size_t i = 0;
+    columns[i++].cells.push_back(grouped(c.candidates));
+    columns[i++].cells.push_back(grouped(c.hits));
+    columns[i++].cells.push_back(std::to_string(c.representative));
+    if (args.family.empty()) columns[i++].cells.push_back(c.family);
+    columns[i++].cells.push_back(std::to_string(c.local_dimension) + "/" + std::to_string(c.free_parameters));
+    columns[i++].cells.push_back(fingerprint_text(c.fingerprint));
+  }
+  print_columns(columns, 0);
+  if (shown_classes < classes.size()) {
+    std::printf("showing %s of %s classes (use --limit 0 for all)\n", grouped(shown_classes).c_str(),
+                grouped(classes.size()).c_str());
+  }
+  if (measured < total) {
+    std::printf("%s not measured: loopfarm bonds %s --store%s measures and stores their fingerprints\n",
+                count_of(total - measured, "candidate").c_str(), db.path().c_str(),
+                args.family == kFingerprintFamily ? ""
+                : args.family.empty()             ? " --family all"
+                                                  : (" --family " + args.family).c_str());
+  }
+}
+
+int run_report(const ReportArguments& args_given) {
+  // --family all is every family, as no --family is, except for
+  // --by-fingerprint, which groups the unclassified candidates unless told.
+  ReportArguments args = args_given;
+  if (args.by_fingerprint && args.family.empty()) args.family = kFingerprintFamily;
+  if (args.family == kEveryFamily) args.family.clear();
   if (!args.limit.empty() && parse_integer(args.limit, "--limit") < 0) {
     throw UsageError("--limit", "got " + args.limit + "; must be >= 0 (0: every candidate)");
   }
@@ -284,7 +371,8 @@ int run_report(const ReportArguments& args) {
   if (!args.family.empty()) {
     // Every family a classification can store (docs/guide/families.md for n = 5, 6).
     if (!family_from_string(args.family)) {
-      throw UsageError("--family", "got " + quote_text(args.family) + "; expected one of " + family_names());
+      throw UsageError("--family",
+                       "got " + quote_text(args.family) + "; expected one of " + family_names() + ", or all");
     }
   }
   std::filesystem::path gnuplot;
@@ -328,7 +416,8 @@ int run_report(const ReportArguments& args) {
     const ResultsDatabase::Snapshot snapshot = db->snapshot();
     const std::optional<std::int64_t> run = run_filter(args);
     if (run) check_run_exists(*db, *run);
-    if (!args.family.empty()) check_family_present(*db, args.family);
+    // A family named must be there; --by-fingerprint's own default need not.
+    if (!args.family.empty() && !args_given.family.empty()) check_family_present(*db, args.family);
     if (!args.candidate.empty()) {
       show_candidate(*db, args);
     } else if (!args.atlas.empty()) {
@@ -337,6 +426,8 @@ int run_report(const ReportArguments& args) {
       write_html_atlas(*db, {args.family, run, args.max_energy}, read_candidates(*db, args, 0), *html);
       html->commit();
       if (!html->to_standard_output()) std::fprintf(stderr, "loopfarm report: wrote %s\n", args.html.c_str());
+    } else if (args.by_fingerprint) {
+      list_fingerprint_classes(*db, args);
     } else if (args.summary) {
       const SummaryData summary = read_summary(*db, run);
       if (args.format.format == OutputFormat::json) {
@@ -377,6 +468,7 @@ Subcommand add_report_command(CLI::App& parent) {
       "  loopfarm report default.sqlite --summary --plot docs/default\n"
       "  loopfarm report goldberg-5r.sqlite --atlas docs/research/atlas\n"
       "  loopfarm report default.sqlite --html atlas.html   # one page, opens offline in any browser\n"
+      "  loopfarm report generic-6r.sqlite --by-fingerprint   # unclassified loops by stored bond fingerprint\n"
       "Order: unclassified candidates (possible new families) first, then by E_mean from zero upwards, ties by id.\n"
       "The table fits 120 columns (--wide: every column) and prints geometry round-off as 0 (|x| < 1e-9 L for\n"
       "lengths, L the loop's length scale; |x| < 1e-9 rad for angles); csv and json keep every stored digit.\n"
@@ -385,7 +477,8 @@ Subcommand add_report_command(CLI::App& parent) {
       "does not hold; a file that is not a loopfarm database or is damaged: checked with PRAGMA quick_check,\n"
       "about 2 s per million starts; the file is never changed).\n");
   app->add_option("DB", args->database, "results database (SQLite) written by loopfarm run")->required();
-  CLI::Option* family = app->add_option("--family", args->family, "only this family: " + family_names());
+  CLI::Option* family =
+      app->add_option("--family", args->family, "only this family (all: every family): " + family_names());
   CLI::Option* max_energy =
       app->add_option("--max-energy", args->max_energy, "only candidates with E_mean at most this")->type_name("E");
   CLI::Option* limit =
@@ -453,6 +546,13 @@ Subcommand add_report_command(CLI::App& parent) {
       ->excludes(html)
       ->excludes("--wide");
   summary->excludes(limit)->excludes("--wide");
+  CLI::Option* by_fingerprint = app->add_flag(
+      "--by-fingerprint", args->by_fingerprint,
+      "one row per bond fingerprint stored (loopfarm bonds DB --store) among the unclassified candidates (or "
+      "--family's; all: every family): fingerprint, candidates, hits, a representative (the first in the list's "
+      "order) and its local dimension; --limit: at most this many classes");
+  by_fingerprint->excludes(candidate)->excludes(summary)->excludes(atlas)->excludes(html)->excludes(plot)->excludes(
+      "--wide");
   return {app, [args] { return run_report(*args); }};
 }
 

@@ -7,6 +7,7 @@
 #include "loopfarm/farm/results_database.hpp"
 
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -48,6 +49,26 @@ std::string json_array(const std::vector<double>& values) {
 bool has_companions(const std::string& path) {
   std::error_code error;
   return std::filesystem::exists(path + "-wal", error) || std::filesystem::exists(path + "-shm", error);
+}
+
+// An existing file that update mode may write to: write permission, some
+// write bit in its mode (a file made read-only on purpose is not written to
+// even by root, whom permissions do not stop), and a directory in which the
+// journal (NAME-wal, NAME-shm) can be created.
+void check_writable(const std::string& path) {
+  struct stat status {};
+  if (::stat(path.c_str(), &status) != 0) fail(path, "cannot read its status");
+  char mode[8];
+  std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(status.st_mode & 07777));
+  if ((status.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || ::access(path.c_str(), W_OK) != 0) {
+    fail(path, std::string("a read-only file (mode ") + mode + "): nothing is written to it (make it writable first)");
+  }
+  std::filesystem::path directory = std::filesystem::path(path).parent_path();
+  if (directory.empty()) directory = ".";
+  if (::access(directory.c_str(), W_OK | X_OK) != 0) {
+    fail(path, "its directory " + directory.string() +
+                   " is not writable: the journal beside the file cannot be created, so nothing is written to it");
+  }
 }
 
 void check_geometry(const std::string& path, const LoopGeometry& g, const char* what, std::uint64_t index) {
@@ -280,6 +301,9 @@ void ResultsDatabase::Impl::bind_candidate(Statement& s, std::int64_t run_id, co
   s.bind(p++, static_cast<std::int64_t>(r.index));
   s.bind(p++, grid_cell);
   s.bind(p++, c.families);
+  // A run measures no bond fingerprint, and one measured on a representative
+  // this record replaces was of another geometry.
+  s.bind_null(p++);
 }
 
 // The candidate_id for a verified record: an existing candidate of the same
@@ -363,11 +387,13 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
   // file whose header says WAL creates NAME-wal and NAME-shm, and a file
   // refused here must be left as it was, companions included. A writer that
   // starts meanwhile changes none of what this reads.
+  if (mode == DatabaseMode::update && !exists) fail(path, "no such file");
   if (exists && !has_commits_in_wal(path)) {
     Connection peek;
     open_connection(peek, path, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, immutable_uri(path));
     check_identity(path, peek.db, mode == DatabaseMode::write);
   }
+  if (mode == DatabaseMode::update) check_writable(path);
 
   if (mode == DatabaseMode::read) {
     if (!exists) fail(path, "no such file");
@@ -391,12 +417,13 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
   // Judge an existing file on a read-only connection first: nothing that
   // could write to it (journal mode, recovery, a checkpoint on close) happens
   // before it is known to be ours and sound.
+  const bool update = mode == DatabaseMode::update;
   if (exists) {
     Connection probe;
     open_connection(probe, path, SQLITE_OPEN_READONLY);
-    if (check_identity(path, probe.db, true) != 0) check_integrity(path, probe.db);
+    if (check_identity(path, probe.db, !update) != 0) check_integrity(path, probe.db);
   }
-  open_connection(impl->connection, path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+  open_connection(impl->connection, path, update ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   sqlite3* db = impl->db();
   const std::string journal = query_text(path, db, "PRAGMA journal_mode = WAL");
   if (journal != "wal") {
@@ -411,7 +438,7 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
   // Again under the write lock: another process may have created it meanwhile.
   // An older schema is upgraded by the first write that needs it (open_run),
   // so that a database refused after this (another job) is left as it was.
-  impl->schema_version = check_identity(path, db, true);
+  impl->schema_version = check_identity(path, db, !update);
   if (impl->schema_version == 0) {
     exec(path, db, schema_sql(), "cannot create the schema");
     exec(path, db,
@@ -740,6 +767,39 @@ CommitSummary ResultsDatabase::commit(std::int64_t run_id, const std::vector<Sta
     done.run("cannot update the session");
   }
   transaction.commit();
+  return summary;
+}
+
+FingerprintStoreSummary ResultsDatabase::store_bond_fingerprints(const std::vector<BondFingerprint>& fingerprints) {
+  Impl& m = impl();
+  m.require_write("store_bond_fingerprints");
+  FingerprintStoreSummary summary;
+  if (fingerprints.empty()) return summary;
+  sqlite3* db = m.db();
+  Transaction transaction(m.path, db);
+  if (m.schema_version < kDatabaseSchemaVersion) {
+    m.upgrade_schema();
+    summary.upgraded = true;
+  }
+  // Only where the measured representative still represents the candidate.
+  Statement update;
+  update.prepare(m.path, db,
+                 "UPDATE candidates SET bond_fingerprint = ?1 "
+                 "WHERE candidate_id = ?2 AND first_run = ?3 AND first_start = ?4");
+  for (const BondFingerprint& f : fingerprints) {
+    update.bind(1, f.fingerprint);
+    update.bind(2, f.candidate_id);
+    update.bind(3, f.first_run);
+    update.bind(4, f.first_start);
+    update.run("cannot store a bond fingerprint");
+    if (sqlite3_changes(db) > 0) {
+      ++summary.stored;
+    } else {
+      ++summary.skipped;
+    }
+  }
+  transaction.commit();
+  if (summary.upgraded) m.upgraded_schema();
   return summary;
 }
 

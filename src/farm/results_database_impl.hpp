@@ -57,7 +57,7 @@ struct ResultsDatabase::Impl {
   sqlite3* db() const { return connection.db; }
 
   void require_write(const char* what) const {
-    if (mode != DatabaseMode::write) store::fail(path, std::string(what) + ": the database is open read-only");
+    if (mode == DatabaseMode::read) store::fail(path, std::string(what) + ": the database is open read-only");
   }
 
   store::Statement& prepared(store::Statement& s, const std::string& sql) {

@@ -418,11 +418,14 @@ MergeSummary ResultsDatabase::merge(const std::string& output, const std::vector
                          "SELECT " + start_columns() + " FROM starts WHERE run_id = ?1 ORDER BY start_index");
       in->cursor.bind(1, in->run_id);
       // An input older than schema version 4 has not recorded the families
-      // whose conditions hold: NULL, as in an upgraded database.
+      // whose conditions hold, one older than version 5 no bond fingerprint:
+      // NULL, as in an upgraded database. A fingerprint stored with the row a
+      // merged candidate is made of comes with it.
       std::string input_list;
       for (const std::string& name : candidate_names) {
-        input_list += (input_list.empty() ? "" : ", ") +
-                      (name == "families" && in->schema_version < 4 ? std::string("NULL") : name);
+        const bool absent =
+            (name == "families" && in->schema_version < 4) || (name == "bond_fingerprint" && in->schema_version < 5);
+        input_list += (input_list.empty() ? "" : ", ") + (absent ? std::string("NULL") : name);
       }
       in->candidate.prepare(in->path, in->connection,
                             "SELECT " + input_list + " FROM candidates WHERE candidate_id = ?1");

@@ -183,12 +183,18 @@ std::int64_t ResultsDatabase::candidate_count() const {
 
 namespace {
 
+// The column of the stored bond fingerprints; NULL (none measured) in a
+// database of schema version 4 or older, which has no such column.
+std::string fingerprint_column(int schema_version) { return schema_version >= 5 ? "bond_fingerprint" : "NULL"; }
+
 // The columns a CandidateRow is read from, in read_candidate_row's order;
 // `families` is NULL in a database of schema version 3 or older (the column
-// came with version 4, and a reader does not upgrade).
+// came with version 4, and a reader does not upgrade), `bond_fingerprint` in
+// one of version 4 or older.
 std::string candidate_row_columns(int schema_version) {
   std::string sql =
-      std::string("candidate_id, family, ") + (schema_version >= 4 ? "families" : "NULL") +
+      std::string("candidate_id, family, ") + (schema_version >= 4 ? "families" : "NULL") + ", " +
+      fingerprint_column(schema_version) +
       ", setup, detail, E_mean, E_max, hits, first_run, first_start, local_dimension, "
       "free_parameters, rigid_residual, family_residual, bennett_residual, planar_residual, spherical_residual, "
       "trivial_residual, full_turn, range_lo_deg, range_hi_deg, joints";
@@ -207,6 +213,8 @@ int read_candidate_row(const Query& q, int c, CandidateRow& r) {
   r.id = q.integer(c++);
   r.family = q.text(c++);
   if (!q.null(c)) r.families = q.text(c);
+  ++c;
+  if (!q.null(c)) r.bond_fingerprint = q.text(c);
   ++c;
   r.setup = q.text(c++);
   r.detail = q.text(c++);
@@ -237,11 +245,12 @@ int read_candidate_row(const Query& q, int c, CandidateRow& r) {
 
 // " WHERE ..." of a filter's conditions; its parameters are ?1 (family), ?2
 // (max_energy) and ?3 (first_run), bound by bind_candidate_filter.
-std::string candidate_filter_sql(const CandidateFilter& filter) {
+std::string candidate_filter_sql(const CandidateFilter& filter, int schema_version) {
   std::string sql = " WHERE 1";
   if (!filter.family.empty()) sql += " AND family = ?1";
   if (filter.max_energy) sql += " AND E_mean <= ?2";
   if (filter.first_run) sql += " AND first_run = ?3";
+  if (filter.without_fingerprint) sql += " AND " + fingerprint_column(schema_version) + " IS NULL";
   return sql;
 }
 
@@ -255,7 +264,7 @@ void bind_candidate_filter(Query& q, const CandidateFilter& filter) {
 
 std::int64_t ResultsDatabase::candidate_count(const CandidateFilter& filter) const {
   const Impl& m = impl();
-  Query q(m.path, m.db(), "SELECT COUNT(*) FROM candidates" + candidate_filter_sql(filter));
+  Query q(m.path, m.db(), "SELECT COUNT(*) FROM candidates" + candidate_filter_sql(filter, m.schema_version));
   bind_candidate_filter(q, filter);
   return q.step() ? q.integer(0) : 0;
 }
@@ -271,7 +280,8 @@ std::vector<CandidateRow> ResultsDatabase::candidates(const CandidateFilter& fil
   const Impl& m = impl();
   // candidate_id last: equal energies come in one order, the same every time.
   Query q(m.path, m.db(),
-          "SELECT " + candidate_row_columns(m.schema_version) + " FROM candidates" + candidate_filter_sql(filter) +
+          "SELECT " + candidate_row_columns(m.schema_version) + " FROM candidates" +
+              candidate_filter_sql(filter, m.schema_version) +
               " ORDER BY family <> 'unclassified', E_mean, candidate_id LIMIT ?4 OFFSET ?5");
   bind_candidate_filter(q, filter);
   q.bind(4, filter.limit < 0 ? std::int64_t{-1} : filter.limit);
@@ -298,6 +308,38 @@ std::optional<CandidateDetails> ResultsDatabase::candidate(std::int64_t candidat
   out.singular_values = q.text(c++);
   out.grid_cell = q.text(c++);
   return out;
+}
+
+std::vector<FingerprintClass> ResultsDatabase::fingerprint_classes(const CandidateFilter& filter) const {
+  const Impl& m = impl();
+  // Each class's representative is its first candidate in the report's order
+  // (by E_mean, then id), as the list of candidates orders them.
+  Query q(m.path, m.db(),
+          "SELECT fingerprint, n, total_hits, candidate_id, family, local_dimension, free_parameters, E_mean FROM ("
+          "SELECT " +
+              fingerprint_column(m.schema_version) +
+              " AS fingerprint, candidate_id, family, local_dimension, free_parameters, E_mean, "
+              "COUNT(*) OVER same AS n, SUM(hits) OVER same AS total_hits, "
+              "ROW_NUMBER() OVER (same ORDER BY E_mean, candidate_id) AS place FROM candidates" +
+              candidate_filter_sql(filter, m.schema_version) + " WINDOW same AS (PARTITION BY " +
+              fingerprint_column(m.schema_version) +
+              ")) WHERE place = 1 "
+              "ORDER BY fingerprint IS NULL, fingerprint = '', n DESC, total_hits DESC, fingerprint");
+  bind_candidate_filter(q, filter);
+  std::vector<FingerprintClass> classes;
+  while (q.step()) {
+    FingerprintClass c;
+    if (!q.null(0)) c.fingerprint = q.text(0);
+    c.candidates = q.integer(1);
+    c.hits = q.integer(2);
+    c.representative = q.integer(3);
+    c.family = q.text(4);
+    c.local_dimension = static_cast<int>(q.integer(5));
+    c.free_parameters = static_cast<int>(q.integer(6));
+    c.E_mean = q.real(7);
+    classes.push_back(std::move(c));
+  }
+  return classes;
 }
 
 ResultsDatabase::Snapshot ResultsDatabase::snapshot() const {

@@ -932,6 +932,141 @@ TEST_F(ResultsDatabaseTest, OneCandidateWholeAndTheCountOfASelection) {
   EXPECT_FALSE(db.candidate(-5).has_value());
 }
 
+// --- bond fingerprints ----------------------------------------------------------
+
+// Candidates 1 (E 3e-20), 2 (5e-21), 3 (1e-22) and a planar one, 4 (2e-30),
+// found by starts 1, 2, 4 and 0 of run 1.
+void write_four_candidates(ResultsDatabase& db) {
+  const std::int64_t run = db.open_run(identity()).run_id;
+  db.commit(run, {verified_start(1, bennett_canonical(), "k1", 3e-20),
+                  verified_start(2, shifted(bennett_canonical(), 1e-3), "k2", 5e-21),
+                  verified_start(4, shifted(bennett_canonical(), 2e-3), "k3", 1e-22)});
+  StartRecord planar = verified_start(0, geometry_deg({1, 2, 1, 2}, {0, 0, 0, 0}, {0, 0, 0, 0}), "p", 2e-30);
+  planar.candidate.family = "planar";
+  db.commit(run, {planar});
+}
+
+TEST_F(ResultsDatabaseTest, StoredFingerprintsAreReadBackAndGroupedIntoClasses) {
+  const std::string path = file("r.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    write_four_candidates(db);
+    EXPECT_EQ(value(db, "SELECT COUNT(*) FROM candidates WHERE bond_fingerprint IS NULL"), "4");
+  }
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::update);
+    EXPECT_EQ(db.mode(), DatabaseMode::update);
+    // Nothing measured yet: one class of candidates not measured.
+    std::vector<FingerprintClass> classes = db.fingerprint_classes({});
+    ASSERT_EQ(classes.size(), 1u);
+    EXPECT_FALSE(classes[0].fingerprint.has_value());
+    EXPECT_EQ(classes[0].candidates, 4);
+    EXPECT_EQ(classes[0].representative, 4);  // the least E_mean
+    CandidateFilter missing;
+    missing.without_fingerprint = true;
+    EXPECT_EQ(db.candidate_count(missing), 4);
+
+    const FingerprintStoreSummary stored =
+        db.store_bond_fingerprints({{1, 1, 1, "4R/4 11 11 11 11 11 11"},
+                                    {2, 1, 2, "4R/4 11 11 11 11 11 11"},
+                                    {3, 1, 4, ""},
+                                    // Not the representative of candidate 4 (start 0): left alone.
+                                    {4, 1, 3, "4R/4 22 22 22 22 22 22"},
+                                    // No such candidate.
+                                    {9, 1, 9, "4R/4 22 22 22 22 22 22"}});
+    EXPECT_EQ(stored.stored, 3);
+    EXPECT_EQ(stored.skipped, 2);
+    EXPECT_FALSE(stored.upgraded);
+    EXPECT_EQ(db.candidate_count(missing), 1);
+    missing.family = "bennett";
+    EXPECT_EQ(db.candidate_count(missing), 0);
+
+    EXPECT_EQ(db.candidate(1)->row.bond_fingerprint, std::optional<std::string>("4R/4 11 11 11 11 11 11"));
+    EXPECT_EQ(db.candidate(3)->row.bond_fingerprint, std::optional<std::string>(""));
+    EXPECT_FALSE(db.candidate(4)->row.bond_fingerprint.has_value());
+    for (const CandidateRow& r : db.candidates({})) {
+      EXPECT_EQ(r.bond_fingerprint.has_value(), r.id != 4) << r.id;
+    }
+
+    // Classes: the fingerprints, then the measured loops without one, then those not measured.
+    classes = db.fingerprint_classes({});
+    ASSERT_EQ(classes.size(), 3u);
+    EXPECT_EQ(classes[0].fingerprint, std::optional<std::string>("4R/4 11 11 11 11 11 11"));
+    EXPECT_EQ(classes[0].candidates, 2);
+    EXPECT_EQ(classes[0].hits, 2);
+    EXPECT_EQ(classes[0].representative, 2);  // 5e-21 < 3e-20
+    EXPECT_EQ(classes[0].family, "bennett");
+    EXPECT_EQ(classes[0].local_dimension, 3);
+    EXPECT_EQ(classes[0].free_parameters, 12);
+    EXPECT_EQ(classes[0].E_mean, 5e-21);
+    EXPECT_EQ(classes[1].fingerprint, std::optional<std::string>(""));
+    EXPECT_EQ(classes[1].representative, 3);
+    EXPECT_FALSE(classes[2].fingerprint.has_value());
+    EXPECT_EQ(classes[2].representative, 4);
+    // A selection: the classes among its candidates only.
+    CandidateFilter bennett;
+    bennett.family = "bennett";
+    bennett.max_energy = 1e-20;
+    classes = db.fingerprint_classes(bennett);
+    ASSERT_EQ(classes.size(), 2u);
+    EXPECT_EQ(classes[0].candidates, 1);
+    EXPECT_EQ(classes[0].representative, 2);
+    EXPECT_EQ(classes[1].representative, 3);
+    // Nothing to store: nothing written.
+    EXPECT_EQ(db.store_bond_fingerprints({}).stored, 0);
+  }
+  // A start earlier than a candidate's representative replaces it: the
+  // fingerprint measured on the old geometry goes with it.
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::int64_t run = db.open_run(identity()).run_id;
+    const CommitSummary summary = db.commit(run, {verified_start(3, shifted(bennett_canonical(), 2e-3 + 1e-7), "k3")});
+    EXPECT_EQ(summary.repeat_hits, 1);
+    EXPECT_EQ(summary.new_candidates, 0);
+    EXPECT_EQ(value(db, "SELECT first_start FROM candidates WHERE candidate_id = 3"), "3");
+    EXPECT_EQ(value(db, "SELECT bond_fingerprint FROM candidates WHERE candidate_id = 3"), "NULL");
+    // A later start of a candidate (a hit) keeps it.
+    db.commit(run, {verified_start(5, shifted(bennett_canonical(), 1e-7), "k1")});
+    EXPECT_EQ(value(db, "SELECT hits || ' ' || bond_fingerprint FROM candidates WHERE candidate_id = 1"),
+              "2 4R/4 11 11 11 11 11 11");
+  }
+  // A reader cannot store.
+  ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
+  EXPECT_NE(error_of([&] { reader.store_bond_fingerprints({{1, 1, 1, "x"}}); }).find("read-only"), std::string::npos);
+}
+
+TEST_F(ResultsDatabaseTest, UpdateModeRefusesWhatItMustNotWriteUntouched) {
+  // A missing file is not created, an empty one not initialised.
+  const std::string missing = file("missing.sqlite");
+  EXPECT_NE(error_of([&] { ResultsDatabase::open(missing, DatabaseMode::update); }).find("no such file"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(missing));
+  const std::string empty = file("empty.sqlite");
+  { std::ofstream touch(empty); }
+  EXPECT_NE(error_of([&] { ResultsDatabase::open(empty, DatabaseMode::update); }).find("not a loopfarm"),
+            std::string::npos);
+  EXPECT_EQ(fs::file_size(empty), 0u);
+
+  // A file whose mode has no write bit, whoever opens it (root too).
+  const std::string path = file("r.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    write_four_candidates(db);
+  }
+  const std::string before = file_bytes(path);
+  fs::permissions(path, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  const std::string text = error_of([&] { ResultsDatabase::open(path, DatabaseMode::update); });
+  EXPECT_NE(text.find(path), std::string::npos) << text;
+  EXPECT_NE(text.find("read-only file (mode 0444)"), std::string::npos) << text;
+  EXPECT_EQ(file_bytes(path), before);
+  EXPECT_FALSE(fs::exists(path + "-wal"));
+  EXPECT_FALSE(fs::exists(path + "-shm"));
+  // Read mode still reads it.
+  EXPECT_EQ(ResultsDatabase::open(path, DatabaseMode::read).candidate_count(), 4);
+  fs::permissions(path, fs::perms::owner_write, fs::perm_options::add);
+  EXPECT_EQ(ResultsDatabase::open(path, DatabaseMode::update).candidate_count(), 4);
+}
+
 // Candidates of equal energy come in id order, the same at every read.
 TEST_F(ResultsDatabaseTest, EqualEnergiesAreOrderedById) {
   const std::string path = file("r.sqlite");

@@ -2,7 +2,9 @@
 // as part of a run's identity, the upgrade of a version 1 database (a file
 // written before slices existed, tests/farm/fixtures/schema-v1.sqlite) and of
 // a version 2 one (before de-duplication moved into memory, schema-v2.sqlite),
-// and
+// a version 3 one (before the families whose conditions hold were recorded,
+// schema-v3.sqlite) and a version 4 one (before bond fingerprints were stored,
+// schema-v4.sqlite: its fingerprints measured here and stored), and
 // ResultsDatabase::merge: three slices merged equal one run of the same
 // starts (candidates de-duplicated across the slices, row for row), overlaps,
 // provenance, and every refusal leaving no file behind. Records are built by
@@ -24,7 +26,10 @@
 
 #include <gtest/gtest.h>
 
+#include "loopfarm/farm/candidate_pose.hpp"
 #include "loopfarm/farm/results_database.hpp"
+#include "loopfarm/search/bond_relations.hpp"
+#include "loopfarm/search/verify.hpp"
 
 #ifndef LOOPFARM_SOURCE_DIR
 #error "LOOPFARM_SOURCE_DIR is defined by tests/CMakeLists.txt"
@@ -149,18 +154,20 @@ void MergeTest::expect_schema_of_a_new_database(const std::string& path) const {
   EXPECT_EQ(rows(path, schema), rows(fresh, schema));
 }
 
-// Every column of every candidate; `families` (schema version 4) only where
-// the file has it, so that a database written before it compares with its
-// upgraded or merged copy, whose rows hold NULL there (checked apart).
+// Every column of every candidate; the columns later schema versions added
+// at the end (`families`, version 4; `bond_fingerprint`, version 5) only where
+// some row holds a value, so that a database written before them compares with
+// its upgraded or merged copy, whose rows hold NULL there (checked apart).
 Rows candidates_content(const std::string& path) {
   Rows out = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
-  if (std::stoi(value(path, "PRAGMA user_version")) >= 4) {
-    const std::string nulls = value(path, "SELECT COUNT(*) FROM candidates WHERE families IS NULL");
-    const Rows names = rows(path, "SELECT name FROM pragma_table_info('candidates')");
-    if (!names.empty() && names.back().at(0) == "families" && nulls == std::to_string(out.size())) {
-      for (auto& row : out) row.pop_back();
-    }
+  const Rows names = rows(path, "SELECT name FROM pragma_table_info('candidates')");
+  size_t columns = names.size();
+  for (const std::string added : {"bond_fingerprint", "families"}) {
+    if (columns == 0 || names[columns - 1].at(0) != added) break;
+    if (value(path, "SELECT COUNT(*) FROM candidates WHERE " + added + " IS NOT NULL") != "0") break;
+    --columns;
   }
+  for (auto& row : out) row.resize(columns);
   return out;
 }
 
@@ -504,7 +511,145 @@ TEST_F(MergeTest, AVersion3DatabaseGainsTheFamiliesColumnItsOldRowsLeaveUnrecord
   EXPECT_EQ(value(merged, "SELECT COUNT(*) FROM candidates WHERE families IS NULL"), old_count);
 }
 
+// --- a database written before bond fingerprints were stored: version 4 ----
+
+const std::string kVersion4Fixture = std::string(LOOPFARM_SOURCE_DIR) + "/tests/farm/fixtures/schema-v4.sqlite";
+
+// The bond fingerprint of a stored candidate's geometry, measured here as
+// docs/guide/bonds.md says: the motion traced as loopfarm verify traces it,
+// the relations measured on the circuit it reports; empty when it does not move.
+std::string measured_fingerprint(const CandidateRow& row) {
+  const LoopGeometry geometry = candidate_geometry(row);
+  const VerificationSummary motion = verify_motion(geometry, nullptr, VerificationOptions{});
+  if (!motion.verified || static_cast<int>(motion.joint_angles.size()) < BondOptions{}.minimum_rows()) return "";
+  return bond_relations(geometry, motion.joint_angles).fingerprint;
+}
+
+TEST_F(MergeTest, AVersion4DatabaseIsUpgradedWhenItsFingerprintsAreStoredAndKeepsEveryRow) {
+  const std::string path = file("v4.sqlite");
+  fs::copy_file(kVersion4Fixture, path);
+  ASSERT_EQ(value(path, "PRAGMA user_version"), "4");
+  const std::string before = file_bytes(path);
+  const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
+  const Rows candidates = candidates_content(path);
+  const Rows runs = rows(path, "SELECT * FROM runs");
+  const Rows sessions = rows(path, "SELECT * FROM sessions");
+  ASSERT_GE(starts.size(), 24u);
+  ASSERT_GE(candidates.size(), 10u);
+
+  // Read: as it is, nothing written, no fingerprint; measured here meanwhile.
+  std::vector<BondFingerprint> fingerprints;
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
+    const std::vector<FingerprintClass> classes = db.fingerprint_classes({});
+    ASSERT_EQ(classes.size(), 1u);
+    EXPECT_FALSE(classes[0].fingerprint.has_value());
+    EXPECT_EQ(std::to_string(classes[0].candidates), std::to_string(candidates.size()));
+    CandidateFilter missing;
+    missing.without_fingerprint = true;
+    EXPECT_EQ(std::to_string(db.candidate_count(missing)), std::to_string(candidates.size()));
+    for (const CandidateRow& r : db.candidates({})) {
+      EXPECT_FALSE(r.bond_fingerprint.has_value()) << r.id;
+      fingerprints.push_back({r.id, r.first_run, r.first_start, measured_fingerprint(r)});
+    }
+  }
+  EXPECT_EQ(file_bytes(path), before);
+  const auto measured = std::count_if(fingerprints.begin(), fingerprints.end(),
+                                      [](const BondFingerprint& f) { return !f.fingerprint.empty(); });
+  EXPECT_GE(measured, 2);
+
+  // Opened for writing and given nothing to store, it stays version 4, as it was.
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::update);
+    const FingerprintStoreSummary nothing = db.store_bond_fingerprints({});
+    EXPECT_EQ(nothing.stored, 0);
+    EXPECT_FALSE(nothing.upgraded);
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), "4");
+  EXPECT_EQ(file_bytes(path), before);
+
+  // Stored: upgraded in the same transaction, every row kept.
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::update);
+    const FingerprintStoreSummary stored = db.store_bond_fingerprints(fingerprints);
+    EXPECT_EQ(stored.stored, static_cast<std::int64_t>(fingerprints.size()));
+    EXPECT_EQ(stored.skipped, 0);
+    EXPECT_TRUE(stored.upgraded);
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
+  expect_schema_of_a_new_database(path);
+  EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
+  EXPECT_EQ(rows(path, "SELECT * FROM runs"), runs);
+  EXPECT_EQ(rows(path, "SELECT * FROM sessions"), sessions);
+  Rows kept = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
+  for (auto& row : kept) row.pop_back();  // bond_fingerprint, the column version 5 added
+  EXPECT_EQ(kept, candidates);
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
+    for (const BondFingerprint& f : fingerprints) {
+      EXPECT_EQ(db.candidate(f.candidate_id)->row.bond_fingerprint, std::optional<std::string>(f.fingerprint))
+          << f.candidate_id;
+    }
+    std::int64_t grouped = 0;
+    for (const FingerprintClass& c : db.fingerprint_classes({})) {
+      EXPECT_TRUE(c.fingerprint.has_value());
+      grouped += c.candidates;
+    }
+    EXPECT_EQ(std::to_string(grouped), std::to_string(candidates.size()));
+  }
+
+  // Merged, a candidate keeps its fingerprint; merged as version 4, none.
+  const std::string merged = file("merged-v5.sqlite");
+  ResultsDatabase::merge(merged, {path});
+  const std::string by_start = "SELECT first_start, bond_fingerprint FROM candidates ORDER BY first_start";
+  EXPECT_EQ(rows(merged, by_start), rows(path, by_start));
+  const std::string old_input = file("v4-input.sqlite"), merged_old = file("merged-v4.sqlite");
+  fs::copy_file(kVersion4Fixture, old_input);
+  ResultsDatabase::merge(merged_old, {old_input});
+  EXPECT_EQ(value(merged_old, "SELECT COUNT(*) FROM candidates WHERE bond_fingerprint IS NULL"),
+            std::to_string(candidates.size()));
+  Rows merged_rows = rows(merged, "SELECT * FROM candidates ORDER BY candidate_id");
+  for (auto& row : merged_rows) row.pop_back();
+  EXPECT_EQ(candidates_content(merged_old), merged_rows);
+
+  // Its own job resumed: the run keeps the fingerprints, and a new candidate has none.
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const RunInfo run = db.open_run(fixture_identity(path, 26));
+    EXPECT_EQ(run.committed_count(), starts.size());
+    StartRecord r = start(25);
+    ASSERT_TRUE(r.verified);
+    EXPECT_EQ(db.commit(run.run_id, {r}).new_candidates, 1);
+  }
+  EXPECT_EQ(value(path, "SELECT COUNT(*) FROM candidates WHERE bond_fingerprint IS NULL"), "1");
+  EXPECT_EQ(value(path, "SELECT bond_fingerprint IS NULL FROM candidates WHERE first_start = 25"), "1");
+}
+
 // --- merge ---------------------------------------------------------------------
+
+// Each slice's candidates get a fingerprint naming the slice and the
+// representative; the merged candidate carries the one of the row it is made
+// of: the input that holds its earliest start.
+TEST_F(MergeTest, AMergedCandidateKeepsTheFingerprintOfItsRepresentativesRow) {
+  std::vector<std::string> slices;
+  for (std::uint64_t i = 0; i < 3; ++i) {
+    slices.push_back(file("slice" + std::to_string(i) + ".sqlite"));
+    write_run(slices.back(), identity(kJob, 4, slice(i, 3)));
+    if (i == 2) continue;  // the last slice measures none
+    ResultsDatabase db = ResultsDatabase::open(slices.back(), DatabaseMode::update);
+    std::vector<BondFingerprint> fingerprints;
+    for (const CandidateRow& r : db.candidates({})) {
+      fingerprints.push_back(
+          {r.id, r.first_run, r.first_start, "slice " + std::to_string(i) + " start " + std::to_string(r.first_start)});
+    }
+    EXPECT_EQ(db.store_bond_fingerprints(fingerprints).stored, static_cast<std::int64_t>(fingerprints.size()));
+  }
+  const std::string merged = file("merged.sqlite");
+  ResultsDatabase::merge(merged, slices);
+  const Rows result = rows(merged, "SELECT first_start, bond_fingerprint FROM candidates ORDER BY first_start");
+  ASSERT_EQ(result.size(), 3u);  // A and B from slice 0, C from slice 2 (starts 21 on)
+  EXPECT_EQ(result, (Rows{{"0", "slice 0 start 0"}, {"1", "slice 0 start 1"}, {"21", "NULL"}}));
+}
 
 TEST_F(MergeTest, ThreeSlicesMergedEqualOneRunOfTheSameStarts) {
   const std::string whole = file("whole.sqlite");

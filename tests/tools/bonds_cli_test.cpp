@@ -1,12 +1,16 @@
 // `loopfarm bonds`, run as a user runs it: one geometry (text and JSON, a
 // loop that does not move), and a results database built here with the
 // library, whose candidates are traced, measured and grouped into classes of
-// equal fingerprint without the file changing. LOOPFARM_EXECUTABLE is the
-// built binary.
+// equal fingerprint without the file changing; with --store, the fingerprints
+// written with their candidates (compared with the fingerprints measured here
+// on the stored geometries) and grouped by `loopfarm report --by-fingerprint`,
+// also in a database of schema version 4. LOOPFARM_EXECUTABLE is the built
+// binary, LOOPFARM_SOURCE_DIR the source tree (for the fixture).
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -15,7 +19,10 @@
 
 #include "command_test_support.hpp"
 #include "loopfarm/core/constructions.hpp"
+#include "loopfarm/farm/candidate_pose.hpp"
 #include "loopfarm/farm/results_database.hpp"
+#include "loopfarm/search/bond_relations.hpp"
+#include "loopfarm/search/verify.hpp"
 
 namespace loopfarm {
 namespace {
@@ -244,6 +251,157 @@ TEST_F(BondsCli, ADatabasesCandidatesFallIntoClassesByFingerprint) {
   // Read-only: the file as it was, nothing added beside it.
   EXPECT_EQ(testing::read_file(db), before);
   EXPECT_EQ(this->files(), files);
+}
+
+// --- stored fingerprints ------------------------------------------------------------
+
+// The fingerprint of a stored candidate's geometry, measured here: its motion
+// traced as loopfarm verify traces it, the relations on the circuit reported.
+std::string measured_fingerprint(const CandidateRow& row) {
+  const LoopGeometry geometry = candidate_geometry(row);
+  const VerificationSummary motion = verify_motion(geometry, nullptr, VerificationOptions{});
+  if (!motion.verified || static_cast<int>(motion.joint_angles.size()) < BondOptions{}.minimum_rows()) return "";
+  return bond_relations(geometry, motion.joint_angles).fingerprint;
+}
+
+// Every candidate's stored fingerprint, by id ("NULL" when none is stored).
+std::map<long long, std::string> stored_fingerprints(const std::string& path) {
+  std::map<long long, std::string> out;
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
+  for (const CandidateRow& r : db.candidates({})) out[r.id] = r.bond_fingerprint.value_or("NULL");
+  return out;
+}
+
+TEST_F(BondsCli, StoreWritesEachFingerprintWithItsCandidateAndTheReportGroupsThem) {
+  const std::string db = (dir_ / "results.sqlite").string();
+  build_database(db);
+
+  testing::CommandResult r = bonds({db, "--store", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  json j = json::parse(r.out);
+  EXPECT_EQ(j["stored"]["written"], 3);
+  EXPECT_EQ(j["stored"]["skipped"], 0);
+  EXPECT_EQ(j["stored"]["upgraded"], false);
+  ASSERT_EQ(j["candidates"].size(), 3u);
+  for (const json& c : j["candidates"]) EXPECT_TRUE(c["stored_fingerprint"].is_null()) << c.dump();
+
+  // What is stored is the fingerprint of the candidate's stored geometry,
+  // measured here; the candidate of another family is left unmeasured.
+  std::map<long long, std::string> stored = stored_fingerprints(db);
+  {
+    ResultsDatabase read = ResultsDatabase::open(db, DatabaseMode::read);
+    for (const CandidateRow& row : read.candidates({})) {
+      if (row.family == "unclassified") {
+        EXPECT_EQ(stored[row.id], measured_fingerprint(row)) << row.id;
+        EXPECT_NE(stored[row.id], "") << row.id;
+      } else {
+        EXPECT_EQ(stored[row.id], "NULL") << row.id;
+      }
+    }
+  }
+
+  // Again: nothing left to measure, the file as it was; --recompute measures again.
+  const std::string after_store = testing::read_file(db);
+  r = bonds({db, "--store"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("have their bond fingerprints stored already"), std::string::npos) << r.out;
+  EXPECT_EQ(testing::read_file(db), after_store);
+  r = bonds({db, "--store", "--recompute"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("stored 3 bond fingerprints in " + db), std::string::npos) << r.out;
+  EXPECT_EQ(stored_fingerprints(db), stored);
+  // Every family: only the one not stored yet is measured.
+  r = bonds({db, "--store", "--family", "all", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  j = json::parse(r.out);
+  ASSERT_EQ(j["candidates"].size(), 1u);
+  EXPECT_EQ(j["candidates"][0]["family"], "bricard_line_symmetric");
+  EXPECT_EQ(j["stored"]["written"], 1);
+
+  // Read-only measuring shows what is stored beside what it measures.
+  r = bonds({db, "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const json& c : json::parse(r.out)["candidates"]) EXPECT_EQ(c["stored_fingerprint"], c["fingerprint"]);
+
+  // The report: the unclassified candidates by stored fingerprint.
+  r = run_command(kExecutable, "report", {db, "--by-fingerprint", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  j = json::parse(r.out);
+  ASSERT_EQ(j.size(), 2u) << r.out;
+  EXPECT_EQ(j[0]["candidates"], 2);
+  EXPECT_EQ(j[0]["hits"], 2);
+  EXPECT_EQ(j[0]["family"], "unclassified");
+  EXPECT_EQ(j[0]["local_dimension"], 9);
+  EXPECT_EQ(j[0]["fingerprint"], stored[j[0]["representative"].get<long long>()]);
+  EXPECT_EQ(j[1]["candidates"], 1);
+  EXPECT_EQ(j[1]["fingerprint"], "6R/4 11 11 11 11 11 11 11 11 11 11 11 11 11 11 11");
+  r = run_command(kExecutable, "report", {db, "--by-fingerprint"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("bond fingerprints of the unclassified candidates (3, 3 measured)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(j[0]["fingerprint"].get<std::string>()), std::string::npos) << r.out;
+  r = run_command(kExecutable, "report", {db, "--by-fingerprint", "--family", "all", "--format", "csv"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 3) << r.out;  // header, two classes (the Bricard three)
+  EXPECT_EQ(r.out.rfind("fingerprint,candidates,hits,representative,family,local_dimension", 0), 0u) << r.out;
+}
+
+TEST_F(BondsCli, StoreFillsAVersion4DatabaseAndUpgradesIt) {
+  const std::string db = (dir_ / "v4.sqlite").string();
+  fs::copy_file(std::string(LOOPFARM_SOURCE_DIR) + "/tests/farm/fixtures/schema-v4.sqlite", db);
+  // Not measured yet: the report says so.
+  testing::CommandResult r = run_command(kExecutable, "report", {db, "--by-fingerprint", "--family", "all"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("(not measured)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--store --family all measures"), std::string::npos) << r.out;
+
+  r = bonds({db, "--store", "--family", "all", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["stored"]["upgraded"], true);
+  EXPECT_EQ(j["stored"]["skipped"], 0);
+  const std::map<long long, std::string> stored = stored_fingerprints(db);
+  EXPECT_EQ(j["stored"]["written"], stored.size());
+  ResultsDatabase read = ResultsDatabase::open(db, DatabaseMode::read);
+  int with_fingerprint = 0;
+  for (const CandidateRow& row : read.candidates({})) {
+    EXPECT_EQ(stored.at(row.id), measured_fingerprint(row)) << row.id;
+    with_fingerprint += !stored.at(row.id).empty();
+  }
+  EXPECT_GE(with_fingerprint, 2);
+}
+
+TEST_F(BondsCli, StoreIsRefusedWhereItMustNotWrite) {
+  const std::string db = (dir_ / "results.sqlite").string();
+  build_database(db);
+  const std::string before = testing::read_file(db);
+  struct Case {
+    std::vector<std::string> args;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {{db, "--store", "--tolerance", "1e-8"}, "--tolerance: --store stores fingerprints measured with the default"},
+      {{db, "--store", "--steps", "1440"}, "--steps: --store"},
+      {{db, "--recompute"}, "--recompute: measures again"},
+      {{"--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--store"}, "--store: stores the fingerprints"},
+      {{"{dir}/missing.sqlite", "--store"}, "missing.sqlite: no such file"},
+      {{db, "--store", "--family", "everything"}, "--family: got \"everything\"; expected one of bennett,"},
+  };
+  for (const Case& c : cases) {
+    const testing::CommandResult r = bonds(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.expected << ": " << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "missing.sqlite"));
+  // A read-only file, refused before anything is measured.
+  fs::permissions(db, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  const testing::CommandResult r = bonds({db, "--store"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(db + ": a read-only file"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  EXPECT_EQ(testing::read_file(db), before);
+  EXPECT_EQ(files(), (std::vector<std::string>{"results.sqlite"}));
 }
 
 }  // namespace

@@ -50,14 +50,15 @@ inline constexpr std::int32_t kDatabaseApplicationId = 0x4C4F4F50;
 // PRAGMA user_version: the schema version this build writes. It reads every
 // version from kOldestDatabaseSchemaVersion on, and upgrades an older file to
 // this one when it opens it for writing (results_schema.cpp says what changed).
-inline constexpr int kDatabaseSchemaVersion = 4;
+inline constexpr int kDatabaseSchemaVersion = 5;
 inline constexpr int kOldestDatabaseSchemaVersion = 1;
 // busy_timeout: how long a connection waits for another one's lock.
 inline constexpr int kDatabaseBusyTimeoutMs = 10000;
 
 enum class DatabaseMode {
-  write,  // create the file if missing; the one writer
-  read,   // read-only (SQLITE_OPEN_READONLY), also while a writer is running
+  write,   // create the file if missing; the one writer
+  read,    // read-only (SQLITE_OPEN_READONLY), also while a writer is running
+  update,  // write to an existing database: never created; a read-only file is refused
 };
 
 enum class RunStatus { running, stopped, complete, failed };
@@ -172,6 +173,11 @@ struct CandidateRow {
   // Every family whose conditions hold, comma-separated, `family` first;
   // none for a row written before schema version 4 (not recorded).
   std::optional<std::string> families;
+  // The bond fingerprint of the stored geometry (bond_relations.hpp), as
+  // `loopfarm bonds --store` measured it; empty when it measured none (the
+  // stored geometry does not move); none when not measured (NULL, or a
+  // database older than schema version 5).
+  std::optional<std::string> bond_fingerprint;
   double E_mean = kNaN, E_max = kNaN;
   long long hits = 0, first_run = 0, first_start = 0;
   int local_dimension = 0, free_parameters = 0;
@@ -207,6 +213,39 @@ struct CandidateFilter {
   std::optional<std::int64_t> first_run;  // found first by this run
   std::int64_t limit = -1;                // at most this many; negative: no limit
   std::int64_t offset = 0;                // skip this many (paging)
+  bool without_fingerprint = false;       // only those whose bond fingerprint is not stored
+};
+
+// Candidates of one bond fingerprint (or of none stored), as
+// ResultsDatabase::fingerprint_classes groups them.
+struct FingerprintClass {
+  // The fingerprint; empty: measured, none (the stored geometry does not
+  // move); none: not measured.
+  std::optional<std::string> fingerprint;
+  std::int64_t candidates = 0;  // distinct linkages
+  std::int64_t hits = 0;        // starts that found them
+  // The first of them in the report's order (by E_mean, then id).
+  std::int64_t representative = 0;
+  std::string family;  // the representative's
+  int local_dimension = 0, free_parameters = 0;
+  double E_mean = std::numeric_limits<double>::quiet_NaN();
+};
+
+// A bond fingerprint to store with a candidate: `first_run` and `first_start`
+// name the representative whose geometry was measured, so that a candidate
+// whose representative a run has replaced meanwhile is left alone.
+struct BondFingerprint {
+  std::int64_t candidate_id = 0;
+  std::int64_t first_run = 0;
+  std::int64_t first_start = 0;
+  std::string fingerprint;  // empty: measured, none (the stored geometry does not move)
+};
+
+// What ResultsDatabase::store_bond_fingerprints did.
+struct FingerprintStoreSummary {
+  std::int64_t stored = 0;   // rows written
+  std::int64_t skipped = 0;  // candidates gone or represented by another start now
+  bool upgraded = false;     // the file was of an older schema version, upgraded in the same transaction
 };
 
 // The connection's PRAGMA values (what SQLite reports, not options), for the record and for tests.
@@ -236,9 +275,12 @@ class ResultsDatabase {
  public:
   // Throws DatabaseError when the file cannot be opened or is refused: not
   // SQLite, another application_id, an unknown schema version, damage (SQLite
-  // says so, or PRAGMA quick_check fails: both modes, before anything is
-  // written), a missing file (read mode). The message says "damaged" for
-  // damage and "not an SQLite database" for a file that is not one.
+  // says so, or PRAGMA quick_check fails: every mode, before anything is
+  // written), a missing file (read and update modes), an empty one or a
+  // read-only one (update mode: a file without write permission, or whose
+  // mode has no write bit at all, which even root does not write to; a
+  // directory where the journal cannot be created). The message says
+  // "damaged" for damage and "not an SQLite database" for a file that is not one.
   static ResultsDatabase open(const std::string& path, DatabaseMode mode);
 
   ResultsDatabase(const ResultsDatabase&) = delete;
@@ -288,6 +330,19 @@ class ResultsDatabase {
   std::vector<CandidateRow> candidates(const CandidateFilter& filter) const;
   // The candidate with this id; empty when there is none.
   std::optional<CandidateDetails> candidate(std::int64_t candidate_id) const;
+  // The candidates `filter` selects (its limit and offset aside) grouped by
+  // their stored bond fingerprint: the most candidates first, then the most
+  // hits, then by fingerprint; the measured loops without one ("") and the
+  // candidates not measured (none) last.
+  std::vector<FingerprintClass> fingerprint_classes(const CandidateFilter& filter) const;
+
+  // --- writing bond fingerprints (write or update mode) -------------------------
+  // Stores each fingerprint with its candidate, in one transaction (an older
+  // schema is upgraded to this version within it): on any error nothing is
+  // written and DatabaseError is thrown. A candidate that is gone, or whose
+  // representative is no longer the start named, is skipped. Nothing to store:
+  // nothing written, the schema left as it is.
+  FingerprintStoreSummary store_bond_fingerprints(const std::vector<BondFingerprint>& fingerprints);
 
   // Merges the databases `inputs`, each holding one run of the same job (its
   // text apart from the [output] table) and seed, into a new database `output`
