@@ -193,6 +193,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::sarrus:
       case Family::bricard_octahedral_plane:
       case Family::waldron_hybrid:
+      case Family::goldberg_6r:
       case Family::degenerate:
       case Family::unclassified:
         break;

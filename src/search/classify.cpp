@@ -183,6 +183,26 @@ std::string special_detail(Family family, const LoopGeometry& g) {
                   std::abs(fit.feet));
     return buffer;
   }
+  if (family == Family::goldberg_6r) {
+    // Which link of the Goldberg 5R the third Bennett loop shares (P, the
+    // removed joint, is the 5R's joint set / 4), the third loop's ratio and
+    // the fusion angle about P, from the fit of the best representation.
+    const Best best = best_over_representations<Family::goldberg_6r>(g, false);
+    const LoopGeometry w = detail::apply(*best.representation, g);
+    const WrittenOut written(w);
+    const int k = best.set / 4, setup = best.set % 4;
+    const Goldberg6RFit fit = goldberg_6r_fit(goldberg_6r_parameters(written), k, setup);
+    static constexpr const char* kLinks[5] = {"BC", "CD", "DE", "EF", "FB (its fused link)"};
+    char buffer[360];
+    const bool same = ((setup & 1) != 0) == ((setup & 2) != 0);
+    std::snprintf(buffer, sizeof buffer,
+                  "a Goldberg 5R B C D E F and a third Bennett loop (links 1-2 of the best representation, |sin "
+                  "alpha| / a = %.4g / L) sharing its link %s, fused at %c at %.4g deg (0 or 180: collinear), the "
+                  "5R's Bennett loops in %s setups",
+                  std::abs(std::sin(w.alpha[0])) / w.a[0] * length_scale(w), kLinks[k], "BCDEF"[k],
+                  std::abs(fit.fusion) * 180.0 / kPi, same ? "the same" : "different");
+    return buffer;
+  }
   if (family != Family::goldberg && family != Family::myard) {
     switch (family) {
       case Family::bricard_line_symmetric:

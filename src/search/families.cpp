@@ -42,6 +42,8 @@ const char* to_string(Family family) {
       return "bricard_octahedral_plane";
     case Family::waldron_hybrid:
       return "waldron_hybrid";
+    case Family::goldberg_6r:
+      return "goldberg_6r";
   }
   return "unknown";
 }
@@ -69,6 +71,7 @@ int family_joints(Family family) {
     case Family::sarrus:
     case Family::bricard_octahedral_plane:
     case Family::waldron_hybrid:
+    case Family::goldberg_6r:
       return 6;
     case Family::planar:
     case Family::spherical:
@@ -122,6 +125,11 @@ std::optional<int> family_dimension(Family family, int joints) {
       // 18 parameters, 9 conditions; local_dimension reads 9 on members
       // (docs/guide/families.md).
       return 9;
+    case Family::goldberg_6r:
+      // A bent Goldberg 5R (5, the scale included) and the third Bennett
+      // loop's twist and fusion angle: 18 parameters, 11 conditions;
+      // local_dimension reads 7 on members (docs/guide/families.md).
+      return 7;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
     case Family::unclassified:

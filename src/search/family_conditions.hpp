@@ -832,6 +832,345 @@ void waldron_hybrid_conditions(const RepresentationView& w, Sink& c) {
         [&] { return get().slide; }, [&] { return gradient(2); });
 }
 
+// Goldberg's 6R of three Bennett loops (docs/guide/families.md): a Goldberg
+// 5R B C D E F (goldberg_bent: the fusion at its removed joint A at any
+// angle, Goldberg's collinear ones included) and a third Bennett loop
+// P Q R S sharing the 5R's link P Q (its length and twist, and the axes P
+// and Q); the third loop's link S -> P is fixed to the 5R's link arriving at
+// P at any angle about P, and the link P Q is removed with joint P: the 6R
+// has the 5R's joints with P replaced by S and R. In one representation:
+// joint 1 is S, 2 is R, 3 is Q, links 1 (S -> R) and 2 (R -> Q) are the
+// third loop's Bennett dyad (no offset at R), link 6 (joint 6 -> S) is the
+// fused link, links 3-5 are the 5R's own. The fit puts P back: it leaves S
+// at link 1's foot along a normal of length a2 at twist alpha2 (the third
+// loop's S -> P, equal to its opposite R -> Q), at an angle psi about S that
+// is fixed in link 6. The 5R is then P, Q and joints 4-6, with link P -> Q
+// equal to link 1 (the third loop's opposite links), links 2-4 equal to
+// links 3-5, the offsets at Q and joints 4-5 the 6R's, and link 6 -> P with
+// the offsets at joint 6 and at P read off the two axes carried by link 6.
+// psi is the one unknown: the angle at which that 5R fits goldberg_bent best,
+// with P as the Goldberg 5R's joint B, C, D, E or F (`k` = 0 ... 4) and its
+// two Bennett loops in either setup (goldberg_bent's sets).
+
+// One representation's parameters as the fit reads them.
+struct Goldberg6RParameters {
+  std::array<double, 6> a{}, alpha{}, sin{}, cos{}, d{};
+  double L = 1.0;
+};
+
+template <class RepresentationView>
+Goldberg6RParameters goldberg_6r_parameters(const RepresentationView& w) {
+  Goldberg6RParameters p;
+  for (int k = 0; k < 6; ++k) {
+    const auto i = static_cast<size_t>(k);
+    p.a[i] = w.a(k);
+    p.alpha[i] = w.alpha(k);
+    p.sin[i] = w.sin_alpha(k);
+    p.cos[i] = w.cos_alpha(k);
+    p.d[i] = w.d(k);
+  }
+  p.L = w.scale().L;
+  return p;
+}
+
+// The 5R the fit builds, in its own labels: joint 0 is P, joint 1 Q (the
+// 6R's joint 3), joints 2-4 the 6R's joints 4-6. `fusion` is the angle about
+// P from link 4's normal (6 -> P) to the third loop's link S -> P.
+struct Goldberg6RFive {
+  std::array<double, 5> a{}, alpha{}, sin{}, cos{}, d{};
+  double fusion = 0.0;
+};
+
+inline Goldberg6RFive goldberg_6r_five(const Goldberg6RParameters& p, double psi) {
+  Goldberg6RFive f;
+  // In the frame of joint 1 (S, at the foot of link 6): axis 6 through
+  // (-a6, 0, 0) along (0, sin alpha6, cos alpha6); P through (a2 cos psi,
+  // a2 sin psi, d1) along Rx'(alpha2) z, x' = (cos psi, sin psi, 0).
+  const Vector3 p6(-p.a[5], 0.0, 0.0), u6(0.0, p.sin[5], p.cos[5]);
+  const double cp = std::cos(psi), sp = std::sin(psi);
+  const Vector3 u(cp, sp, 0.0);
+  const Vector3 pp = Vector3(0.0, 0.0, p.d[0]) + p.a[1] * u, up(sp * p.sin[1], -cp * p.sin[1], p.cos[1]);
+  // The common normal of axis 6 and axis P: feet p6 + s u6 and pp + t up.
+  const Vector3 w0 = p6 - pp;
+  const double b = u6.dot(up), e = up.dot(w0), g = u6.dot(w0), denominator = 1.0 - b * b;
+  double s = 0.0, t = e;  // parallel axes: the foot on axis 6 at link 6's
+  if (denominator > 1e-24) {
+    s = (b * e - g) / denominator;
+    t = (e - b * g) / denominator;
+  }
+  const Vector3 gap = (pp + t * up) - (p6 + s * u6), cross = u6.cross(up);
+  const double length = gap.norm();
+  Vector3 x = length > 1e-12 * p.L ? Vector3(gap / length) : Vector3(cross);
+  if (!(x.squaredNorm() > 1e-30)) x = Vector3(1.0, 0.0, 0.0).cross(u6);
+  x.normalize();
+  const double twist = std::atan2(cross.dot(x), b);
+  const int from[4] = {0, 2, 3, 4};  // 5R links 0-3: the 6R's links 1, 3, 4, 5
+  for (size_t m = 0; m < 4; ++m) {
+    const auto i = static_cast<size_t>(from[m]);
+    f.a[m] = p.a[i];
+    f.alpha[m] = p.alpha[i];
+    f.sin[m] = p.sin[i];
+    f.cos[m] = p.cos[i];
+  }
+  f.a[4] = length;
+  f.alpha[4] = twist;
+  f.sin[4] = std::sin(twist);
+  f.cos[4] = std::cos(twist);
+  f.d[0] = -t;  // from link 4's foot on P to the third loop's, the point pp
+  f.d[1] = p.d[2];
+  f.d[2] = p.d[3];
+  f.d[3] = p.d[4];
+  f.d[4] = p.d[5] + s;
+  f.fusion = std::atan2(x.cross(u).dot(up), x.dot(u));
+  return f;
+}
+
+// The 5R as goldberg_bent's conditions read it, P as the Goldberg 5R's joint k.
+struct Goldberg6RFiveView {
+  const Goldberg6RFive& f;
+  int k;
+  Scale s;
+  size_t at(int g) const { return static_cast<size_t>((g - k + 5) % 5); }
+  int joints() const { return 5; }
+  double a(int g) const { return f.a[at(g)]; }
+  double alpha(int g) const { return f.alpha[at(g)]; }
+  double d(int g) const { return f.d[at(g)]; }
+  double sin_alpha(int g) const { return f.sin[at(g)]; }
+  double cos_alpha(int g) const { return f.cos[at(g)]; }
+  const Scale& scale() const { return s; }
+};
+
+// Values only, in the order they come.
+struct Goldberg6RValues {
+  std::array<double, 10> values{};
+  int count = 0;
+  template <class Name, class Value, class Gradient>
+  void add(const Name&, const Value& value, const Gradient&) {
+    values[static_cast<size_t>(count++)] = value();
+  }
+};
+
+// Names only (the reporting path).
+struct Goldberg6RNames {
+  std::array<std::string, 10> names;
+  int count = 0;
+  template <class Name, class Value, class Gradient>
+  void add(const Name& name, const Value&, const Gradient&) {
+    names[static_cast<size_t>(count++)] = name();
+  }
+};
+
+// goldberg_bent's ten conditions on the 5R, over the 6R's L.
+inline std::array<double, 10> goldberg_6r_values(const Goldberg6RFive& f, int k, int setup, double L) {
+  const Goldberg6RFiveView view{f, k, Scale{L, GeometryVector(), 5}};
+  Goldberg6RValues v;
+  goldberg_bent_conditions(setup, view, v);
+  return v.values;
+}
+
+// Whether goldberg_bent's condition q (in its order) reads the 5R's link 4
+// (6 -> P) or its offsets at P or joint 6, i.e. depends on psi, when P is
+// the Goldberg 5R's joint k. The conditions read: a1 - a4 and alpha1 - alpha4
+// links 1, 4; d2, d3, d4 their joints; the two Bennett products links 1, 2
+// and 1, 3; d1 -+ d5 joints 1, 5; the length term links 2, 3, 5; the offset
+// term links 2, 3, 5 and joint 5 (1-based Goldberg labels).
+constexpr bool goldberg_6r_depends_on_psi(int q, int k) {
+  constexpr unsigned kLinks[10] = {0b01001, 0b01001, 0, 0, 0, 0b00011, 0b00101, 0, 0b10110, 0b10110};
+  constexpr unsigned kJoints[10] = {0, 0, 0b00010, 0b00100, 0b01000, 0, 0, 0b10001, 0, 0b10000};
+  const unsigned link = 1u << ((4 + k) % 5), joints = (1u << k) | (1u << ((4 + k) % 5));
+  return (kLinks[q] & link) != 0 || (kJoints[q] & joints) != 0;
+}
+
+struct Goldberg6RFit {
+  std::array<double, 10> values{};  // goldberg_bent's, at psi
+  double psi = 0.0;
+  double fusion = 0.0;  // the angle about P (Goldberg6RFive::fusion)
+};
+
+// The sum of squares of the psi-dependent values at psi.
+inline double goldberg_6r_dependent_sum(const Goldberg6RParameters& p, int k, int setup, double psi,
+                                        std::array<double, 10>& values) {
+  values = goldberg_6r_values(goldberg_6r_five(p, psi), k, setup, p.L);
+  double sum = 0.0;
+  for (int q = 0; q < 10; ++q) {
+    if (goldberg_6r_depends_on_psi(q, k)) sum += values[static_cast<size_t>(q)] * values[static_cast<size_t>(q)];
+  }
+  return sum;
+}
+
+// Gauss-Newton on psi from `psi`, the derivative by central differences;
+// a step that does not lower the sum is halved, up to three times; at most
+// eight steps (from the grid's best angle a member's psi is reached in four
+// or five, to round-off).
+inline double goldberg_6r_refine(const Goldberg6RParameters& p, int k, int setup, double psi) {
+  std::array<double, 10> values{}, plus{}, minus{}, trial{};
+  double sum = goldberg_6r_dependent_sum(p, k, setup, psi, values);
+  for (int iteration = 0; iteration < 8 && sum > 0.0; ++iteration) {
+    const double h = 1e-6;
+    goldberg_6r_dependent_sum(p, k, setup, psi + h, plus);
+    goldberg_6r_dependent_sum(p, k, setup, psi - h, minus);
+    double jj = 0.0, jr = 0.0;
+    for (int q = 0; q < 10; ++q) {
+      if (!goldberg_6r_depends_on_psi(q, k)) continue;
+      const auto i = static_cast<size_t>(q);
+      const double j = (plus[i] - minus[i]) / (2.0 * h);
+      jj += j * j;
+      jr += j * values[i];
+    }
+    if (!(jj > 0.0)) break;
+    double step = std::clamp(-jr / jj, -0.5, 0.5);
+    if (std::abs(step) < 1e-14) break;
+    bool moved = false;
+    for (int halving = 0; halving < 4 && !moved; ++halving, step *= 0.5) {
+      const double candidate = goldberg_6r_dependent_sum(p, k, setup, psi + step, trial);
+      if (candidate < sum) {
+        psi += step;
+        sum = candidate;
+        values = trial;
+        moved = true;
+      }
+    }
+    if (!moved) break;
+  }
+  return psi;
+}
+
+inline Goldberg6RFit goldberg_6r_fit_at(const Goldberg6RParameters& p, int k, int setup, double psi) {
+  const Goldberg6RFive f = goldberg_6r_five(p, psi);
+  return {goldberg_6r_values(f, k, setup, p.L), psi, f.fusion};
+}
+
+// The fit: Gauss-Newton from the best of a few starting angles. Where the
+// 5R's link 6 -> P must have a known twist (P as C: it is the Goldberg 5R's
+// B C, equal to E F, the 6R's link 4; P as F: it is E F, equal to B C, the
+// 6R's link 3), its cosine, cos(alpha6) cos(alpha2) - sin(alpha6) sin(alpha2)
+// cos(psi), gives psi up to its sign: the two are the starts. Otherwise a grid
+// of 16 angles.
+inline Goldberg6RFit goldberg_6r_fit(const Goldberg6RParameters& p, int k, int setup) {
+  constexpr int kGrid = 16;
+  std::array<double, 10> values{};
+  double start = 0.0, least = kInf;
+  const auto consider = [&](double psi) {
+    const double sum = goldberg_6r_dependent_sum(p, k, setup, psi, values);
+    if (sum < least) {
+      least = sum;
+      start = psi;
+    }
+  };
+  const double sines = p.sin[5] * p.sin[1];
+  if ((k == 1 || k == 4) && std::abs(sines) > 1e-12) {
+    const double target = p.cos[k == 1 ? 3 : 2];
+    const double psi = std::acos(std::clamp((p.cos[5] * p.cos[1] - target) / sines, -1.0, 1.0));
+    consider(psi);
+    consider(-psi);
+  } else {
+    for (int i = 0; i < kGrid; ++i) consider(2.0 * kPi * i / kGrid);
+  }
+  return goldberg_6r_fit_at(p, k, setup, goldberg_6r_refine(p, k, setup, start));
+}
+
+// The gradient of every value of the fit with respect to the representation's
+// (a, alpha, d), by central differences (steps 1e-6 L and 1e-6 rad), each
+// side refined from the fit's psi and evaluated with its own L.
+inline std::array<GeometryVector, 10> goldberg_6r_fit_gradients(const Goldberg6RParameters& p, int k, int setup,
+                                                                double psi) {
+  const int n = 6;
+  std::array<GeometryVector, 10> g;
+  for (auto& v : g) v = GeometryVector::Zero(3 * n);
+  for (int q = 0; q < 3 * n; ++q) {
+    const auto i = static_cast<size_t>(q % n);
+    const double h = q < n || q >= 2 * n ? 1e-6 * p.L : 1e-6;
+    std::array<std::array<double, 10>, 2> side{};
+    for (size_t s = 0; s < 2; ++s) {
+      Goldberg6RParameters r = p;
+      const double step = s == 0 ? h : -h;
+      if (q < n) {
+        r.a[i] += step;
+      } else if (q < 2 * n) {
+        r.alpha[i] = p.alpha[i] + step;
+        r.sin[i] = std::sin(r.alpha[i]);
+        r.cos[i] = std::cos(r.alpha[i]);
+      } else {
+        r.d[i] += step;
+      }
+      double mean_square = 0.0;
+      for (size_t j = 0; j < 6; ++j) mean_square += r.a[j] * r.a[j] + r.d[j] * r.d[j];
+      mean_square /= n;
+      r.L = mean_square > 0.0 ? std::sqrt(mean_square) : 1.0;
+      side[s] = goldberg_6r_fit_at(r, k, setup, goldberg_6r_refine(r, k, setup, psi)).values;
+    }
+    for (size_t v = 0; v < 10; ++v) g[v][q] = (side[0][v] - side[1][v]) / (2.0 * h);
+  }
+  return g;
+}
+
+// The number of condition sets: P as each of the Goldberg 5R's five joints,
+// times goldberg_bent's four.
+constexpr int kGoldberg6RSets = 20;
+
+// The conditions of set `set` (P as the Goldberg 5R's joint set / 4, its
+// Bennett loops in goldberg_bent's setups set % 4): the third loop's dyad
+// (d2, the Bennett ratio of links 1 and 2), then goldberg_bent's conditions
+// on the 5R, those that do not depend on psi first (read at psi = 0, where
+// they are what they are at any psi), then the fitted ones.
+template <class RepresentationView, class Sink>
+void goldberg_6r_conditions(int set, const RepresentationView& w, Sink& c) {
+  const int k = set / 4, setup = set % 4;
+  add_offset(w, c, "d2", 1, -1, 0.0);
+  add_bennett_ratio(w, c, "a1 |sin(alpha2)| - a2 |sin(alpha1)|", 0, 1);
+  bool have_parameters = false, have_fixed = false, fitted = false, have_gradients = false;
+  Goldberg6RParameters p;
+  std::array<double, 10> fixed{};
+  Goldberg6RFit fit;
+  std::array<GeometryVector, 10> gradients;
+  const auto parameters = [&]() -> const Goldberg6RParameters& {
+    if (!have_parameters) {
+      p = goldberg_6r_parameters(w);
+      have_parameters = true;
+    }
+    return p;
+  };
+  const auto value = [&](int q) {
+    if (!goldberg_6r_depends_on_psi(q, k)) {
+      if (!have_fixed) {
+        fixed = goldberg_6r_values(goldberg_6r_five(parameters(), 0.0), k, setup, parameters().L);
+        have_fixed = true;
+      }
+      return fixed[static_cast<size_t>(q)];
+    }
+    if (!fitted) {
+      fit = goldberg_6r_fit(parameters(), k, setup);
+      fitted = true;
+    }
+    return fit.values[static_cast<size_t>(q)];
+  };
+  const auto gradient = [&](int q) {
+    if (!have_gradients) {
+      if (!fitted) {
+        fit = goldberg_6r_fit(parameters(), k, setup);
+        fitted = true;
+      }
+      gradients = goldberg_6r_fit_gradients(parameters(), k, setup, fit.psi);
+      have_gradients = true;
+    }
+    return gradients[static_cast<size_t>(q)];
+  };
+  static constexpr const char* kJoint[5] = {"B", "C", "D", "E", "F"};
+  const auto name = [&](int q) {
+    const Goldberg6RFive f;
+    const Goldberg6RFiveView view{f, 0, Scale{1.0, GeometryVector(), 5}};
+    Goldberg6RNames names;
+    goldberg_bent_conditions(setup, view, names);
+    return std::string("5R with P as ") + kJoint[k] + ": " + names.names[static_cast<size_t>(q)];
+  };
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int q = 0; q < 10; ++q) {
+      if (goldberg_6r_depends_on_psi(q, k) != (pass == 1)) continue;
+      c.add([&] { return name(q); }, [&] { return value(q); }, [&] { return gradient(q); });
+    }
+  }
+}
+
 // Sarrus 6R: two chains of three parallel axes, joints 2, 3, 4 and 5, 6, 1
 // of the representation: sin(alpha2) = sin(alpha3) = 0, sin(alpha5) =
 // sin(alpha6) = 0, and cos(alpha1)^2 = cos(alpha4)^2. Each chain lets the link between the chains (links 1 and
@@ -949,6 +1288,8 @@ inline int condition_sets(Family family, int joints) {
       return 4;
     case Family::bricard_octahedral_plane:
       return 3;
+    case Family::goldberg_6r:
+      return kGoldberg6RSets;
     case Family::bennett_dyads:
     case Family::waldron_hybrid:
     case Family::sarrus:
@@ -969,7 +1310,8 @@ inline int condition_sets(Family family, int joints) {
 constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
          family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus ||
-         family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid;
+         family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid ||
+         family == Family::goldberg_6r;
 }
 
 template <Family F, class RepresentationView, class Sink>
@@ -997,6 +1339,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     bennett_dyads_conditions(w, c);
   } else if constexpr (F == Family::waldron_hybrid) {
     waldron_hybrid_conditions(w, c);
+  } else if constexpr (F == Family::goldberg_6r) {
+    goldberg_6r_conditions(set, w, c);
   } else if constexpr (F == Family::sarrus) {
     sarrus_conditions(w, c);
   } else if constexpr (F == Family::bricard_octahedral_plane) {

@@ -102,6 +102,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       return distance_over_representations<Family::bricard_octahedral_plane>(geometry, gradient);
     case Family::waldron_hybrid:
       return distance_over_representations<Family::waldron_hybrid>(geometry, gradient);
+    case Family::goldberg_6r:
+      return distance_over_representations<Family::goldberg_6r>(geometry, gradient);
     case Family::degenerate:
       throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified:
@@ -137,6 +139,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::sarrus:
     case Family::bricard_octahedral_plane:
     case Family::waldron_hybrid:
+    case Family::goldberg_6r:
       best = best_for(family, geometry, true);
       break;
     case Family::degenerate:

@@ -50,6 +50,7 @@ constexpr DeflatableFamily kDeflatable[] = {
     {"sarrus", 6, "Sarrus loops have 6 joints"},
     {"bricard_octahedral_plane", 6, "Bricard loops have 6 joints"},
     {"waldron_hybrid", 6, "Waldron's hybrid loops have 6 joints"},
+    {"goldberg_6r", 6, "Goldberg's 6R loops have 6 joints"},
 };
 
 // The settings tables and their keys; anything else is an error.

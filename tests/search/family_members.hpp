@@ -163,6 +163,45 @@ inline Posed waldron_member(std::mt19937_64& rng) {
 
 // Myard 5R: Goldberg from two mirror-image Bennett loops, the shared link a
 // right-angle twist: (a, alpha, b, pi/2) and (a, -alpha, b, pi/2).
+// Goldberg's 6R of three Bennett loops (constructions.hpp's three_bennett_6r,
+// built in space from its mechanism, not from the classifier's fit): a
+// Goldberg 5R from two random Bennett loops in random setups, fused at A
+// collinear (either side) or at a random angle, and a third Bennett loop of
+// random twist on its link `link` (random when negative), fused at P
+// collinear or at a random angle. Lengths kept within [0.3, 4] of each other.
+inline ThreeBennett6R random_goldberg_6r(std::mt19937_64& rng, int link = -1) {
+  const auto fusion = [&] {
+    const double u = uniform(rng, 0.0, 1.0);
+    if (u < 0.25) return kPi;
+    if (u < 0.4) return 0.0;
+    const double angle = uniform(rng, 0.3, kPi - 0.3);
+    return uniform(rng, 0.0, 1.0) < 0.5 ? angle : -angle;
+  };
+  for (;;) {
+    const double alpha = twist(rng), beta = twist(rng), gamma = twist(rng);
+    const double a = uniform(rng, 0.5, 2.0);
+    const double b = a * std::abs(std::sin(beta) / std::sin(alpha));
+    const double c = a * std::abs(std::sin(gamma) / std::sin(alpha));
+    if (b < 0.3 || b > 4.0 || c < 0.3 || c > 4.0 || std::abs(a - c) < 0.2) continue;
+    ThreeBennett6R p;
+    p.goldberg = {{b, beta, alpha, gamma}, fusion()};
+    p.link = link >= 0 ? link : static_cast<int>(uniform(rng, 0.0, 5.0 - 1e-9));
+    p.gamma = twist(rng);
+    p.phi = fusion();
+    // The link the third loop shares, and the third loop's other length.
+    const LoopGeometry five = goldberg_5r(p.goldberg, 1.0).geometry;
+    const double a_pq = five.a[p.link], sin_pq = std::abs(std::sin(five.alpha[p.link]));
+    if (a_pq < 0.3 || a_pq > 4.0 || sin_pq < 0.2) continue;
+    const double c3 = a_pq * std::abs(std::sin(p.gamma)) / sin_pq;
+    if (c3 < 0.3 || c3 > 4.0) continue;
+    return p;
+  }
+}
+
+inline Posed goldberg_6r_member(std::mt19937_64& rng, int link = -1) {
+  return three_bennett_6r(random_goldberg_6r(rng, link), uniform(rng, 0.3, kPi - 0.3));
+}
+
 inline Posed myard_member(std::mt19937_64& rng, double phi) {
   const double alpha = twist(rng), a = uniform(rng, 0.5, 2.0);
   const double b = a / std::abs(std::sin(alpha));

@@ -31,6 +31,12 @@
 //              whose fourth axes, found in the fused links 3 and 6, are one
 //              line, the two Bennett loops' feet on it the same distance
 //              apart in both links (a fit of the construction)
+//   goldberg_6r (n = 6) Goldberg's 6R of three Bennett loops: a Bennett
+//              dyad (links 1-2 of a representation, no offset at joint 2)
+//              whose fourth axis, placed in link 6 at the angle that fits
+//              best, gives back a Goldberg 5R (goldberg_bent's conditions)
+//              with link 1 in the place of the removed link (a fit of the
+//              construction)
 //   sarrus     (n = 6) two chains of three parallel axes: sin(alpha) = 0 for
 //              two pairs of consecutive links (2, 3 and 5, 6 of a
 //              representation) and cos^2(alpha1) = cos^2(alpha4); the link
@@ -90,6 +96,9 @@ enum class Family {
   // 6R: Waldron's hybrid, two Bennett loops sharing a joint axis, fused
   // links, the shared joint removed
   waldron_hybrid,
+  // 6R: Goldberg's 6R, a (bent) Goldberg 5R and a third Bennett loop sharing
+  // one of its links, the shared link removed and two links fused
+  goldberg_6r,
 };
 const char* to_string(Family family);
 
@@ -114,6 +123,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::sarrus,
     Family::bricard_octahedral_plane,
     Family::waldron_hybrid,
+    Family::goldberg_6r,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -168,8 +178,9 @@ struct Classification {
   std::vector<Family> fitting;
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
-  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, bennett_dyads,
-  // waldron_hybrid, sarrus, bricard_octahedral_plane (the order they are tried).
+  // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, goldberg_6r,
+  // bennett_dyads, waldron_hybrid, sarrus, bricard_octahedral_plane (the order
+  // they are tried).
   std::vector<FamilyCheck> checks;
 };
 
