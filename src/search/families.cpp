@@ -127,8 +127,8 @@ std::optional<int> family_dimension(Family family, int joints) {
       return 9;
     case Family::goldberg_6r:
       // A bent Goldberg 5R (5, the scale included) and the third Bennett
-      // loop's twist and fusion angle: 18 parameters, 11 conditions;
-      // local_dimension reads 7 on members (docs/guide/families.md).
+      // loop's twist and fusion angle: 18 parameters, 11 conditions; the
+      // construction's Jacobian has rank 7 (docs/guide/families.md).
       return 7;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
