@@ -234,6 +234,38 @@ TEST(Families, WaldronHybridLoopsMoveAndAreClassified) {
   }
 }
 
+// The singular values of the Jacobian of the 18 DH parameters a constructor
+// builds with respect to its `count` free parameters (`field(p, k)`), by
+// central differences, twists wrapped across the cut. Each parameter moved
+// by 1e-2 must still give a member of `family` (classified so at 1e-12).
+template <class Parameters, class Build, class Field>
+Eigen::VectorXd constructor_singular_values(const Parameters& p, int count, Build build, Field field, Family family,
+                                            const std::string& tag) {
+  const std::vector<double> moving(6, 2 * kPi);
+  const auto dh = [&](const Parameters& q) {
+    const LoopGeometry g = build(q).geometry;
+    GeometryVector x(18);
+    x << g.a, g.alpha, g.d;
+    return x;
+  };
+  Eigen::MatrixXd J(18, count);
+  for (int k = 0; k < count; ++k) {
+    Parameters moved = p;
+    field(moved, k) += 1e-2;
+    const Posed m = build(moved);
+    const Classification c = classify(m.geometry, m.theta, moving);
+    EXPECT_EQ(c.family, family) << tag << " parameter " << k;
+    EXPECT_LT(c.residual, 1e-12) << tag << " parameter " << k;
+    Parameters up = p, down = p;
+    field(up, k) += 1e-6;
+    field(down, k) -= 1e-6;
+    GeometryVector column = dh(up) - dh(down);
+    for (int j = 6; j < 12; ++j) column[j] = wrap_angle(column[j]);  // twists across the cut
+    J.col(k) = column / 2e-6;
+  }
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(J).singularValues();
+}
+
 // The construction's nine parameters (the two Bennett loops' b, beta, alpha
 // and e, epsilon, gamma, the turn, the slide and the phase) are all free:
 // each moved by 1e-2 gives another member (still classified so), and the
@@ -243,7 +275,6 @@ TEST(Families, WaldronHybridLoopsMoveAndAreClassified) {
 // (docs/guide/families.md), so no more.
 TEST(Families, WaldronHybridHasNineFreeParameters) {
   std::mt19937_64 rng(53);
-  const std::vector<double> moving(6, 2 * kPi);
   for (int i = 0; i < 4; ++i) {
     const WaldronHybrid6R p = random_waldron(rng);
     const double t = uniform(rng, -kPi, kPi);
@@ -252,29 +283,8 @@ TEST(Families, WaldronHybridHasNineFreeParameters) {
       double* fields[] = {&q.b, &q.beta, &q.alpha, &q.e, &q.epsilon, &q.gamma, &q.turn, &q.slide, &q.phase};
       return *fields[k];
     };
-    const auto dh = [&](const WaldronHybrid6R& q) {
-      const LoopGeometry g = waldron_hybrid_6r(q, t).geometry;
-      GeometryVector x(18);
-      x << g.a, g.alpha, g.d;
-      return x;
-    };
-    Eigen::MatrixXd J(18, 9);
-    for (int k = 0; k < 9; ++k) {
-      WaldronHybrid6R moved = p;
-      field(moved, k) += 1e-2;
-      const Posed m = waldron_hybrid_6r(moved, t);
-      const Classification c = classify(m.geometry, m.theta, moving);
-      EXPECT_EQ(c.family, Family::waldron_hybrid) << tag << " parameter " << k;
-      EXPECT_LT(c.residual, 1e-12) << tag << " parameter " << k;
-      WaldronHybrid6R up = p, down = p;
-      field(up, k) += 1e-6;
-      field(down, k) -= 1e-6;
-      GeometryVector column = dh(up) - dh(down);
-      for (int j = 6; j < 12; ++j) column[j] = wrap_angle(column[j]);  // twists across the cut
-      J.col(k) = column / 2e-6;
-    }
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J);
-    const Eigen::VectorXd sv = svd.singularValues();
+    const Eigen::VectorXd sv = constructor_singular_values(
+        p, 9, [&](const WaldronHybrid6R& q) { return waldron_hybrid_6r(q, t); }, field, Family::waldron_hybrid, tag);
     EXPECT_GT(sv[8], 1e-4 * sv[0]) << tag << ": rank below 9";
   }
 }
@@ -528,7 +538,6 @@ TEST(Families, GoldbergSixRFitRebuildsTheConstructorsFiveR) {
 // (docs/guide/families.md), so no more.
 TEST(Families, GoldbergSixRHasSevenFreeParameters) {
   std::mt19937_64 rng(63);
-  const std::vector<double> moving(6, 2 * kPi);
   for (int i = 0; i < 5; ++i) {
     ThreeBennett6R p = random_goldberg_6r(rng, i);
     p.goldberg.phi = uniform(rng, 0.5, 2.5);  // away from the collinear fusions, where
@@ -545,29 +554,8 @@ TEST(Families, GoldbergSixRHasSevenFreeParameters) {
                           &q.phi};
       return *fields[k];
     };
-    const auto dh = [&](const ThreeBennett6R& q) {
-      const LoopGeometry g = three_bennett_6r(q, t).geometry;
-      GeometryVector x(18);
-      x << g.a, g.alpha, g.d;
-      return x;
-    };
-    Eigen::MatrixXd J(18, 7);
-    for (int k = 0; k < 7; ++k) {
-      ThreeBennett6R moved = p;
-      field(moved, k) += 1e-2;
-      const Posed m = three_bennett_6r(moved, t);
-      const Classification c = classify(m.geometry, m.theta, moving);
-      EXPECT_EQ(c.family, Family::goldberg_6r) << tag << " parameter " << k;
-      EXPECT_LT(c.residual, 1e-12) << tag << " parameter " << k;
-      ThreeBennett6R up = p, down = p;
-      field(up, k) += 1e-6;
-      field(down, k) -= 1e-6;
-      GeometryVector column = dh(up) - dh(down);
-      for (int j = 6; j < 12; ++j) column[j] = wrap_angle(column[j]);  // twists across the cut
-      J.col(k) = column / 2e-6;
-    }
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J);
-    const Eigen::VectorXd sv = svd.singularValues();
+    const Eigen::VectorXd sv = constructor_singular_values(
+        p, 7, [&](const ThreeBennett6R& q) { return three_bennett_6r(q, t); }, field, Family::goldberg_6r, tag);
     EXPECT_GT(sv[6], 1e-4 * sv[0]) << tag << ": rank below 7";
   }
 }
