@@ -280,8 +280,10 @@ StartSummary run_start(const Job& job, std::uint64_t index, const StartOptions& 
   // as its analysis needs that objective's Jacobian and cycle: the re-solved
   // energy decides, so a verdict never rests on which cycle was solved last.
   const ObjectiveValue searched = objective.last_x() == result.x ? objective.last_cycle_value() : ObjectiveValue{};
-  const bool maybe_zero = !searched.ok || (searched.E_mean <= kZeroRecheckFactor * job.search.zero_threshold &&
-                                           searched.failed_samples == 0);
+  // A cycle with a failed sample is solved again too: from the searched
+  // cycle the failed solve may succeed.
+  const bool maybe_zero =
+      !searched.ok || searched.failed_samples > 0 || searched.E_mean <= kZeroRecheckFactor * job.search.zero_threshold;
   const CycleObjective& final_cycle = maybe_zero ? unsteered : objective;
   ObjectiveValue final_value = searched;
   if (maybe_zero) {
