@@ -50,17 +50,6 @@ void install_stop_handlers() {
   for (int signal : {SIGINT, SIGTERM}) sigaction(signal, &action, nullptr);
 }
 
-std::string signal_name(int signal) {
-  switch (signal) {
-    case SIGINT:
-      return "SIGINT";
-    case SIGTERM:
-      return "SIGTERM";
-    default:
-      return "signal " + std::to_string(signal);
-  }
-}
-
 struct BondsArguments {
   std::string database;
   GeometryOptions geometry;

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <system_error>
@@ -320,6 +321,19 @@ void ScratchFile::close() {
   stream_ = nullptr;
   if (failed || close_failed) {
     throw EnvironmentError("cannot write temporary file " + quote_text(path_.string()) + ": " + std::strerror(errno));
+  }
+}
+
+std::string signal_name(int signal) {
+  switch (signal) {
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGUSR1:
+      return "SIGUSR1";
+    default:
+      return "signal " + std::to_string(signal);
   }
 }
 

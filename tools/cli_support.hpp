@@ -47,6 +47,10 @@ std::string quote_text(std::string_view text);
 // Messages must stay on one line: newlines and tabs become spaces.
 std::string one_line(std::string_view text);
 
+// "SIGINT", "SIGTERM", "SIGUSR1", else "signal N": the stop signals a command
+// names in its messages.
+std::string signal_name(int signal);
+
 // One finite decimal number: optional sign, digits, optional fraction and
 // exponent, nothing else (no spaces, no "nan", no "inf", no hex).
 double parse_number(std::string_view text, const std::string& where);

@@ -137,19 +137,6 @@ RunRequest read_settings(const RunArguments& args) {
   return s;
 }
 
-std::string signal_name(int signal) {
-  switch (signal) {
-    case SIGINT:
-      return "SIGINT";
-    case SIGTERM:
-      return "SIGTERM";
-    case SIGUSR1:
-      return "SIGUSR1";
-    default:
-      return "signal " + std::to_string(signal);
-  }
-}
-
 // This process's rank as the MPI launcher tells it (Open MPI, PMIx, MPICH,
 // Slurm), read before MPI starts, so that a usage error knows it too; 0 when
 // not launched by one.
