@@ -628,6 +628,30 @@ PosedLoop waldron_hybrid_6r(const WaldronHybrid6R& p, double t) {
 }
 
 // ---------------------------------------------------------------------------
+// The double-Goldberg 6R
+
+PosedLoop double_goldberg_6r(const DoubleGoldberg6R& p, double t) {
+  check_pair(p.goldberg.loops, "double_goldberg_6r");
+  check_twist(p.epsilon, "double_goldberg_6r: epsilon");
+  for (double v : {p.goldberg.phi, p.psi, t}) {
+    if (!std::isfinite(v)) bad("double_goldberg_6r: phi, psi and t must be finite", v);
+  }
+  // Every loop with frame 0 on axis A and x0 along the link arriving at A:
+  // the first's and the second's along DA, the third's along YA, which is DA
+  // turned by psi.
+  const auto [first, second] = pair_loops(p.goldberg.loops);
+  const double a = first.a[0], alpha = first.alpha[0];
+  const LoopGeometry third = bennett(a, alpha, a * std::abs(std::sin(p.epsilon) / std::sin(alpha)), p.epsilon);
+  const std::vector<Axis> x1 = joint_axes(first, bennett_pose(first, t));
+  const std::vector<Axis> x2 = joint_axes(second, bennett_pose(second, t + p.goldberg.phi));
+  std::vector<Axis> x3 = joint_axes(third, bennett_pose(third, t - p.psi));
+  const Eigen::Isometry3d turn(Eigen::AngleAxisd(p.psi, Vector3::UnitZ()));
+  for (Axis& axis : x3) axis = {turn * axis.point, turn.linear() * axis.direction};
+  const std::vector<Axis> axes{x1[1], x3[2], x3[3], x1[3], x2[2], x2[1]};  // B X Y D E F
+  return dh_from_axes(axes);
+}
+
+// ---------------------------------------------------------------------------
 // Sarrus 6R
 
 namespace {

@@ -194,6 +194,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::bricard_octahedral_plane:
       case Family::waldron_hybrid:
       case Family::goldberg_6r:
+      case Family::double_goldberg:
       case Family::degenerate:
       case Family::unclassified:
         break;

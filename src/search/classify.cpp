@@ -183,6 +183,18 @@ std::string special_detail(Family family, const LoopGeometry& g) {
                   std::abs(fit.feet));
     return buffer;
   }
+  if (family == Family::double_goldberg) {
+    // The one Bennett ratio of the three loops, from the best representation.
+    const Best best = best_over_representations<Family::double_goldberg>(g, false);
+    const LoopGeometry w = detail::apply(*best.representation, g);
+    char buffer[320];
+    std::snprintf(buffer, sizeof buffer,
+                  "double-Goldberg: Bennett dyads (links 1-2 and 4-5 of the best representation, |sin alpha| / a = "
+                  "%.4g / L) closed by one fourth axis, fixed in links 3 and 6, on which the two Bennett loops meet "
+                  "at one point; a third Bennett loop joins links 3 and 6 there (two Goldberg 5Rs merged)",
+                  std::abs(std::sin(w.alpha[0])) / w.a[0] * length_scale(w));
+    return buffer;
+  }
   if (family == Family::goldberg_6r) {
     // Which link of the Goldberg 5R the third Bennett loop shares (P, the
     // removed joint, is the 5R's joint set / 4), the third loop's ratio and

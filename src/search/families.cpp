@@ -44,6 +44,8 @@ const char* to_string(Family family) {
       return "waldron_hybrid";
     case Family::goldberg_6r:
       return "goldberg_6r";
+    case Family::double_goldberg:
+      return "double_goldberg";
   }
   return "unknown";
 }
@@ -72,6 +74,7 @@ int family_joints(Family family) {
     case Family::bricard_octahedral_plane:
     case Family::waldron_hybrid:
     case Family::goldberg_6r:
+    case Family::double_goldberg:
       return 6;
     case Family::planar:
     case Family::spherical:
@@ -129,6 +132,12 @@ std::optional<int> family_dimension(Family family, int joints) {
       // A bent Goldberg 5R (5, the scale included) and the third Bennett
       // loop's twist and fusion angle: 18 parameters, 11 conditions; the
       // construction's Jacobian has rank 7 (docs/guide/families.md).
+      return 7;
+    case Family::double_goldberg:
+      // Three Bennett loops on one joint axis (a Goldberg 5R's five and the
+      // third loop's twist and fusion angle): 18 parameters, 11 conditions;
+      // the construction's Jacobian has rank 7. local_dimension reads 9 on
+      // members: it sees waldron_hybrid, which holds them (docs/guide/families.md).
       return 7;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:

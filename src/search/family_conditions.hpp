@@ -634,14 +634,19 @@ void bennett_dyads_conditions(const RepresentationView& w, Sink& c) {
 // no offset at U) and reaches V at V's foot pv along a normal of length m,
 // twist mu (the link A -> V, no offset at V). Its direction z makes the
 // angle lambda with u and mu with v: the common lines of two cones, up to
-// two. For each, the line A placed from U and the one placed from V are
-// parallel: `apart` is their distance over L (where the cones do not meet,
-// the nearest direction, its miss in radians added in quadrature), `slide`
-// the signed distance along z from the first's foot to the second's, in the
-// geometry's units.
+// two (candidates 0 and 1). Where the cones touch, the two meet in the
+// plane of u and v, and the cones' equations give the direction only to
+// the square root of the round-off; so a third candidate is always tried:
+// the direction in that plane whose angles to u and v miss lambda and mu
+// least (in the sum of squares), its miss in radians added in quadrature.
+// Where the cones do not meet, it is the only one. For each, the line A
+// placed from U and the one placed from V are parallel: `apart` is their
+// distance over L, `slide` the signed distance along z from the first's
+// foot to the second's, in the geometry's units.
 struct FusedLinkFit {
-  std::array<double, 2> apart{};
-  std::array<double, 2> slide{};
+  static constexpr size_t kCandidates = 3;
+  std::array<double, kCandidates> apart{};
+  std::array<double, kCandidates> slide{};
 };
 
 inline FusedLinkFit fourth_axis_in_link(const Vector3& pu, const Vector3& u, double l, double sin_l, double cos_l,
@@ -654,26 +659,53 @@ inline FusedLinkFit fourth_axis_in_link(const Vector3& pu, const Vector3& u, dou
   // axis this fit can place (a Waldron loop needs neither); a residual of 1
   // (one L apart), whatever the scale.
   if (!(s2 > 1e-24) || !(std::abs(sin_l) > 1e-12) || !(std::abs(sin_m) > 1e-12)) {
-    out.apart = {1.0, 1.0};
+    out.apart.fill(1.0);
     return out;
   }
-  // z = x u + y v + w (u x v) / |u x v| with z . u = cos_l, z . v = cos_m, |z| = 1.
-  const double x = (cos_l - c * cos_m) / s2, y = (cos_m - c * cos_l) / s2;
-  const double w2 = 1.0 - (x * cos_l + y * cos_m);
-  const double miss = w2 < 0.0 ? std::sqrt(-w2) : 0.0;
-  const double w = w2 > 0.0 ? std::sqrt(w2) : 0.0;
-  const Vector3 normal = uxv / std::sqrt(s2);
-  for (size_t k = 0; k < 2; ++k) {
-    const Vector3 z = (x * u + y * v + (k == 0 ? w : -w) * normal).normalized();
+  // A placed along z from both axes: its distance and slide, `miss` added.
+  const auto place = [&](const Vector3& z, bool normalise, double miss, size_t k) {
     // Link U -> A: z = cos_l u - sin_l (u x x_UA), and x_UA = (u x x_UA) x u.
-    const Vector3 x_ua = ((cos_l * u - z) / sin_l).cross(u);
+    Vector3 x_ua = ((cos_l * u - z) / sin_l).cross(u);
     // Link A -> V: v = cos_m z - sin_m (z x x_AV), and x_AV = (z x x_AV) x z.
-    const Vector3 x_av = ((cos_m * z - v) / sin_m).cross(z);
+    Vector3 x_av = ((cos_m * z - v) / sin_m).cross(z);
+    if (normalise) {  // unit only where z makes both angles exactly
+      x_ua.normalize();
+      x_av.normalize();
+    }
     const Vector3 gap = (pv - m * x_av) - (pu + l * x_ua);
     const double along = gap.dot(z);
     out.apart[k] = std::hypot((gap - along * z).norm() / L, miss);
     out.slide[k] = along;
+  };
+  // z = x u + y v + w (u x v) / |u x v| with z . u = cos_l, z . v = cos_m, |z| = 1.
+  const double x = (cos_l - c * cos_m) / s2, y = (cos_m - c * cos_l) / s2;
+  const double w2 = 1.0 - (x * cos_l + y * cos_m);
+  const Vector3 normal = uxv / std::sqrt(s2);
+  if (w2 > 0.0) {
+    const double w = std::sqrt(w2);
+    for (size_t k = 0; k < 2; ++k) place((x * u + y * v + (k == 0 ? w : -w) * normal).normalized(), false, 0.0, k);
+  } else {
+    out.apart[0] = out.apart[1] = kInf;
   }
+  // In the plane of u and v: e1 = u, e2 toward v, v at the angle phi.
+  const Vector3 e2 = (v - c * u).normalized();
+  const double phi = std::atan2(std::sqrt(s2), c), lambda = std::atan2(std::abs(sin_l), cos_l),
+               mu = std::atan2(std::abs(sin_m), cos_m);
+  double least = kInf, best = 0.0;
+  // The in-plane direction nearest to both angles, on each side of u and of v
+  // (a least-squares compromise: the two choosing one exactly tie where the
+  // cones touch, and switching between them would not be smooth).
+  for (double theta :
+       {0.5 * (lambda + phi - mu), 0.5 * (lambda + phi + mu), 0.5 * (-lambda + phi - mu), 0.5 * (-lambda + phi + mu)}) {
+    // The angles to u and v of the direction at theta from u.
+    const double to_u = std::abs(wrap_angle(theta)), to_v = std::abs(wrap_angle(theta - phi));
+    const double miss = std::hypot(to_u - lambda, to_v - mu);
+    if (miss < least) {
+      least = miss;
+      best = theta;
+    }
+  }
+  place(std::cos(best) * u + std::sin(best) * e2, true, least, 2);
   return out;
 }
 
@@ -692,7 +724,7 @@ struct WaldronParameters {
 // A: from dyad 1's to dyad 2's along A in link 3, back in link 6, the same
 // distance once A is one joint axis of both bodies. The direction of A is
 // dyad 1's in both links (an axis flip of a dyad-2 joint makes it so in
-// another representation). Of the two directions in each link, the pair
+// another representation). Of the candidate directions in each link, the pair
 // with the least sum of squares.
 struct WaldronFit {
   double link3 = 0.0;  // the two fourth axes in link 3 apart / L
@@ -715,8 +747,8 @@ inline WaldronFit waldron_fit(const WaldronParameters& p) {
                           p.a[1], p.sin[1], p.cos[1], p.L);
   WaldronFit best;
   double least = kInf;
-  for (size_t i = 0; i < 2; ++i) {
-    for (size_t j = 0; j < 2; ++j) {
+  for (size_t i = 0; i < FusedLinkFit::kCandidates; ++i) {
+    for (size_t j = 0; j < FusedLinkFit::kCandidates; ++j) {
       // In link 6 the slide runs from dyad 2's foot to dyad 1's.
       const WaldronFit f{in3.apart[i], in6.apart[j], (in3.slide[i] + in6.slide[j]) / p.L, in3.slide[i] / p.L};
       const double sum = f.link3 * f.link3 + f.link6 * f.link6 + f.slide * f.slide;
@@ -744,14 +776,16 @@ WaldronParameters waldron_parameters(const RepresentationView& w) {
 }
 
 // The gradient of one of the fit's values (which: 0 link3, 1 link6, 2
-// slide) with respect to the representation's (a, alpha, d), by central
+// slide, 3 feet) with respect to the representation's (a, alpha, d), by central
 // differences (the fit has no closed form to differentiate): steps of 1e-6
 // L on lengths and offsets, 1e-6 rad on twists, each side evaluated with
 // its own L.
 inline GeometryVector waldron_fit_gradient(const WaldronParameters& p, const std::array<double, 6>& alpha, int which) {
   const int n = 6;
   GeometryVector g = GeometryVector::Zero(3 * n);
-  const auto value = [which](const WaldronFit& f) { return which == 0 ? f.link3 : which == 1 ? f.link6 : f.slide; };
+  const auto value = [which](const WaldronFit& f) {
+    return which == 0 ? f.link3 : which == 1 ? f.link6 : which == 2 ? f.slide : f.feet;
+  };
   for (int q = 0; q < 3 * n; ++q) {
     const auto k = static_cast<size_t>(q % n);
     const double h = q < n || q >= 2 * n ? 1e-6 * p.L : 1e-6;
@@ -801,12 +835,16 @@ void add_bennett_ratio(const RepresentationView& w, Sink& c, const char* text, i
 // The conditions: the two dyads (no offset at their middle joints 2 and 5,
 // Bennett's ratio on links 1, 2 and on 4, 5) and the fit of their fourth
 // axes (waldron_fit), evaluated once, when the first of its values is read.
+// With `double_goldberg`, the double-Goldberg 6R's two more: one Bennett
+// ratio for both dyads, and the two loops' feet on the fourth axis at one
+// point (a third Bennett loop then joins the fused links at A: below).
 template <class RepresentationView, class Sink>
-void waldron_hybrid_conditions(const RepresentationView& w, Sink& c) {
+void waldron_conditions(const RepresentationView& w, Sink& c, bool double_goldberg) {
   add_offset(w, c, "d2", 1, -1, 0.0);
   add_offset(w, c, "d5", 4, -1, 0.0);
   add_bennett_ratio(w, c, "a1 |sin(alpha2)| - a2 |sin(alpha1)|", 0, 1);
   add_bennett_ratio(w, c, "a4 |sin(alpha5)| - a5 |sin(alpha4)|", 3, 4);
+  if (double_goldberg) add_bennett_ratio(w, c, "a1 |sin(alpha4)| - a4 |sin(alpha1)|", 0, 3);
   bool fitted = false;
   WaldronParameters p;
   WaldronFit fit;
@@ -830,6 +868,28 @@ void waldron_hybrid_conditions(const RepresentationView& w, Sink& c) {
         [&] { return gradient(1); });
   c.add([] { return "feet of the two Bennett loops on the fourth axis: link 3 against link 6 / L"; },
         [&] { return get().slide; }, [&] { return gradient(2); });
+  if (double_goldberg) {
+    c.add([] { return "feet of the two Bennett loops on the fourth axis apart / L"; }, [&] { return get().feet; },
+          [&] { return gradient(3); });
+  }
+}
+
+// Waldron's hybrid 6R: the construction's nine conditions.
+template <class RepresentationView, class Sink>
+void waldron_hybrid_conditions(const RepresentationView& w, Sink& c) {
+  waldron_conditions(w, c, false);
+}
+
+// The double-Goldberg 6R (docs/guide/families.md): Waldron's hybrid whose
+// two Bennett loops (A B C D and A E F G, the 6R B C D G F E) have one ratio
+// and meet the fourth axis A at one point. Links AB (in link 6) and GA (in
+// link 3) are then a Bennett dyad about A, which closes into a third Bennett
+// loop A B C' G: two Goldberg 5Rs, B C D G C' (loops one and three) and
+// G F E B C' (two and three), merged along the dyad B C' G, which is
+// removed. Eleven conditions.
+template <class RepresentationView, class Sink>
+void double_goldberg_conditions(const RepresentationView& w, Sink& c) {
+  waldron_conditions(w, c, true);
 }
 
 // Goldberg's 6R of three Bennett loops (docs/guide/families.md): a Goldberg
@@ -1292,6 +1352,7 @@ inline int condition_sets(Family family, int joints) {
       return kGoldberg6RSets;
     case Family::bennett_dyads:
     case Family::waldron_hybrid:
+    case Family::double_goldberg:
     case Family::sarrus:
     case Family::bricard_line_symmetric:
     case Family::bricard_plane_symmetric:
@@ -1311,7 +1372,7 @@ constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
          family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus ||
          family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid ||
-         family == Family::goldberg_6r;
+         family == Family::goldberg_6r || family == Family::double_goldberg;
 }
 
 template <Family F, class RepresentationView, class Sink>
@@ -1341,6 +1402,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     waldron_hybrid_conditions(w, c);
   } else if constexpr (F == Family::goldberg_6r) {
     goldberg_6r_conditions(set, w, c);
+  } else if constexpr (F == Family::double_goldberg) {
+    double_goldberg_conditions(w, c);
   } else if constexpr (F == Family::sarrus) {
     sarrus_conditions(w, c);
   } else if constexpr (F == Family::bricard_octahedral_plane) {

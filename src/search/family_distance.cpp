@@ -104,6 +104,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       return distance_over_representations<Family::waldron_hybrid>(geometry, gradient);
     case Family::goldberg_6r:
       return distance_over_representations<Family::goldberg_6r>(geometry, gradient);
+    case Family::double_goldberg:
+      return distance_over_representations<Family::double_goldberg>(geometry, gradient);
     case Family::degenerate:
       throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified:
@@ -140,6 +142,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::bricard_octahedral_plane:
     case Family::waldron_hybrid:
     case Family::goldberg_6r:
+    case Family::double_goldberg:
       best = best_for(family, geometry, true);
       break;
     case Family::degenerate:

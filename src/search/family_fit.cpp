@@ -85,6 +85,8 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
       return best_over_representations<Family::waldron_hybrid>(g, by_norm);
     case Family::goldberg_6r:
       return best_over_representations<Family::goldberg_6r>(g, by_norm);
+    case Family::double_goldberg:
+      return best_over_representations<Family::double_goldberg>(g, by_norm);
     case Family::spherical:
     case Family::degenerate:
     case Family::unclassified:
@@ -121,6 +123,7 @@ std::vector<Family> special_families(int n) {
               Family::bricard_line_symmetric,
               Family::bennett_pair,
               Family::goldberg_6r,
+              Family::double_goldberg,
               Family::bennett_dyads,
               Family::waldron_hybrid,
               Family::sarrus,

@@ -615,6 +615,40 @@ TEST(Constructions, WaldronHybridClosesAlongItsMotion) {
   }
 }
 
+TEST(Constructions, DoubleGoldberg6RClosesAlongItsMotionInEverySetupAndFusion) {
+  for (const BennettPairParameters& pair : kPairs) {
+    for (double phi : {0.0, kPi, 1.1}) {
+      for (double psi : {kPi, 0.0, -0.8}) {
+        for (double epsilon : {0.6, -2.2}) {  // both setups of the third loop
+          const DoubleGoldberg6R g{{pair, phi}, epsilon, psi};
+          const std::string tag = "double goldberg b " + std::to_string(pair.b) + " phi " + std::to_string(phi) +
+                                  " psi " + std::to_string(psi) + " epsilon " + std::to_string(epsilon);
+          expect_closes_along([&](double t) { return double_goldberg_6r(g, t); }, kMotion, tag);
+          const PosedLoop at = double_goldberg_6r(g, 1.0);
+          ASSERT_EQ(at.geometry.joints(), 6);
+          expect_one_freedom(at, tag);
+          // B -> X and X -> Y are the third loop's (e, epsilon) and (a,
+          // alpha), D -> E and E -> F the second's (c, gamma) and (b, beta),
+          // with no offset at X and E; the 5R's joints D, E, F keep their
+          // links (goldberg_5r: its links 3 and 4).
+          const double a = pair.b * std::abs(std::sin(pair.alpha) / std::sin(pair.beta));
+          EXPECT_NEAR(at.geometry.a[0], a * std::abs(std::sin(epsilon) / std::sin(pair.alpha)), 1e-10) << tag;
+          EXPECT_NEAR(angle_distance(at.geometry.alpha[0], epsilon), 0.0, 1e-10) << tag;
+          EXPECT_NEAR(at.geometry.a[1], a, 1e-10) << tag;
+          EXPECT_NEAR(angle_distance(at.geometry.alpha[1], pair.alpha), 0.0, 1e-10) << tag;
+          const PosedLoop five = goldberg_5r(g.goldberg, 1.0);
+          for (int k : {3, 4}) {
+            EXPECT_NEAR(at.geometry.a[k], five.geometry.a[k - 1], 1e-10) << tag << " link " << k;
+            EXPECT_NEAR(angle_distance(at.geometry.alpha[k], five.geometry.alpha[k - 1]), 0.0, 1e-10) << tag;
+          }
+          EXPECT_NEAR(at.geometry.d[1], 0.0, 1e-10) << tag;
+          EXPECT_NEAR(at.geometry.d[4], 0.0, 1e-10) << tag;
+        }
+      }
+    }
+  }
+}
+
 TEST(Constructions, SarrusClosesAlongItsMotionAndItsTopOnlyTranslates) {
   std::vector<Sarrus6R> linkages(3);
   linkages[1].gamma = 2.3;
@@ -657,6 +691,8 @@ TEST(Constructions, FusedConstructionsRefuseBadParameters) {
   waldron.epsilon = kPi;
   EXPECT_THROW(waldron_hybrid_6r(waldron, 0.5), std::invalid_argument);
   EXPECT_THROW(waldron_hybrid_6r(WaldronHybrid6R{}, NAN), std::invalid_argument);
+  EXPECT_THROW(double_goldberg_6r({{{1.0, 1.0, 1.0, 2.0}, kPi}, 0.0, kPi}, 0.5), std::invalid_argument);
+  EXPECT_THROW(double_goldberg_6r({{{1.0, 1.0, 1.0, 2.0}, kPi}, 1.0, NAN}, 0.5), std::invalid_argument);
   Sarrus6R sarrus;
   sarrus.gamma = 0.0;
   EXPECT_THROW(sarrus_6r(sarrus, 0.0), std::invalid_argument);

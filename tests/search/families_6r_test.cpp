@@ -177,6 +177,91 @@ TEST(Families, BennettDyadsNeedTheSameCosineSumOverKappa) {
   EXPECT_GE(tried, 4);
 }
 
+// A member of a 6R family decided by a fit: verified movable (from the
+// built pose and in a random representation), `phrase` in its detail, each
+// of its family's `conditions` values at round-off, the families in `far`
+// more than 1e-3 away; named so by analyse_candidate as a search's zero is
+// (when `analyse`), at scales 1e-3 and 1e3 (residuals are in units of L),
+// and in every shift, reversed or not, with random axis flips.
+void expect_member_in_every_representation(const Posed& m, Family family, size_t conditions,
+                                           std::initializer_list<Family> far, const std::string& phrase, bool analyse,
+                                           std::mt19937_64& rng, const std::string& tag) {
+  std::uniform_int_distribution<unsigned> flips(0, 63);
+  const std::vector<double> moving(6, 2 * kPi);
+  expect_movable_member(m, family, rng, tag);
+  const VerificationSummary v = verify_from(m.geometry, m.theta);
+  ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
+  const Classification c = classified(m, v);
+  EXPECT_NE(c.detail.find(phrase), std::string::npos) << tag << ": " << c.detail;
+  for (const FamilyCheck& check : c.checks) {
+    if (check.family == family) {
+      ASSERT_EQ(check.conditions.size(), conditions) << tag;
+      for (const ConditionResidual& r : check.conditions) {
+        EXPECT_LT(std::abs(r.residual), 1e-12) << tag << ": " << r.name;
+      }
+    }
+    if (std::find(far.begin(), far.end(), check.family) != far.end()) {
+      EXPECT_GT(check.residual, 1e-3) << tag << ": " << to_string(check.family);
+    }
+  }
+  if (analyse) {
+    const CandidateAnalysis a = analyse_candidate(m.geometry, m.theta, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
+    EXPECT_TRUE(a.verification.verified) << tag;
+    EXPECT_EQ(a.classification.family, family) << tag << ": " << a.classification.detail;
+  }
+  for (double scale : {1e-3, 1e3}) {
+    LoopGeometry scaled = m.geometry;
+    scaled.a *= scale;
+    scaled.d *= scale;
+    const Classification cs = classify(scaled, m.theta, moving);
+    EXPECT_EQ(cs.family, family) << tag << " scaled by " << scale;
+    EXPECT_LT(cs.residual, 1e-12) << tag << " scaled by " << scale;
+  }
+  for (int shift = 0; shift < 6; ++shift) {
+    for (bool reverse : {false, true}) {
+      const Posed w = rewritten(m, shift, reverse, flips(rng));
+      ASSERT_LT(closure_error(w), 1e-12) << tag;
+      const Classification cw = classify(w.geometry, w.theta, moving);
+      EXPECT_EQ(cw.family, family) << tag << " shift " << shift << (reverse ? " reversed" : "");
+      EXPECT_LT(cw.residual, 1e-12) << tag << " shift " << shift << (reverse ? " reversed" : "");
+    }
+  }
+}
+
+// Near misses of members of a 6R family decided by a fit (`member(rng, i)`,
+// i = 0 ... 9): one DH parameter moved by 1e-2, 1e-4, 1e-6 and 1e-8 (x L for
+// lengths and offsets, rad for twists), in turn a1, alpha2, d3, a4, alpha5,
+// d6, d2, a3, alpha6, d1. The rigid closure cannot follow them from the
+// member's pose, and the fit's residual sees the move (at least eps / 10).
+// Down to 1e-6 they are not classified `family`; at 1e-8 the residual is of
+// the order of the classifier's tolerance (1e-8), so whether it is named
+// depends on the parameter: the tracer is what refuses it there
+// (docs/guide/families.md).
+template <class Member>
+void expect_near_misses_rigid_and_unnamed(Member member, Family family, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const std::array<int, 10> parameters = {0, 6 + 1, 12 + 2, 3, 6 + 4, 12 + 5, 12 + 1, 2, 6 + 5, 12 + 0};
+  for (size_t i = 0; i < parameters.size(); ++i) {
+    const Posed m = member(rng, static_cast<int>(i));
+    const std::string tag = std::string(to_string(family)) + " near miss " + std::to_string(i) + ", parameter " +
+                            std::to_string(parameters[i]);
+    for (double eps : {1e-2, 1e-4, 1e-6, 1e-8}) {
+      const LoopGeometry g = perturbed(m.geometry, parameters[i], eps);
+      const VerificationSummary v = verify_from(g, m.theta);
+      EXPECT_FALSE(v.verified) << tag << " + " << eps << ": worst residual " << v.worst_residual;
+      const Classification c = classified({g, m.theta}, v);
+      if (eps >= 1e-6) {
+        EXPECT_NE(c.family, family) << tag << " + " << eps;
+      }
+      for (const FamilyCheck& check : c.checks) {
+        if (check.family == family) {
+          EXPECT_GT(check.residual, eps / 10) << tag << " + " << eps;
+        }
+      }
+    }
+  }
+}
+
 // Waldron's hybrid (docs/guide/families.md): members built in space by
 // waldron_hybrid_6r (two random Bennett loops sharing a joint axis, turned,
 // slid and phased at random), verified movable by the rigid closure and
@@ -186,51 +271,10 @@ TEST(Families, BennettDyadsNeedTheSameCosineSumOverKappa) {
 // dyads. The construction knows nothing of the fit.
 TEST(Families, WaldronHybridLoopsMoveAndAreClassified) {
   std::mt19937_64 rng(51);
-  std::uniform_int_distribution<unsigned> flips(0, 63);
-  const std::vector<double> moving(6, 2 * kPi);
   for (int i = 0; i < 8; ++i) {
     const Posed m = waldron_member(rng);
-    const std::string tag = "waldron_hybrid " + std::to_string(i);
-    expect_movable_member(m, Family::waldron_hybrid, rng, tag);
-    const VerificationSummary v = verify_from(m.geometry, m.theta);
-    ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
-    const Classification c = classified(m, v);
-    EXPECT_NE(c.detail.find("Waldron's hybrid"), std::string::npos) << tag << ": " << c.detail;
-    for (const FamilyCheck& check : c.checks) {
-      if (check.family == Family::waldron_hybrid) {
-        ASSERT_EQ(check.conditions.size(), 7u) << tag;
-        for (const ConditionResidual& r : check.conditions) {
-          EXPECT_LT(std::abs(r.residual), 1e-12) << tag << ": " << r.name;
-        }
-      }
-      if (check.family == Family::bennett_pair || check.family == Family::bennett_dyads) {
-        EXPECT_GT(check.residual, 1e-3) << tag << ": " << to_string(check.family);
-      }
-    }
-    // As a zero of a search is analysed (verification, then classification).
-    if (i < 2) {
-      const CandidateAnalysis a = analyse_candidate(m.geometry, m.theta, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
-      EXPECT_TRUE(a.verification.verified) << tag;
-      EXPECT_EQ(a.classification.family, Family::waldron_hybrid) << tag << ": " << a.classification.detail;
-    }
-    // Scaled, it is the same loop (residuals are in units of L).
-    for (double scale : {1e-3, 1e3}) {
-      LoopGeometry scaled = m.geometry;
-      scaled.a *= scale;
-      scaled.d *= scale;
-      const Classification cs = classify(scaled, m.theta, moving);
-      EXPECT_EQ(cs.family, Family::waldron_hybrid) << tag << " scaled by " << scale;
-      EXPECT_LT(cs.residual, 1e-12) << tag << " scaled by " << scale;
-    }
-    for (int shift = 0; shift < 6; ++shift) {
-      for (bool reverse : {false, true}) {
-        const Posed w = rewritten(m, shift, reverse, flips(rng));
-        ASSERT_LT(closure_error(w), 1e-12) << tag;
-        const Classification cw = classify(w.geometry, w.theta, moving);
-        EXPECT_EQ(cw.family, Family::waldron_hybrid) << tag << " shift " << shift << (reverse ? " reversed" : "");
-        EXPECT_LT(cw.residual, 1e-12) << tag << " shift " << shift << (reverse ? " reversed" : "");
-      }
-    }
+    expect_member_in_every_representation(m, Family::waldron_hybrid, 7, {Family::bennett_pair, Family::bennett_dyads},
+                                          "Waldron's hybrid", i < 2, rng, "waldron_hybrid " + std::to_string(i));
   }
 }
 
@@ -289,35 +333,10 @@ TEST(Families, WaldronHybridHasNineFreeParameters) {
   }
 }
 
-// Near misses: one DH parameter of a member moved by 1e-2, 1e-4, 1e-6 and
-// 1e-8 (x L for lengths and offsets, rad for twists): the rigid closure
-// cannot follow them from the member's pose, and the fit's residual sees
-// the move (at least eps / 10). Down to 1e-6 they are not classified
-// waldron_hybrid; at 1e-8 the residual is of the order of the classifier's
-// tolerance (1e-8), so whether it is named depends on the parameter: the
-// tracer is what refuses it there (docs/guide/families.md).
+// Near misses (expect_near_misses_rigid_and_unnamed).
 TEST(Families, WaldronHybridNearMissesAreRigidAndNotClassified) {
-  std::mt19937_64 rng(52);
-  // a1, alpha2, d3, a4, alpha5, d6, d2, a3, alpha6, d1
-  const std::array<int, 10> parameters = {0, 6 + 1, 12 + 2, 3, 6 + 4, 12 + 5, 12 + 1, 2, 6 + 5, 12 + 0};
-  for (size_t i = 0; i < parameters.size(); ++i) {
-    const Posed m = waldron_member(rng);
-    const std::string tag = "waldron near miss " + std::to_string(i) + ", parameter " + std::to_string(parameters[i]);
-    for (double eps : {1e-2, 1e-4, 1e-6, 1e-8}) {
-      const LoopGeometry g = perturbed(m.geometry, parameters[i], eps);
-      const VerificationSummary v = verify_from(g, m.theta);
-      EXPECT_FALSE(v.verified) << tag << " + " << eps << ": worst residual " << v.worst_residual;
-      const Classification c = classified({g, m.theta}, v);
-      if (eps >= 1e-6) {
-        EXPECT_NE(c.family, Family::waldron_hybrid) << tag << " + " << eps;
-      }
-      for (const FamilyCheck& check : c.checks) {
-        if (check.family == Family::waldron_hybrid) {
-          EXPECT_GT(check.residual, eps / 10) << tag << " + " << eps;
-        }
-      }
-    }
-  }
+  expect_near_misses_rigid_and_unnamed([](std::mt19937_64& rng, int) { return waldron_member(rng); },
+                                       Family::waldron_hybrid, 52);
 }
 
 // Loops from two factorisations of one cubic motion polynomial (Hegedus,
@@ -439,51 +458,12 @@ TEST(Families, OtherFamiliesAndGeneric6RAreNotWaldronHybrids) {
 // the fit.
 TEST(Families, GoldbergSixRLoopsMoveAndAreClassified) {
   std::mt19937_64 rng(61);
-  std::uniform_int_distribution<unsigned> flips(0, 63);
-  const std::vector<double> moving(6, 2 * kPi);
   for (int i = 0; i < 10; ++i) {
     const ThreeBennett6R p = random_goldberg_6r(rng, i % 5);
     const Posed m = three_bennett_6r(p, uniform(rng, 0.3, kPi - 0.3));
-    const std::string tag = "goldberg_6r " + std::to_string(i) + " on link " + std::to_string(p.link);
-    expect_movable_member(m, Family::goldberg_6r, rng, tag);
-    const VerificationSummary v = verify_from(m.geometry, m.theta);
-    ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
-    const Classification c = classified(m, v);
-    EXPECT_NE(c.detail.find("third Bennett loop"), std::string::npos) << tag << ": " << c.detail;
-    for (const FamilyCheck& check : c.checks) {
-      if (check.family == Family::goldberg_6r) {
-        ASSERT_EQ(check.conditions.size(), 12u) << tag;
-        for (const ConditionResidual& r : check.conditions) {
-          EXPECT_LT(std::abs(r.residual), 1e-12) << tag << ": " << r.name;
-        }
-      }
-      if (check.family == Family::bennett_pair || check.family == Family::bennett_dyads ||
-          check.family == Family::waldron_hybrid) {
-        EXPECT_GT(check.residual, 1e-3) << tag << ": " << to_string(check.family);
-      }
-    }
-    if (i < 2) {
-      const CandidateAnalysis a = analyse_candidate(m.geometry, m.theta, Eigen::MatrixXd::Zero(1, 1), StartOptions{});
-      EXPECT_TRUE(a.verification.verified) << tag;
-      EXPECT_EQ(a.classification.family, Family::goldberg_6r) << tag << ": " << a.classification.detail;
-    }
-    for (double scale : {1e-3, 1e3}) {
-      LoopGeometry scaled = m.geometry;
-      scaled.a *= scale;
-      scaled.d *= scale;
-      const Classification cs = classify(scaled, m.theta, moving);
-      EXPECT_EQ(cs.family, Family::goldberg_6r) << tag << " scaled by " << scale;
-      EXPECT_LT(cs.residual, 1e-12) << tag << " scaled by " << scale;
-    }
-    for (int shift = 0; shift < 6; ++shift) {
-      for (bool reverse : {false, true}) {
-        const Posed w = rewritten(m, shift, reverse, flips(rng));
-        ASSERT_LT(closure_error(w), 1e-12) << tag;
-        const Classification cw = classify(w.geometry, w.theta, moving);
-        EXPECT_EQ(cw.family, Family::goldberg_6r) << tag << " shift " << shift << (reverse ? " reversed" : "");
-        EXPECT_LT(cw.residual, 1e-12) << tag << " shift " << shift << (reverse ? " reversed" : "");
-      }
-    }
+    expect_member_in_every_representation(
+        m, Family::goldberg_6r, 12, {Family::bennett_pair, Family::bennett_dyads, Family::waldron_hybrid},
+        "third Bennett loop", i < 2, rng, "goldberg_6r " + std::to_string(i) + " on link " + std::to_string(p.link));
   }
 }
 
@@ -560,35 +540,10 @@ TEST(Families, GoldbergSixRHasSevenFreeParameters) {
   }
 }
 
-// Near misses: one DH parameter of a member moved by 1e-2, 1e-4, 1e-6 and
-// 1e-8 (x L for lengths and offsets, rad for twists): the rigid closure
-// cannot follow them from the member's pose, and the fit's residual sees
-// the move (at least eps / 10). Down to 1e-6 they are not classified
-// goldberg_6r; at 1e-8 the residual is of the order of the classifier's
-// tolerance, and the tracer is what refuses them (as for waldron_hybrid).
+// Near misses (expect_near_misses_rigid_and_unnamed), on each of the five links.
 TEST(Families, GoldbergSixRNearMissesAreRigidAndNotClassified) {
-  std::mt19937_64 rng(64);
-  // a1, alpha2, d3, a4, alpha5, d6, d2, a3, alpha6, d1
-  const std::array<int, 10> parameters = {0, 6 + 1, 12 + 2, 3, 6 + 4, 12 + 5, 12 + 1, 2, 6 + 5, 12 + 0};
-  for (size_t i = 0; i < parameters.size(); ++i) {
-    const Posed m = goldberg_6r_member(rng, static_cast<int>(i % 5));
-    const std::string tag =
-        "goldberg_6r near miss " + std::to_string(i) + ", parameter " + std::to_string(parameters[i]);
-    for (double eps : {1e-2, 1e-4, 1e-6, 1e-8}) {
-      const LoopGeometry g = perturbed(m.geometry, parameters[i], eps);
-      const VerificationSummary v = verify_from(g, m.theta);
-      EXPECT_FALSE(v.verified) << tag << " + " << eps << ": worst residual " << v.worst_residual;
-      const Classification c = classified({g, m.theta}, v);
-      if (eps >= 1e-6) {
-        EXPECT_NE(c.family, Family::goldberg_6r) << tag << " + " << eps;
-      }
-      for (const FamilyCheck& check : c.checks) {
-        if (check.family == Family::goldberg_6r) {
-          EXPECT_GT(check.residual, eps / 10) << tag << " + " << eps;
-        }
-      }
-    }
-  }
+  expect_near_misses_rigid_and_unnamed([](std::mt19937_64& rng, int i) { return goldberg_6r_member(rng, i % 5); },
+                                       Family::goldberg_6r, 64);
 }
 
 // Members of the other Bennett-based and Bricard 6R families, Sarrus loops
@@ -626,6 +581,163 @@ TEST(Families, OtherFamiliesAndGeneric6RAreNotGoldbergSixR) {
       if (check.family == Family::goldberg_6r) {
         EXPECT_GT(check.residual, 1e-3) << name;
       }
+    }
+  }
+}
+
+// The double-Goldberg 6R (docs/guide/families.md): members built in space by
+// double_goldberg_6r (three random Bennett loops on one joint axis, in
+// random setups, fused collinear or at random angles), verified movable and
+// classified double_goldberg in every representation, every condition value
+// at round-off; they are Waldron hybrids too, the more general family
+// (listed in `fitting`), and far from the other Bennett-based families. The
+// construction knows nothing of the conditions.
+TEST(Families, DoubleGoldbergLoopsMoveAndAreClassified) {
+  std::mt19937_64 rng(71);
+  for (int i = 0; i < 8; ++i) {
+    const Posed m = double_goldberg_member(rng);
+    const std::string tag = "double_goldberg " + std::to_string(i);
+    expect_member_in_every_representation(m, Family::double_goldberg, 9,
+                                          {Family::bennett_pair, Family::bennett_dyads, Family::goldberg_6r},
+                                          "double-Goldberg", i < 2, rng, tag);
+    const Classification c = classify(m.geometry, m.theta, std::vector<double>(6, 2 * kPi));
+    EXPECT_NE(std::find(c.fitting.begin(), c.fitting.end(), Family::waldron_hybrid), c.fitting.end()) << tag;
+  }
+}
+
+// A second construction: Waldron's hybrid (waldron_hybrid_6r) with the two
+// Bennett loops of one ratio and no slide between them along the shared
+// axis is a double-Goldberg 6R. Moved off that by eps (a slide of eps L, or
+// the second loop's ratio by a factor 1 + eps), it is still a Waldron
+// hybrid: verified movable, named waldron_hybrid down to eps = 1e-6, its
+// double-Goldberg residual at least eps / 10.
+TEST(Families, WaldronHybridsOfOneRatioMeetingTheAxisAtOnePointAreDoubleGoldberg) {
+  std::mt19937_64 rng(72);
+  const std::vector<double> moving(6, 2 * kPi);
+  for (int i = 0; i < 6; ++i) {
+    WaldronHybrid6R p;
+    for (;;) {
+      p = random_waldron(rng);
+      // The second loop's ratio |sin epsilon| / e made the first's, |sin beta| / b.
+      p.e = p.b * std::abs(std::sin(p.epsilon) / std::sin(p.beta));
+      const double c = p.e * std::abs(std::sin(p.gamma) / std::sin(p.epsilon));
+      if (p.e >= 0.3 && p.e <= 4.0 && c >= 0.3 && c <= 4.0) break;
+    }
+    p.slide = 0.0;
+    const double t = uniform(rng, -kPi, kPi);
+    const Posed m = waldron_hybrid_6r(p, t);
+    const std::string tag = "waldron of one ratio " + std::to_string(i);
+    const VerificationSummary v = verify_from(m.geometry, m.theta);
+    ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
+    const Classification c = classified(m, v);
+    EXPECT_EQ(c.family, Family::double_goldberg) << tag << ": " << c.detail;
+    EXPECT_LT(c.residual, 1e-12) << tag;
+    const double L = length_scale(m.geometry);
+    for (double eps : {1e-2, 1e-4, 1e-6}) {
+      for (int way = 0; way < 2; ++way) {
+        WaldronHybrid6R q = p;
+        if (way == 0) {
+          q.slide = eps * L;
+        } else {
+          q.e *= 1.0 + eps;
+        }
+        const Posed off = waldron_hybrid_6r(q, t);
+        const std::string off_tag = tag + (way == 0 ? " slid by " : " ratio off by ") + std::to_string(eps);
+        const VerificationSummary vo = verify_from(off.geometry, off.theta);
+        EXPECT_TRUE(vo.verified) << off_tag << ": " << vo.limit;
+        const Classification co = classified(off, vo);
+        EXPECT_EQ(co.family, Family::waldron_hybrid) << off_tag << ": " << co.detail;
+        for (const FamilyCheck& check : co.checks) {
+          if (check.family == Family::double_goldberg) EXPECT_GT(check.residual, eps / 10) << off_tag;
+        }
+      }
+    }
+  }
+}
+
+// The construction's seven parameters (the Goldberg 5R's b, beta, alpha,
+// gamma and fusion angle, the third loop's twist and fusion angle) are all
+// free: each moved by 1e-2 gives another member (still classified so), and
+// the DH parameters depend on all seven independently (the Jacobian of the
+// 18 DH parameters with respect to them has rank 7): the family has at least
+// dimension 7; 18 parameters less 11 conditions give at most 7.
+TEST(Families, DoubleGoldbergHasSevenFreeParameters) {
+  std::mt19937_64 rng(73);
+  for (int i = 0; i < 4; ++i) {
+    DoubleGoldberg6R p = random_double_goldberg(rng);
+    p.goldberg.phi = uniform(rng, 0.5, 2.5);  // away from the collinear fusions, where
+    p.psi = uniform(rng, 0.5, 2.5);           // the offsets are stationary in the angles
+    const double t = uniform(rng, 0.3, kPi - 0.3);
+    const std::string tag = "double_goldberg " + std::to_string(i);
+    const auto field = [](DoubleGoldberg6R& q, int k) -> double& {
+      double* fields[] = {&q.goldberg.loops.b,
+                          &q.goldberg.loops.beta,
+                          &q.goldberg.loops.alpha,
+                          &q.goldberg.loops.gamma,
+                          &q.goldberg.phi,
+                          &q.epsilon,
+                          &q.psi};
+      return *fields[k];
+    };
+    const Eigen::VectorXd sv = constructor_singular_values(
+        p, 7, [&](const DoubleGoldberg6R& q) { return double_goldberg_6r(q, t); }, field, Family::double_goldberg, tag);
+    EXPECT_GT(sv[6], 1e-4 * sv[0]) << tag << ": rank below 7";
+  }
+}
+
+// Fused collinear on opposite sides (both fusion angles pi), the loop read
+// off the constructor's axes has Goldberg's sums in closed form: B X Y D E F
+// = (e, epsilon), (a, alpha), (b + e, beta + epsilon), (c, gamma), (b,
+// beta), (a + c, alpha + gamma), no offsets (twists of one sign: the
+// asymmetric setups).
+TEST(Families, DoubleGoldbergFusedCollinearHasGoldbergsSums) {
+  std::mt19937_64 rng(76);
+  for (int i = 0; i < 4; ++i) {
+    const double alpha = uniform(rng, 0.3, 1.4), beta = uniform(rng, 0.3, 1.4), gamma = uniform(rng, 0.3, 1.4),
+                 epsilon = uniform(rng, 0.3, 1.4), b = uniform(rng, 0.5, 2.0);
+    const double kappa = std::sin(beta) / b, a = std::sin(alpha) / kappa, c = std::sin(gamma) / kappa,
+                 e = std::sin(epsilon) / kappa;
+    const LoopGeometry g = double_goldberg_6r({{{b, beta, alpha, gamma}, kPi}, epsilon, kPi}, 0.7).geometry;
+    const std::array<double, 6> links = {e, a, b + e, c, b, a + c};
+    const std::array<double, 6> twists = {epsilon, alpha, beta + epsilon, gamma, beta, alpha + gamma};
+    for (int k = 0; k < 6; ++k) {
+      const auto j = static_cast<size_t>(k);
+      EXPECT_NEAR(g.a[k], links[j], 1e-12) << i << " link " << k;
+      EXPECT_NEAR(wrap_angle(g.alpha[k] - twists[j]), 0.0, 1e-12) << i << " twist " << k;
+      EXPECT_NEAR(g.d[k], 0.0, 1e-12) << i << " offset " << k;
+    }
+  }
+}
+
+// Near misses (expect_near_misses_rigid_and_unnamed).
+TEST(Families, DoubleGoldbergNearMissesAreRigidAndNotClassified) {
+  expect_near_misses_rigid_and_unnamed([](std::mt19937_64& rng, int) { return double_goldberg_member(rng); },
+                                       Family::double_goldberg, 74);
+}
+
+// Members of the other Bennett-based and Bricard 6R families (Waldron
+// hybrids of two ratios and a slide among them), Sarrus loops and generic 6R
+// loops are far from the double-Goldberg 6R and keep their families.
+TEST(Families, OtherFamiliesAndGeneric6RAreNotDoubleGoldberg) {
+  std::mt19937_64 rng(75);
+  std::vector<std::pair<std::string, LoopGeometry>> others;
+  for (int i = 0; i < 4; ++i) {
+    others.push_back({"bennett_pair", bennett_pair_member(rng).geometry});
+    others.push_back({"bennett_dyads", bennett_dyads_geometry(rng)});
+    others.push_back({"waldron_hybrid", waldron_member(rng).geometry});
+    others.push_back({"goldberg_6r", goldberg_6r_member(rng).geometry});
+    others.push_back({"bricard_line_symmetric", bricard_line_geometry(rng)});
+    others.push_back({"bricard_plane_symmetric", bricard_plane_geometry(rng)});
+    others.push_back({"bricard_trihedral", bricard_trihedral_geometry(rng)});
+    others.push_back({"sarrus", sarrus_geometry(rng)});
+    others.push_back({"generic", random_loop(6, 80 + static_cast<std::uint64_t>(i))});
+  }
+  for (const auto& [name, g] : others) {
+    const Classification c = classify(g, JointVector::Zero(6), std::vector<double>(6, 1.0));
+    if (name != "generic") EXPECT_EQ(to_string(c.family), name);
+    EXPECT_EQ(std::find(c.fitting.begin(), c.fitting.end(), Family::double_goldberg), c.fitting.end()) << name;
+    for (const FamilyCheck& check : c.checks) {
+      if (check.family == Family::double_goldberg) EXPECT_GT(check.residual, 1e-3) << name;
     }
   }
 }
@@ -743,7 +855,7 @@ TEST(Families, Generic5RAnd6RAreUnclassifiedWithEveryResidualLarge) {
       const Classification c = classify(g, random_angles(n, seed), std::vector<double>(n, 1.0));
       EXPECT_EQ(c.family, Family::unclassified) << n << " " << seed;
       EXPECT_TRUE(c.fitting.empty()) << n << " " << seed;
-      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 14u);
+      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 15u);
       for (const FamilyCheck& check : c.checks) EXPECT_GT(check.residual, 1e-3) << to_string(check.family);
     }
   }
@@ -773,7 +885,8 @@ TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
                              {Family::waldron_hybrid, waldron_member(rng).geometry},
                              {Family::waldron_hybrid, waldron_member(rng).geometry},
                              {Family::goldberg_6r, goldberg_6r_member(rng, 1).geometry},
-                             {Family::goldberg_6r, goldberg_6r_member(rng, 4).geometry}};
+                             {Family::goldberg_6r, goldberg_6r_member(rng, 4).geometry},
+                             {Family::double_goldberg, double_goldberg_member(rng).geometry}};
   for (const Case& c : cases) {
     const int n = c.member.joints();
     EXPECT_LT(family_distance(c.family, c.member), 1e-12) << to_string(c.family);
@@ -822,7 +935,8 @@ TEST(Families, DistanceNeedsTheRightJointCountAndIsAllocationFree) {
   double sum = 0.0;
   for (Family f : {Family::goldberg, Family::myard, Family::goldberg_bent}) sum += family_distance(f, g5, &gradient);
   for (Family f : {Family::bricard_line_symmetric, Family::bricard_plane_symmetric, Family::bricard_trihedral,
-                   Family::bennett_pair, Family::bennett_dyads, Family::waldron_hybrid, Family::goldberg_6r}) {
+                   Family::bennett_pair, Family::bennett_dyads, Family::waldron_hybrid, Family::goldberg_6r,
+                   Family::double_goldberg}) {
     sum += family_distance(f, g6, &gradient);
   }
   EXPECT_EQ(testing::allocations() - before, 0);

@@ -169,14 +169,18 @@ inline Posed waldron_member(std::mt19937_64& rng) {
 // collinear (either side) or at a random angle, and a third Bennett loop of
 // random twist on its link `link` (random when negative), fused at P
 // collinear or at a random angle. Lengths kept within [0.3, 4] of each other.
+// A fusion angle of two Bennett loops' links: collinear on opposite sides
+// (pi) or the same side (0), or bent at a random angle of random sign.
+inline double random_fusion(std::mt19937_64& rng) {
+  const double u = uniform(rng, 0.0, 1.0);
+  if (u < 0.25) return kPi;
+  if (u < 0.4) return 0.0;
+  const double angle = uniform(rng, 0.3, kPi - 0.3);
+  return uniform(rng, 0.0, 1.0) < 0.5 ? angle : -angle;
+}
+
 inline ThreeBennett6R random_goldberg_6r(std::mt19937_64& rng, int link = -1) {
-  const auto fusion = [&] {
-    const double u = uniform(rng, 0.0, 1.0);
-    if (u < 0.25) return kPi;
-    if (u < 0.4) return 0.0;
-    const double angle = uniform(rng, 0.3, kPi - 0.3);
-    return uniform(rng, 0.0, 1.0) < 0.5 ? angle : -angle;
-  };
+  const auto fusion = [&] { return random_fusion(rng); };
   for (;;) {
     const double alpha = twist(rng), beta = twist(rng), gamma = twist(rng);
     const double a = uniform(rng, 0.5, 2.0);
@@ -200,6 +204,35 @@ inline ThreeBennett6R random_goldberg_6r(std::mt19937_64& rng, int link = -1) {
 
 inline Posed goldberg_6r_member(std::mt19937_64& rng, int link = -1) {
   return three_bennett_6r(random_goldberg_6r(rng, link), uniform(rng, 0.3, kPi - 0.3));
+}
+
+// The double-Goldberg 6R (constructions.hpp's double_goldberg_6r, built in
+// space from three Bennett loops, not from the classifier's conditions): a
+// Goldberg 5R from two random Bennett loops in random setups and a third
+// loop of random twist on the first loop's link AB, each fused at A
+// collinear (either side) or at a random angle. Lengths within [0.3, 4].
+inline DoubleGoldberg6R random_double_goldberg(std::mt19937_64& rng) {
+  for (;;) {
+    const double alpha = twist(rng), beta = twist(rng), gamma = twist(rng), epsilon = twist(rng);
+    const double a = uniform(rng, 0.5, 2.0);
+    // |sin alpha| / a = |sin beta| / b = |sin gamma| / c = |sin epsilon| / e.
+    const double b = a * std::abs(std::sin(beta) / std::sin(alpha));
+    const double c = a * std::abs(std::sin(gamma) / std::sin(alpha));
+    const double e = a * std::abs(std::sin(epsilon) / std::sin(alpha));
+    if (std::min({b, c, e}) < 0.3 || std::max({b, c, e}) > 4.0) continue;
+    // Fused on one side, the fused links F -> B and Y -> D are a - c and
+    // e - b long: kept away from coincident axes.
+    if (std::abs(a - c) < 0.2 || std::abs(e - b) < 0.2) continue;
+    DoubleGoldberg6R p;
+    p.goldberg = {{b, beta, alpha, gamma}, random_fusion(rng)};
+    p.epsilon = epsilon;
+    p.psi = random_fusion(rng);
+    return p;
+  }
+}
+
+inline Posed double_goldberg_member(std::mt19937_64& rng) {
+  return double_goldberg_6r(random_double_goldberg(rng), uniform(rng, 0.3, kPi - 0.3));
 }
 
 inline Posed myard_member(std::mt19937_64& rng, double phi) {

@@ -249,6 +249,29 @@ struct WaldronHybrid6R {
 PosedLoop waldron_hybrid_6r(const WaldronHybrid6R& parameters, double t);
 
 // ---------------------------------------------------------------------------
+// The double-Goldberg 6R
+//
+// Three Bennett loops on one joint axis A (K. Wohlhart, "Merging two general
+// Goldberg 5R linkages to obtain a new 6R space mechanism", Mech. Mach.
+// Theory 26 (1991) 659-668; cited from the surveys, not read): the Goldberg
+// 5R's loops A B C D and A F E D (`goldberg`: sharing the link DA, AF = AB
+// turned by phi about A) and a third loop A B X Y = (a, alpha), (epsilon's
+// link), (a, alpha), (epsilon's link) sharing the first loop's link AB, its
+// length e = a |sin epsilon / sin alpha| (either setup, from the signs). Its
+// link Y A is fixed to the first loop's D A at the angle `psi` about A, so
+// its angle at A is the first loop's minus psi. The first loop's links BC
+// and CD and joint A are removed: the 6R B X Y D E F, links Y -> D (the body
+// Y A D) and F -> B (the body F A B) fused. Two Goldberg 5Rs, B C D E F and
+// B C D Y X, merged along the dyad B C D. One degree of freedom: t, the
+// first loop's angle at A.
+struct DoubleGoldberg6R {
+  Goldberg5R goldberg;
+  double epsilon = -0.7;  // the third loop's other twist, away from 0 and pi
+  double psi = 2.0;       // the fusion of Y A to D A about A [rad]
+};
+PosedLoop double_goldberg_6r(const DoubleGoldberg6R& parameters, double t);
+
+// ---------------------------------------------------------------------------
 // Sarrus 6R
 //
 // Two planar chains of three parallel axes between a base and a top: one

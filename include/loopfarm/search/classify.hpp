@@ -37,6 +37,10 @@
 //              best, gives back a Goldberg 5R (goldberg_bent's conditions)
 //              with link 1 in the place of the removed link (a fit of the
 //              construction)
+//   double_goldberg (n = 6) the double-Goldberg 6R (two Goldberg 5Rs merged
+//              along a shared Bennett dyad): Waldron's hybrid whose two
+//              Bennett loops have one ratio and meet the fourth axis at one
+//              point (waldron_hybrid's fit and two conditions more)
 //   sarrus     (n = 6) two chains of three parallel axes: sin(alpha) = 0 for
 //              two pairs of consecutive links (2, 3 and 5, 6 of a
 //              representation) and cos^2(alpha1) = cos^2(alpha4); the link
@@ -99,6 +103,9 @@ enum class Family {
   // 6R: Goldberg's 6R, a (bent) Goldberg 5R and a third Bennett loop sharing
   // one of its links, the shared link removed and two links fused
   goldberg_6r,
+  // 6R: the double-Goldberg 6R, three Bennett loops fused at one joint axis
+  // (two Goldberg 5Rs merged along a shared dyad, which is removed)
+  double_goldberg,
 };
 const char* to_string(Family family);
 
@@ -124,6 +131,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::bricard_octahedral_plane,
     Family::waldron_hybrid,
     Family::goldberg_6r,
+    Family::double_goldberg,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -179,8 +187,8 @@ struct Classification {
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, goldberg_6r,
-  // bennett_dyads, waldron_hybrid, sarrus, bricard_octahedral_plane (the order
-  // they are tried).
+  // double_goldberg, bennett_dyads, waldron_hybrid, sarrus,
+  // bricard_octahedral_plane (the order they are tried).
   std::vector<FamilyCheck> checks;
 };
 
