@@ -941,7 +941,8 @@ struct Goldberg6RFive {
   double fusion = 0.0;
 };
 
-inline Goldberg6RFive goldberg_6r_five(const Goldberg6RParameters& p, double psi) {
+// `fusion` computed only when asked (the fit's evaluations do not read it).
+inline Goldberg6RFive goldberg_6r_five(const Goldberg6RParameters& p, double psi, bool fusion = false) {
   Goldberg6RFive f;
   // In the frame of joint 1 (S, at the foot of link 6): axis 6 through
   // (-a6, 0, 0) along (0, sin alpha6, cos alpha6); P through (a2 cos psi,
@@ -981,7 +982,7 @@ inline Goldberg6RFive goldberg_6r_five(const Goldberg6RParameters& p, double psi
   f.d[2] = p.d[3];
   f.d[3] = p.d[4];
   f.d[4] = p.d[5] + s;
-  f.fusion = std::atan2(x.cross(u).dot(up), x.dot(u));
+  if (fusion) f.fusion = std::atan2(x.cross(u).dot(up), x.dot(u));
   return f;
 }
 
@@ -1000,13 +1001,16 @@ struct Goldberg6RFiveView {
   const Scale& scale() const { return s; }
 };
 
-// Values only, in the order they come.
+// Values only, in the order they come; those not in `mask` (bit q for the
+// q-th) left at zero, not evaluated.
 struct Goldberg6RValues {
   std::array<double, 10> values{};
+  unsigned mask = 0x3ffu;
   int count = 0;
   template <class Name, class Value, class Gradient>
   void add(const Name&, const Value& value, const Gradient&) {
-    values[static_cast<size_t>(count++)] = value();
+    if ((mask >> count & 1u) != 0) values[static_cast<size_t>(count)] = value();
+    ++count;
   }
 };
 
@@ -1020,10 +1024,12 @@ struct Goldberg6RNames {
   }
 };
 
-// goldberg_bent's ten conditions on the 5R, over the 6R's L.
-inline std::array<double, 10> goldberg_6r_values(const Goldberg6RFive& f, int k, int setup, double L) {
+// goldberg_bent's ten conditions on the 5R, over the 6R's L (those in `mask`).
+inline std::array<double, 10> goldberg_6r_values(const Goldberg6RFive& f, int k, int setup, double L,
+                                                 unsigned mask = 0x3ffu) {
   const Goldberg6RFiveView view{f, k, Scale{L, GeometryVector(), 5}};
   Goldberg6RValues v;
+  v.mask = mask;
   goldberg_bent_conditions(setup, view, v);
   return v.values;
 }
@@ -1034,11 +1040,25 @@ inline std::array<double, 10> goldberg_6r_values(const Goldberg6RFive& f, int k,
 // links 1, 4; d2, d3, d4 their joints; the two Bennett products links 1, 2
 // and 1, 3; d1 -+ d5 joints 1, 5; the length term links 2, 3, 5; the offset
 // term links 2, 3, 5 and joint 5 (1-based Goldberg labels).
-constexpr bool goldberg_6r_depends_on_psi(int q, int k) {
+constexpr bool goldberg_6r_reads_psi(int q, int k) {
   constexpr unsigned kLinks[10] = {0b01001, 0b01001, 0, 0, 0, 0b00011, 0b00101, 0, 0b10110, 0b10110};
   constexpr unsigned kJoints[10] = {0, 0, 0b00010, 0b00100, 0b01000, 0, 0, 0b10001, 0, 0b10000};
   const unsigned link = 1u << ((4 + k) % 5), joints = (1u << k) | (1u << ((4 + k) % 5));
   return (kLinks[q] & link) != 0 || (kJoints[q] & joints) != 0;
+}
+
+// The same as a bit mask over q for each k, made at compile time (the fit
+// asks for every value of every evaluation).
+inline constexpr std::array<unsigned, 5> kGoldberg6RPsiMasks = [] {
+  std::array<unsigned, 5> masks{};
+  for (int k = 0; k < 5; ++k) {
+    for (int q = 0; q < 10; ++q) masks[static_cast<size_t>(k)] |= goldberg_6r_reads_psi(q, k) ? 1u << q : 0u;
+  }
+  return masks;
+}();
+
+constexpr bool goldberg_6r_depends_on_psi(int q, int k) {
+  return (kGoldberg6RPsiMasks[static_cast<size_t>(k)] >> q & 1u) != 0;
 }
 
 struct Goldberg6RFit {
@@ -1050,7 +1070,7 @@ struct Goldberg6RFit {
 // The sum of squares of the psi-dependent values at psi.
 inline double goldberg_6r_dependent_sum(const Goldberg6RParameters& p, int k, int setup, double psi,
                                         std::array<double, 10>& values) {
-  values = goldberg_6r_values(goldberg_6r_five(p, psi), k, setup, p.L);
+  values = goldberg_6r_values(goldberg_6r_five(p, psi), k, setup, p.L, kGoldberg6RPsiMasks[static_cast<size_t>(k)]);
   double sum = 0.0;
   for (int q = 0; q < 10; ++q) {
     if (goldberg_6r_depends_on_psi(q, k)) sum += values[static_cast<size_t>(q)] * values[static_cast<size_t>(q)];
@@ -1096,7 +1116,7 @@ inline double goldberg_6r_refine(const Goldberg6RParameters& p, int k, int setup
 }
 
 inline Goldberg6RFit goldberg_6r_fit_at(const Goldberg6RParameters& p, int k, int setup, double psi) {
-  const Goldberg6RFive f = goldberg_6r_five(p, psi);
+  const Goldberg6RFive f = goldberg_6r_five(p, psi, true);
   return {goldberg_6r_values(f, k, setup, p.L), psi, f.fusion};
 }
 
@@ -1193,7 +1213,8 @@ void goldberg_6r_conditions(int set, const RepresentationView& w, Sink& c) {
   const auto value = [&](int q) {
     if (!goldberg_6r_depends_on_psi(q, k)) {
       if (!have_fixed) {
-        fixed = goldberg_6r_values(goldberg_6r_five(parameters(), 0.0), k, setup, parameters().L);
+        fixed = goldberg_6r_values(goldberg_6r_five(parameters(), 0.0), k, setup, parameters().L,
+                                   ~kGoldberg6RPsiMasks[static_cast<size_t>(k)] & 0x3ffu);
         have_fixed = true;
       }
       return fixed[static_cast<size_t>(q)];

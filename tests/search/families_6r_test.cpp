@@ -496,7 +496,7 @@ TEST(Families, GoldbergSixRFitRebuildsTheConstructorsFiveR) {
       }
     }
     EXPECT_LT(least, 1e-12) << tag;
-    const detail::Goldberg6RFive f = detail::goldberg_6r_five(q, best.psi);
+    const detail::Goldberg6RFive f = detail::goldberg_6r_five(q, best.psi, true);
     for (int g = 0; g < 5; ++g) {
       const auto m = static_cast<size_t>((g - p.link + 5) % 5);  // the fit's 5R starts at P
       EXPECT_NEAR(f.a[m], five.a[g], 1e-12) << tag << " link " << g;
