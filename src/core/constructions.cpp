@@ -699,6 +699,51 @@ std::optional<PosedLoop> sarrus_6r(const Sarrus6R& p, double s) {
 }
 
 // ---------------------------------------------------------------------------
+// Hooke's double-spherical 6R
+
+namespace {
+
+// The unit direction at dot products c_from with `from` and c_to with `to`
+// (unit, not parallel) on the side of the plane of from and to where
+// from . (z x to) has the sign `side`; nothing where no direction has them.
+std::optional<Vector3> middle_direction(const Vector3& from, const Vector3& to, double c_from, double c_to,
+                                        double side) {
+  // z = p from + q to + r (from x to): p + q g = c_from, p g + q = c_to.
+  const double g = from.dot(to), sin2 = 1.0 - g * g;
+  if (!(sin2 > 1e-12)) return std::nullopt;
+  const double p = (c_from - g * c_to) / sin2, q = (c_to - g * c_from) / sin2;
+  const double r2 = (1.0 - (p * p + q * q + 2.0 * p * q * g)) / sin2;
+  if (r2 < -kTolerance) return std::nullopt;
+  // from . (z x to) = z . (to x from) = -r sin2.
+  const double r = (side > 0.0 ? -1.0 : 1.0) * std::sqrt(std::max(0.0, r2));
+  return Vector3(p * from + q * to + r * from.cross(to)).normalized();
+}
+
+}  // namespace
+
+std::optional<PosedLoop> hooke_6r(const Hooke6R& p, double t) {
+  if (!p.o1.allFinite() || !p.o2.allFinite()) bad("hooke_6r: a centre is not finite", (p.o2 - p.o1).norm());
+  if (!((p.o2 - p.o1).norm() > 1e-9)) bad("hooke_6r: the centres must be apart, distance", (p.o2 - p.o1).norm());
+  if (!std::isfinite(t)) bad("hooke_6r: t", t);
+  std::array<Vector3, 6> u;
+  for (size_t k = 0; k < 6; ++k) {
+    if (!p.u[k].allFinite() || !(p.u[k].norm() > 1e-9)) bad("hooke_6r: direction " + std::to_string(k), p.u[k].norm());
+    u[k] = p.u[k].normalized();
+  }
+  const double side1 = u[0].dot(u[1].cross(u[2])), side2 = u[3].dot(u[4].cross(u[5]));
+  if (!(std::abs(side1) > 1e-9)) bad("hooke_6r: u0, u1, u2 must not lie in one plane, det", side1);
+  if (!(std::abs(side2) > 1e-9)) bad("hooke_6r: u3, u4, u5 must not lie in one plane, det", side2);
+  // Link 3 turned by t about the line O1 O2 (both centres stay put).
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(t, (p.o2 - p.o1).normalized()).toRotationMatrix();
+  const Vector3 z3 = turn * u[2], z4 = turn * u[3];
+  const std::optional<Vector3> z2 = middle_direction(u[0], z3, u[0].dot(u[1]), u[2].dot(u[1]), side1);
+  const std::optional<Vector3> z5 = middle_direction(z4, u[5], u[3].dot(u[4]), u[5].dot(u[4]), side2);
+  if (!z2 || !z5) return std::nullopt;
+  const std::vector<Axis> axes{{p.o1, u[0]}, {p.o1, *z2}, {p.o1, z3}, {p.o2, z4}, {p.o2, *z5}, {p.o2, u[5]}};
+  return dh_from_axes(axes);
+}
+
+// ---------------------------------------------------------------------------
 // Bricard's plane-symmetric octahedron
 
 PosedLoop bricard_octahedral_plane(const OctahedronPlane& v) {

@@ -195,6 +195,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::waldron_hybrid:
       case Family::goldberg_6r:
       case Family::double_goldberg:
+      case Family::hooke:
       case Family::degenerate:
       case Family::unclassified:
         break;

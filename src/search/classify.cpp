@@ -215,6 +215,21 @@ std::string special_detail(Family family, const LoopGeometry& g) {
                   std::abs(fit.fusion) * 180.0 / kPi, same ? "the same" : "different");
     return buffer;
   }
+  if (family == Family::hooke) {
+    // How far apart the two centres are (the distance both links 3 and 6
+    // hold), from the best representation.
+    const Best best = best_over_representations<Family::hooke>(g, false);
+    const LoopGeometry w = detail::apply(*best.representation, g);
+    const double distance =
+        std::sqrt(w.d[2] * w.d[2] + w.a[2] * w.a[2] + w.d[3] * w.d[3] + 2.0 * w.d[2] * w.d[3] * std::cos(w.alpha[2]));
+    char buffer[256];
+    std::snprintf(buffer, sizeof buffer,
+                  "axes 1-3 of the best representation through one point, axes 4-6 through another, %.4g L apart in "
+                  "links 3 and 6 (Hooke's double-spherical loop): link 3 turns against link 6 about the line through "
+                  "them",
+                  distance / length_scale(w));
+    return buffer;
+  }
   if (family != Family::goldberg && family != Family::myard) {
     switch (family) {
       case Family::bricard_line_symmetric:

@@ -46,6 +46,8 @@ const char* to_string(Family family) {
       return "goldberg_6r";
     case Family::double_goldberg:
       return "double_goldberg";
+    case Family::hooke:
+      return "hooke";
   }
   return "unknown";
 }
@@ -75,6 +77,7 @@ int family_joints(Family family) {
     case Family::waldron_hybrid:
     case Family::goldberg_6r:
     case Family::double_goldberg:
+    case Family::hooke:
       return 6;
     case Family::planar:
     case Family::spherical:
@@ -139,6 +142,12 @@ std::optional<int> family_dimension(Family family, int joints) {
       // the construction's Jacobian has rank 7. local_dimension reads 9 on
       // members: it sees waldron_hybrid, which holds them (docs/guide/families.md).
       return 7;
+    case Family::hooke:
+      // Two centres and three axis directions through each (18 numbers)
+      // less the rigid motions (6) and the motion itself (1): 18 parameters,
+      // 7 conditions; the construction's Jacobian has rank 11, and
+      // local_dimension reads 11 on members (docs/guide/families.md).
+      return 11;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
     case Family::unclassified:

@@ -1340,6 +1340,50 @@ void bricard_octahedral_plane_conditions(int set, const RepresentationView& w, S
   }
 }
 
+// Hooke's double-spherical 6R (docs/guide/families.md): axes 1, 2, 3 of the
+// representation through one point O1 (a1 = a2 = 0, and d2 = 0: links 1 and 2
+// meet axis 2 at the same point), axes 4, 5, 6 through another, O2 (a4 = a5 =
+// d5 = 0). Links 3 and 6 each carry both centres; each spherical chain lets
+// link 3 turn against link 6 about its centre, so together about the line
+// O1 O2, once the two links hold the centres equally far apart. In link 3,
+// O1 is link 2's foot on axis 3 and O2 link 4's foot on axis 4, so O2 - O1 =
+// d3 z3 + a3 x4 + d4 z4; in link 6, O1 - O2 = d6 z6 + a6 x1 + d1 z1. With
+// z3 . z4 = cos(alpha3), z6 . z1 = cos(alpha6) and the normals perpendicular
+// to both axes, the squared distances are
+//   d3^2 + a3^2 + d4^2 + 2 d3 d4 cos(alpha3) and d6^2 + a6^2 + d1^2 + 2 d6 d1 cos(alpha6);
+// their difference over L^2 is the last condition (squared, so polynomial in
+// the parameters and smooth where the two centres meet: a spherical loop).
+template <class RepresentationView, class Sink>
+void hooke_conditions(const RepresentationView& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  add_length(w, c, "a1", 0, -1, 0.0);
+  add_length(w, c, "a2", 1, -1, 0.0);
+  add_offset(w, c, "d2", 1, -1, 0.0);
+  add_length(w, c, "a4", 3, -1, 0.0);
+  add_length(w, c, "a5", 4, -1, 0.0);
+  add_offset(w, c, "d5", 4, -1, 0.0);
+  // |O1 O2|^2 in link k (joints k and k + 1; 0-based k = 2 or 5).
+  auto squared = [&](int k) {
+    const int j = (k + 1) % n;
+    return w.d(k) * w.d(k) + w.a(k) * w.a(k) + w.d(j) * w.d(j) + 2.0 * w.d(k) * w.d(j) * w.cos_alpha(k);
+  };
+  auto difference = [&] { return (squared(2) - squared(5)) / (s.L * s.L); };
+  c.add([] { return "(|O1O2|^2 in link 3 - |O1O2|^2 in link 6) / L^2"; }, difference,
+        [&] {
+          GeometryVector g = -(2.0 * difference() / s.L) * s.dL;
+          for (int k : {2, 5}) {
+            const int j = (k + 1) % n;
+            const double sign = k == 2 ? 1.0 : -1.0, scale = sign / (s.L * s.L);
+            g[k] += scale * 2.0 * w.a(k);
+            g[2 * n + k] += scale * 2.0 * (w.d(k) + w.d(j) * w.cos_alpha(k));
+            g[2 * n + j] += scale * 2.0 * (w.d(j) + w.d(k) * w.cos_alpha(k));
+            g[n + k] += -scale * 2.0 * w.d(k) * w.d(j) * w.sin_alpha(k);
+          }
+          return g;
+        });
+}
+
 // The 5R families built from two Bennett loops sharing a link: Goldberg's,
 // its symmetric case Myard's and its bent-link variant.
 constexpr bool goldberg_type(Family family) {
@@ -1371,6 +1415,7 @@ inline int condition_sets(Family family, int joints) {
       return 3;
     case Family::goldberg_6r:
       return kGoldberg6RSets;
+    case Family::hooke:
     case Family::bennett_dyads:
     case Family::waldron_hybrid:
     case Family::double_goldberg:
@@ -1393,7 +1438,7 @@ constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
          family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus ||
          family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid ||
-         family == Family::goldberg_6r || family == Family::double_goldberg;
+         family == Family::goldberg_6r || family == Family::double_goldberg || family == Family::hooke;
 }
 
 template <Family F, class RepresentationView, class Sink>
@@ -1429,6 +1474,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     sarrus_conditions(w, c);
   } else if constexpr (F == Family::bricard_octahedral_plane) {
     bricard_octahedral_plane_conditions(set, w, c);
+  } else if constexpr (F == Family::hooke) {
+    hooke_conditions(w, c);
   } else if (set == 0) {
     adjacent_coaxial_conditions(w, c);
   } else {

@@ -106,6 +106,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       return distance_over_representations<Family::goldberg_6r>(geometry, gradient);
     case Family::double_goldberg:
       return distance_over_representations<Family::double_goldberg>(geometry, gradient);
+    case Family::hooke:
+      return distance_over_representations<Family::hooke>(geometry, gradient);
     case Family::degenerate:
       throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified:
@@ -143,6 +145,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::waldron_hybrid:
     case Family::goldberg_6r:
     case Family::double_goldberg:
+    case Family::hooke:
       best = best_for(family, geometry, true);
       break;
     case Family::degenerate:

@@ -87,6 +87,8 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
       return best_over_representations<Family::goldberg_6r>(g, by_norm);
     case Family::double_goldberg:
       return best_over_representations<Family::double_goldberg>(g, by_norm);
+    case Family::hooke:
+      return best_over_representations<Family::hooke>(g, by_norm);
     case Family::spherical:
     case Family::degenerate:
     case Family::unclassified:
@@ -127,7 +129,8 @@ std::vector<Family> special_families(int n) {
               Family::bennett_dyads,
               Family::waldron_hybrid,
               Family::sarrus,
-              Family::bricard_octahedral_plane};
+              Family::bricard_octahedral_plane,
+              Family::hooke};
     default:
       return {};
   }

@@ -649,6 +649,24 @@ TEST(Constructions, DoubleGoldberg6RClosesAlongItsMotionInEverySetupAndFusion) {
   }
 }
 
+// A construction that may not reach (it returns std::optional): it reaches
+// every value of `ts`, is closed along them (expect_closes_along) and has
+// one degree of freedom at `at`, the pose it returns.
+template <class Build>
+PosedLoop expect_reaches_and_moves_along(Build build, const std::vector<double>& ts, double at,
+                                         const std::string& tag) {
+  bool reaches = true;
+  for (double t : ts) {
+    EXPECT_TRUE(build(t).has_value()) << tag << " t " << t;
+    reaches = reaches && build(t).has_value();
+  }
+  if (!reaches || !build(at).has_value()) return {};
+  expect_closes_along([&](double t) { return *build(t); }, ts, tag);
+  const PosedLoop pose = *build(at);
+  expect_one_freedom(pose, tag);
+  return pose;
+}
+
 TEST(Constructions, SarrusClosesAlongItsMotionAndItsTopOnlyTranslates) {
   std::vector<Sarrus6R> linkages(3);
   linkages[1].gamma = 2.3;
@@ -660,10 +678,8 @@ TEST(Constructions, SarrusClosesAlongItsMotionAndItsTopOnlyTranslates) {
   for (size_t i = 0; i < linkages.size(); ++i) {
     const Sarrus6R& p = linkages[i];
     const std::string tag = "sarrus " + std::to_string(i);
-    for (double s : travel) ASSERT_TRUE(sarrus_6r(p, s).has_value()) << tag << " s " << s;
-    expect_closes_along([&](double s) { return *sarrus_6r(p, s); }, travel, tag);
-    const PosedLoop at = *sarrus_6r(p, 0.1);
-    expect_one_freedom(at, tag);
+    const PosedLoop at = expect_reaches_and_moves_along([&](double s) { return sarrus_6r(p, s); }, travel, 0.1, tag);
+    ASSERT_EQ(at.geometry.joints(), 6) << tag;
     // Two chains of parallel axes: twists 0 or pi within each chain, and
     // gamma (up to the axes' orientation) where the chains meet.
     for (int k : {1, 2, 4, 5}) EXPECT_NEAR(std::sin(at.geometry.alpha[k]), 0.0, 1e-12) << tag << " link " << k;
@@ -679,6 +695,48 @@ TEST(Constructions, SarrusClosesAlongItsMotionAndItsTopOnlyTranslates) {
   }
   // Out of reach: the u chain cannot stretch that far.
   EXPECT_FALSE(sarrus_6r(Sarrus6R{}, 5.0).has_value());
+}
+
+// Hooke's double-spherical 6R: the loop built at one turn is closed by the
+// poses at the others and reads the same geometry; one degree of freedom;
+// axes 1-3 meet in one point (a1 = a2 = d2 = 0) and axes 4-6 in another; the
+// centres' distance is what links 3 and 6 hold (from the DH parameters:
+// O2 - O1 = d3 z3 + a3 x4 + d4 z4 in link 3, likewise in link 6).
+TEST(Constructions, HookeClosesAlongItsMotionAboutTheLineOfCentres) {
+  std::vector<Hooke6R> linkages(3);
+  linkages[1].o2 = {-0.7, 0.9, 0.2};
+  linkages[1].u[1] = {0.9, -0.3, 0.8};
+  linkages[2].o1 = {0.2, -0.1, 0.3};
+  linkages[2].u[4] = {-0.5, 0.4, 0.9};
+  const std::vector<double> turns = {-0.3, -0.15, 0.0, 0.1, 0.25};
+  for (size_t i = 0; i < linkages.size(); ++i) {
+    const Hooke6R& p = linkages[i];
+    const std::string tag = "hooke " + std::to_string(i);
+    const PosedLoop at = expect_reaches_and_moves_along([&](double t) { return hooke_6r(p, t); }, turns, 0.1, tag);
+    ASSERT_EQ(at.geometry.joints(), 6) << tag;
+    const LoopGeometry& g = at.geometry;
+    for (double zero : {g.a[0], g.a[1], g.d[1], g.a[3], g.a[4], g.d[4]}) EXPECT_NEAR(zero, 0.0, 1e-12) << tag;
+    const double centres = (p.o2 - p.o1).norm();
+    for (int k : {2, 5}) {
+      const int j = (k + 1) % 6;
+      EXPECT_NEAR(g.d[k] * g.d[k] + g.a[k] * g.a[k] + g.d[j] * g.d[j] + 2 * g.d[k] * g.d[j] * std::cos(g.alpha[k]),
+                  centres * centres, 1e-12)
+          << tag << " link " << k + 1;
+    }
+  }
+  // Out of reach: the default linkage is a rocker, which cannot turn link 3
+  // through -2.4 rad (its reach ends near -1.92 and -2.90).
+  EXPECT_FALSE(hooke_6r(Hooke6R{}, -2.4).has_value());
+  Hooke6R bad;
+  bad.o2 = bad.o1;
+  EXPECT_THROW(hooke_6r(bad, 0.0), std::invalid_argument);
+  bad = {};
+  bad.u[2] = bad.u[0] + bad.u[1];  // axes 1-3 in one plane
+  EXPECT_THROW(hooke_6r(bad, 0.0), std::invalid_argument);
+  bad = {};
+  bad.u[4] = Vector3::Zero();
+  EXPECT_THROW(hooke_6r(bad, 0.0), std::invalid_argument);
+  EXPECT_THROW(hooke_6r(Hooke6R{}, NAN), std::invalid_argument);
 }
 
 TEST(Constructions, FusedConstructionsRefuseBadParameters) {

@@ -161,6 +161,50 @@ inline Posed waldron_member(std::mt19937_64& rng) {
   return waldron_hybrid_6r(p, uniform(rng, -kPi, kPi));
 }
 
+// Hooke's double-spherical 6R (constructions.hpp's hooke_6r, built in space
+// from two centres and three axis directions through each, not from the
+// conditions): the centres 0.6 to 1.6 apart, random directions with every
+// two axes of a triad and every two consecutive axes at least 0.3 rad from
+// parallel, neither triad near a plane, and the line of centres at least
+// 0.25 (in cosine) from perpendicular to axes 1, 3, 4 and 6 (so that moving
+// an offset of links 3 or 6 changes the distance it holds to first order).
+// `t` is a turn of link 3 at which it can still turn 0.2 rad either way.
+struct HookeMember {
+  Hooke6R parameters;
+  double t = 0.0;
+};
+
+inline HookeMember random_hooke(std::mt19937_64& rng) {
+  const auto direction = [&] {
+    for (;;) {
+      const Vector3 v(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+      if (v.norm() > 0.2 && v.norm() < 1.0) return Vector3(v.normalized());
+    }
+  };
+  const auto apart = [](const Vector3& u, const Vector3& v) { return u.cross(v).norm() > std::sin(0.3); };
+  for (;;) {
+    HookeMember m;
+    Hooke6R& p = m.parameters;
+    p.o1 = Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+    const Vector3 line = direction();
+    p.o2 = p.o1 + uniform(rng, 0.6, 1.6) * line;
+    for (Vector3& u : p.u) u = direction();
+    const auto& u = p.u;
+    bool ok = apart(u[0], u[2]) && apart(u[3], u[5]);
+    for (size_t k = 0; k < 6; ++k) ok = ok && apart(u[k], u[(k + 1) % 6]);
+    ok = ok && std::abs(u[0].dot(u[1].cross(u[2]))) > 0.3 && std::abs(u[3].dot(u[4].cross(u[5]))) > 0.3;
+    for (int k : {0, 2, 3, 5}) ok = ok && std::abs(line.dot(u[static_cast<size_t>(k)])) > 0.25;
+    if (!ok) continue;
+    m.t = uniform(rng, -1.0, 1.0);
+    if (hooke_6r(p, m.t - 0.2) && hooke_6r(p, m.t) && hooke_6r(p, m.t + 0.2)) return m;
+  }
+}
+
+inline Posed hooke_member(std::mt19937_64& rng) {
+  const HookeMember m = random_hooke(rng);
+  return *hooke_6r(m.parameters, m.t);
+}
+
 // Myard 5R: Goldberg from two mirror-image Bennett loops, the shared link a
 // right-angle twist: (a, alpha, b, pi/2) and (a, -alpha, b, pi/2).
 // Goldberg's 6R of three Bennett loops (constructions.hpp's three_bennett_6r,

@@ -11,8 +11,9 @@
 // - Bennett loops fused in space: the Goldberg 5R, two Bennett loops sharing
 //   a link (a 6R with two degrees of freedom) and a 6R of three Bennett loops,
 //   their DH parameters read off the joint axes (dh_from_axes);
-// - Waldron's hybrid 6R (two Bennett loops sharing a joint axis) and the
-//   Sarrus 6R (two chains of parallel axes), also read off their axes.
+// - Waldron's hybrid 6R (two Bennett loops sharing a joint axis), the
+//   Sarrus 6R (two chains of parallel axes) and Hooke's double-spherical 6R
+//   (two chains of concurrent axes), also read off their axes.
 //
 // Angles in radians; lengths in the geometry's unit. Bad arguments throw
 // std::invalid_argument naming the value.
@@ -295,6 +296,32 @@ struct Sarrus6R {
 };
 // Nothing where a chain cannot reach (its circles do not meet) at s.
 std::optional<PosedLoop> sarrus_6r(const Sarrus6R& parameters, double s);
+
+// ---------------------------------------------------------------------------
+// Hooke's double-spherical 6R
+//
+// Axes 1, 2, 3 pass through a centre O1 and axes 4, 5, 6 through another
+// centre O2. Link 6 (axis 6 to axis 1) is the ground and carries axis 1
+// through O1 and axis 6 through O2; link 3 carries axis 3 through O1 and
+// axis 4 through O2. Each spherical chain (joints 1-3, joints 4-6) lets link 3
+// turn against link 6 about its centre only, so the loop moves by turning
+// link 3 about the line O1 O2: one degree of freedom, t, the angle it is
+// turned by from the pose the directions `u` describe (t = 0). The middle
+// axes follow: axis 2 through O1 at the angles to axes 1 and 3 that u2 makes
+// with u1 and u3 (links 1 and 2 are rigid), on the side of the plane of axes
+// 1 and 3 that u2 is on (the chain's branch, kept while the motion does not
+// reach the chain's stretched or folded pose); likewise axis 5 with axes 4
+// and 6. The DH parameters are read off the six axes (dh_from_axes).
+struct Hooke6R {
+  Vector3 o1{0.0, 0.0, 0.0}, o2{0.4, 0.3, 1.5};  // the centres, apart
+  // The axes' directions at t = 0 (made unit here): 0-2 through o1, 3-5
+  // through o2; u0, u1, u2 not in one plane, nor u3, u4, u5.
+  std::array<Vector3, 6> u{Vector3(1.0, 0.2, 0.1),  Vector3(0.3, 1.0, -0.4), Vector3(-0.2, 0.5, 1.0),
+                           Vector3(0.8, -0.6, 0.3), Vector3(0.1, 0.9, 0.6),  Vector3(-1.0, 0.1, 0.5)};
+};
+// Nothing where a chain cannot reach at t (the middle axis has no direction
+// at its two angles).
+std::optional<PosedLoop> hooke_6r(const Hooke6R& parameters, double t);
 
 // ---------------------------------------------------------------------------
 // Bricard's plane-symmetric octahedron (his second type) as a 6R loop

@@ -49,6 +49,11 @@
 //              points are the vertices of an octahedron with a mirror plane
 //              through two opposite vertices that maps each other vertex onto
 //              its opposite one (six pairs of equal edges)
+//   hooke      (n = 6) Hooke's double-spherical loop: axes 1-3 of a
+//              representation through one point (a1 = a2 = d2 = 0), axes 4-6
+//              through another (a4 = a5 = d5 = 0), and links 3 and 6 hold the
+//              two points equally far apart; link 3 turns against link 6
+//              about the line through them
 //   degenerate (n = 5, 6) two adjacent axes coincide (a_k = 0, alpha_k = 0
 //              or pi) and the (n-1)R loop with them merged is in a movable
 //              family (not trivial); or a joint stays locked over the motion
@@ -106,6 +111,9 @@ enum class Family {
   // 6R: the double-Goldberg 6R, three Bennett loops fused at one joint axis
   // (two Goldberg 5Rs merged along a shared dyad, which is removed)
   double_goldberg,
+  // 6R: Hooke's double-spherical loop, axes 1-3 through one point and axes
+  // 4-6 through another; links 3 and 6 turn about the line through both
+  hooke,
 };
 const char* to_string(Family family);
 
@@ -132,6 +140,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::waldron_hybrid,
     Family::goldberg_6r,
     Family::double_goldberg,
+    Family::hooke,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -188,7 +197,7 @@ struct Classification {
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, goldberg_6r,
   // double_goldberg, bennett_dyads, waldron_hybrid, sarrus,
-  // bricard_octahedral_plane (the order they are tried).
+  // bricard_octahedral_plane, hooke (the order they are tried).
   std::vector<FamilyCheck> checks;
 };
 
