@@ -1034,29 +1034,28 @@ inline std::array<double, 10> goldberg_6r_values(const Goldberg6RFive& f, int k,
   return v.values;
 }
 
-// Whether goldberg_bent's condition q (in its order) reads the 5R's link 4
-// (6 -> P) or its offsets at P or joint 6, i.e. depends on psi, when P is
-// the Goldberg 5R's joint k. The conditions read: a1 - a4 and alpha1 - alpha4
-// links 1, 4; d2, d3, d4 their joints; the two Bennett products links 1, 2
-// and 1, 3; d1 -+ d5 joints 1, 5; the length term links 2, 3, 5; the offset
-// term links 2, 3, 5 and joint 5 (1-based Goldberg labels).
-constexpr bool goldberg_6r_reads_psi(int q, int k) {
+// Per k, the goldberg_bent conditions (bit q for the q-th, in their order)
+// that read the 5R's link 4 (6 -> P) or its offsets at P or joint 6, i.e.
+// depend on psi, when P is the Goldberg 5R's joint k; made at compile time
+// (the fit asks for every value of every evaluation). The conditions read:
+// a1 - a4 and alpha1 - alpha4 links 1, 4; d2, d3, d4 their joints; the two
+// Bennett products links 1, 2 and 1, 3; d1 -+ d5 joints 1, 5; the length
+// term links 2, 3, 5; the offset term links 2, 3, 5 and joint 5 (1-based
+// Goldberg labels).
+inline constexpr std::array<unsigned, 5> kGoldberg6RPsiMasks = [] {
   constexpr unsigned kLinks[10] = {0b01001, 0b01001, 0, 0, 0, 0b00011, 0b00101, 0, 0b10110, 0b10110};
   constexpr unsigned kJoints[10] = {0, 0, 0b00010, 0b00100, 0b01000, 0, 0, 0b10001, 0, 0b10000};
-  const unsigned link = 1u << ((4 + k) % 5), joints = (1u << k) | (1u << ((4 + k) % 5));
-  return (kLinks[q] & link) != 0 || (kJoints[q] & joints) != 0;
-}
-
-// The same as a bit mask over q for each k, made at compile time (the fit
-// asks for every value of every evaluation).
-inline constexpr std::array<unsigned, 5> kGoldberg6RPsiMasks = [] {
   std::array<unsigned, 5> masks{};
   for (int k = 0; k < 5; ++k) {
-    for (int q = 0; q < 10; ++q) masks[static_cast<size_t>(k)] |= goldberg_6r_reads_psi(q, k) ? 1u << q : 0u;
+    const unsigned link = 1u << ((4 + k) % 5), joints = (1u << k) | (1u << ((4 + k) % 5));
+    for (size_t q = 0; q < 10; ++q) {
+      if ((kLinks[q] & link) != 0 || (kJoints[q] & joints) != 0) masks[static_cast<size_t>(k)] |= 1u << q;
+    }
   }
   return masks;
 }();
 
+// Whether goldberg_bent's condition q depends on psi when P is joint k.
 constexpr bool goldberg_6r_depends_on_psi(int q, int k) {
   return (kGoldberg6RPsiMasks[static_cast<size_t>(k)] >> q & 1u) != 0;
 }
