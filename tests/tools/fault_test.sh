@@ -88,12 +88,15 @@ seed="${FAULT_SEED:-$(($(date +%s%N) % 1000000))}"
 RANDOM=$seed
 say "seed $seed (replay the moments with FAULT_SEED=$seed)"
 
-# A small generic 4R job (tests/tools/farm_test.sh's), 600 starts: about 20 s on
-# 2 ranks, long enough for several commits (every 2 s). No time limit per
-# start, so that results cannot depend on how loaded the machine is.
-# LOOPFARM_FAULT_STARTS changes the count: scripts/test.sh --sanitize runs 150,
-# since the instrumented farm took about 170 s for 600 (on a loaded machine).
-total="${LOOPFARM_FAULT_STARTS:-600}"
+# A small generic 4R job (tests/tools/farm_test.sh's), 2,400 starts: about 8 s
+# on 2 ranks of a fast day of the development machine, long enough for several
+# commits (every 2 s) and so for faults at numbers of committed starts (with
+# 600 starts, 2 s there, the run ended before most of them and too few were
+# delivered). No time limit per start, so that results cannot depend on how
+# loaded the machine is. LOOPFARM_FAULT_STARTS changes the count:
+# scripts/test.sh --sanitize runs 150, since the instrumented farm took about
+# 170 s for 600 (on a loaded machine).
+total="${LOOPFARM_FAULT_STARTS:-2400}"
 [[ "$total" =~ ^[0-9]+$ ]] && ((total >= 100)) || fail "LOOPFARM_FAULT_STARTS must be a whole number >= 100, not '$total'"
 job="$tmp/job.toml"
 cat >"$job" <<EOF
