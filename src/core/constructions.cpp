@@ -767,4 +767,70 @@ PosedLoop bricard_octahedral_plane(const OctahedronPlane& v) {
   return dh_from_axes(axes);
 }
 
+// ---------------------------------------------------------------------------
+// Bricard's doubly collapsible octahedron
+
+namespace {
+
+// A line of the plane through `point` with unit direction `along`.
+struct PlaneLine {
+  Eigen::Vector2d point, along;
+};
+
+// The two tangents from `from` (outside) to the circle of radius r about the
+// origin, each through `from` towards its point of contact.
+std::array<PlaneLine, 2> tangents_to_circle(const Eigen::Vector2d& from, double r) {
+  const double distance = from.norm();
+  const double phi = std::atan2(from.y(), from.x()), beta = std::acos(r / distance);
+  std::array<PlaneLine, 2> out;
+  for (int k = 0; k < 2; ++k) {
+    const double angle = phi + (k == 0 ? beta : -beta);
+    const Eigen::Vector2d contact = r * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    out[static_cast<size_t>(k)] = {from, (contact - from).normalized()};
+  }
+  return out;
+}
+
+Eigen::Vector2d meeting_point(const PlaneLine& l, const PlaneLine& m) {
+  const double cross = l.along.x() * m.along.y() - l.along.y() * m.along.x();
+  if (!(std::abs(cross) > 1e-9))
+    bad("bricard_octahedral_collapsible: two tangents that must meet are parallel, sine", cross);
+  const Eigen::Vector2d w = m.point - l.point;
+  return l.point + ((w.x() * m.along.y() - w.y() * m.along.x()) / cross) * l.along;
+}
+
+}  // namespace
+
+PosedLoop bricard_octahedral_collapsible(const OctahedronCollapsible& f) {
+  if (!(f.r1 > 0.0) || !std::isfinite(f.r1))
+    bad("bricard_octahedral_collapsible: r1 must be positive and finite", f.r1);
+  if (!(f.r2 > 0.0) || !std::isfinite(f.r2))
+    bad("bricard_octahedral_collapsible: r2 must be positive and finite", f.r2);
+  if (!(std::abs(f.r1 - f.r2) > 1e-9 * std::max(f.r1, f.r2))) {
+    bad("bricard_octahedral_collapsible: the two radii must differ, r1 - r2", f.r1 - f.r2);
+  }
+  const double outer = std::max(f.r1, f.r2);
+  for (const Eigen::Vector2d* x : {&f.p, &f.t}) {
+    if (!x->allFinite() || !(x->norm() > outer * (1.0 + 1e-9))) {
+      bad("bricard_octahedral_collapsible: P and T must lie outside both circles, |x| - max(r1, r2)",
+          x->norm() - outer);
+    }
+  }
+  const std::array<PlaneLine, 2> p1 = tangents_to_circle(f.p, f.r1), t1 = tangents_to_circle(f.t, f.r1);
+  const std::array<PlaneLine, 2> p2 = tangents_to_circle(f.p, f.r2), t2 = tangents_to_circle(f.t, f.r2);
+  const int sr = f.cross_sr ? 1 : 0, qu = f.cross_qu ? 1 : 0;
+  const Eigen::Vector2d S = meeting_point(p1[0], t1[static_cast<size_t>(sr)]);
+  const Eigen::Vector2d R = meeting_point(p1[1], t1[static_cast<size_t>(1 - sr)]);
+  const Eigen::Vector2d Q = meeting_point(p2[0], t2[static_cast<size_t>(qu)]);
+  const Eigen::Vector2d U = meeting_point(p2[1], t2[static_cast<size_t>(1 - qu)]);
+  const std::array<Eigen::Vector2d, 6> vertices{f.p, S, Q, f.t, R, U};  // joint i's axis from vertex i to i + 1
+  std::vector<Axis> axes;
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const Eigen::Vector2d along = vertices[(i + 1) % vertices.size()] - vertices[i];
+    if (!(along.norm() > 1e-9)) bad("bricard_octahedral_collapsible: a hinge has no length", along.norm());
+    axes.push_back({Vector3(vertices[i].x(), vertices[i].y(), 0.0), Vector3(along.x(), along.y(), 0.0).normalized()});
+  }
+  return dh_from_axes(axes);
+}
+
 }  // namespace loopfarm

@@ -196,6 +196,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::goldberg_6r:
       case Family::double_goldberg:
       case Family::hooke:
+      case Family::bricard_octahedral_collapsible:
       case Family::degenerate:
       case Family::unclassified:
         break;

@@ -243,6 +243,10 @@ std::string special_detail(Family family, const LoopGeometry& g) {
       case Family::bricard_octahedral_plane:
         return "every a_i = 0: an octahedron with a mirror plane through two opposite vertices that maps each "
                "other vertex onto its opposite one";
+      case Family::bricard_octahedral_collapsible:
+        return "every a_i = 0: a doubly collapsible octahedron (Bricard's third type, two flat poses): opposite "
+               "face angles at each vertex equal or supplementary, the four edges of each four-edge cycle through "
+               "two opposite pairs adding up to zero with signs";
       default:
         return "";
     }

@@ -48,6 +48,8 @@ const char* to_string(Family family) {
       return "double_goldberg";
     case Family::hooke:
       return "hooke";
+    case Family::bricard_octahedral_collapsible:
+      return "bricard_octahedral_collapsible";
   }
   return "unknown";
 }
@@ -78,6 +80,7 @@ int family_joints(Family family) {
     case Family::goldberg_6r:
     case Family::double_goldberg:
     case Family::hooke:
+    case Family::bricard_octahedral_collapsible:
       return 6;
     case Family::planar:
     case Family::spherical:
@@ -148,6 +151,11 @@ std::optional<int> family_dimension(Family family, int joints) {
       // 7 conditions; the construction's Jacobian has rank 11, and
       // local_dimension reads 11 on members (docs/guide/families.md).
       return 11;
+    case Family::bricard_octahedral_collapsible:
+      // Two radii and two vertices in the plane of a flat pose, less the
+      // turn about the circles' centre: the construction's Jacobian has rank
+      // 5, and the 21 conditions' gradients rank 13 of 18 (docs/guide/families.md).
+      return 5;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
     case Family::unclassified:

@@ -117,9 +117,9 @@ struct Conditions {
 };
 
 // The numeric path's best representation: values and gradients, no names, in fixed
-// storage (at most 2n conditions, the spherical family's).
+// storage (at most 21 conditions, bricard_octahedral_collapsible's).
 struct FixedConditions {
-  static constexpr int kCapacity = 2 * kMaxJoints;
+  static constexpr int kCapacity = 3 * kMaxJoints;
   int count = 0;
   std::array<double, kCapacity> values;
   std::array<GeometryVector, kCapacity> gradients;
@@ -1383,6 +1383,180 @@ void hooke_conditions(const RepresentationView& w, Sink& c) {
         });
 }
 
+// Bricard's doubly collapsible octahedral 6R (his third type,
+// docs/guide/families.md). Every a_i = 0, and the meeting points V_u of axes
+// u and u + 1 are an octahedron's vertices, V_u and V_{u+3} opposite, as for
+// bricard_octahedral_plane: hinge h_u = |V_{u-1} V_u| = |d_u| and diagonal
+// D_u = |V_{u-1} V_{u+1}| across link u. In a flat pose of such an octahedron
+// the four edges at a vertex lie on the two tangents from it to one circle
+// and the two to another about the same centre, so the four face angles at
+// every vertex are, in their order round it, f1, f2, f3, f4 with f1 = f3 and
+// f2 = f4, or f1 = pi - f3 and f2 = pi - f4: two conditions on their cosines
+// per vertex, with the sign s = +-1 of the closer fit. And the four edges of
+// each cycle V_k V_{k+1} V_{k+3} V_{k+4} (and its shifts) touch one circle in
+// that pose, so they add up to zero with signs: h_k +- D_{k+1} +- h_{k+3}
+// +- D_{k+4} = 0, the signs those of the closest fit. The lengths
+// and angles are the octahedron's own, so the conditions hold in every pose
+// and every representation. A vertex or a diagonal of zero length (no
+// octahedron) fails every angle condition at it by 1.
+template <class RepresentationView, class Sink>
+void bricard_octahedral_collapsible_conditions(const RepresentationView& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  static constexpr const char* kLengths[] = {"a1", "a2", "a3", "a4", "a5", "a6"};
+  for (int i = 0; i < n; ++i) add_length(w, c, kLengths[i], i, -1, 0.0);
+  auto at = [](int u) { return static_cast<size_t>((u % 6 + 6) % 6); };
+  // The twelve edges, computed when a condition first needs them.
+  std::array<double, 6> hinge{}, diagonal{};
+  bool edges = false;
+  auto need_edges = [&] {
+    if (edges) return;
+    for (int u = 0; u < n; ++u) {
+      const double d = w.d(u), d1 = w.d(static_cast<int>(at(u + 1)));
+      hinge[at(u)] = std::abs(d);
+      diagonal[at(u)] = std::sqrt(std::max(0.0, d * d + d1 * d1 + 2.0 * d * d1 * w.cos_alpha(u)));
+    }
+    edges = true;
+  };
+  // The gradients of hinge u and diagonal u with respect to (a, alpha, d).
+  auto hinge_gradient = [&](int u) {
+    GeometryVector g = GeometryVector::Zero(3 * n);
+    const double d = w.d(u);
+    g[2 * n + u] = d > 0.0 ? 1.0 : (d < 0.0 ? -1.0 : 0.0);
+    return g;
+  };
+  auto diagonal_gradient = [&](int u) {
+    GeometryVector g = GeometryVector::Zero(3 * n);
+    const int u1 = static_cast<int>(at(u + 1));
+    const double e = diagonal[at(u)], d = w.d(u), d1 = w.d(u1), cu = w.cos_alpha(u);
+    if (e > 0.0) {
+      g[2 * n + u] = (d + d1 * cu) / e;
+      g[2 * n + u1] = (d1 + d * cu) / e;
+      g[n + u] = -d * d1 * w.sin_alpha(u) / e;
+    }
+    return g;
+  };
+  // An edge of the octahedron: a hinge or a diagonal, by its index.
+  struct Edge {
+    bool is_hinge;
+    int index;
+  };
+  auto length = [&](Edge e) { return e.is_hinge ? hinge[at(e.index)] : diagonal[at(e.index)]; };
+  auto length_gradient = [&](Edge e) {
+    return e.is_hinge ? hinge_gradient(static_cast<int>(at(e.index)))
+                      : diagonal_gradient(static_cast<int>(at(e.index)));
+  };
+  // The cosine of a face angle from its two sides p, q and the side r
+  // opposite it (law of cosines), or none where a side has no length. Three
+  // lengths that make no triangle (round-off where a side nearly vanishes)
+  // read the cosine held to [-1, 1], with no gradient.
+  struct Angle {
+    Edge p, q, r;
+  };
+  auto law_of_cosines = [&](const Angle& a) {
+    const double p = length(a.p), q = length(a.q), r = length(a.r);
+    return (p * p + q * q - r * r) / (2.0 * p * q);
+  };
+  auto cosine = [&](const Angle& a, double& value) {
+    if (!(length(a.p) > 0.0 && length(a.q) > 0.0)) return false;
+    value = std::clamp(law_of_cosines(a), -1.0, 1.0);
+    return true;
+  };
+  auto cosine_gradient = [&](const Angle& a) {
+    const double p = length(a.p), q = length(a.q), r = length(a.r);
+    if (std::abs(law_of_cosines(a)) > 1.0) return GeometryVector(GeometryVector::Zero(3 * n));
+    return GeometryVector((p * p - q * q + r * r) / (2.0 * p * p * q) * length_gradient(a.p) +
+                          (q * q - p * p + r * r) / (2.0 * p * q * q) * length_gradient(a.q) -
+                          r / (p * q) * length_gradient(a.r));
+  };
+  for (int i = 0; i < n; ++i) {
+    // Round V_i: V_{i-1} (hinge i), V_{i+1} (hinge i + 1), V_{i+2} (diagonal
+    // i + 1), V_{i-2} (diagonal i - 1); the faces between them are links i,
+    // i + 1, the face V_{i-2} V_i V_{i+2} and link i - 1.
+    const std::array<Angle, 4> face = {
+        Angle{{true, i}, {true, i + 1}, {false, i}}, Angle{{true, i + 1}, {false, i + 1}, {true, i + 2}},
+        Angle{{false, i + 1}, {false, i - 1}, {false, i + 3}}, Angle{{false, i - 1}, {true, i}, {true, i - 1}}};
+    struct {
+      bool computed = false, octahedron = false;
+      double sign = 1.0;
+      std::array<double, 4> cosines{};
+    } fit;
+    auto vertex = [&] {
+      if (fit.computed) return;
+      fit.computed = true;
+      need_edges();
+      fit.octahedron = true;
+      for (size_t k = 0; k < 4; ++k) fit.octahedron = cosine(face[k], fit.cosines[k]) && fit.octahedron;
+      if (!fit.octahedron) return;
+      const std::array<double, 4>& f = fit.cosines;
+      const double same = (f[0] - f[2]) * (f[0] - f[2]) + (f[1] - f[3]) * (f[1] - f[3]);
+      const double supplementary = (f[0] + f[2]) * (f[0] + f[2]) + (f[1] + f[3]) * (f[1] + f[3]);
+      fit.sign = supplementary < same ? -1.0 : 1.0;
+    };
+    for (size_t k = 0; k < 2; ++k) {
+      c.add(
+          [&] {
+            return "cos(f" + std::to_string(k + 1) + ") -+ cos(f" + std::to_string(k + 3) + ") at V" +
+                   std::to_string(i + 1);
+          },
+          [&] {
+            vertex();
+            return fit.octahedron ? fit.cosines[k] - fit.sign * fit.cosines[k + 2] : 1.0;
+          },
+          [&] {
+            vertex();
+            if (!fit.octahedron) return GeometryVector(GeometryVector::Zero(3 * n));
+            return GeometryVector(cosine_gradient(face[k]) - fit.sign * cosine_gradient(face[k + 2]));
+          });
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    // The cycle V_{k-1} V_k V_{k+2} V_{k+3}: hinge k, diagonal k + 1, hinge
+    // k + 3, diagonal k + 4; signs + and the three of the best fit.
+    const std::array<Edge, 4> cycle = {Edge{true, k}, Edge{false, k + 1}, Edge{true, k + 3}, Edge{false, k + 4}};
+    std::array<double, 4> sign = {1.0, 1.0, 1.0, 1.0};
+    double sum = 0.0;
+    bool computed = false;
+    auto fit = [&] {
+      if (computed) return;
+      computed = true;
+      need_edges();
+      double best = kInf;
+      for (int pattern = 0; pattern < 8; ++pattern) {
+        const std::array<double, 4> trial = {1.0, pattern & 1 ? -1.0 : 1.0, pattern & 2 ? -1.0 : 1.0,
+                                             pattern & 4 ? -1.0 : 1.0};
+        double t = 0.0;
+        for (size_t e = 0; e < 4; ++e) t += trial[e] * length(cycle[e]);
+        if (std::abs(t) < best) {
+          best = std::abs(t);
+          sum = t;
+          sign = trial;
+        }
+      }
+    };
+    c.add(
+        [&] {
+          fit();
+          std::string text = "(h" + std::to_string(k + 1);
+          const char* names[] = {"h", "D", "h", "D"};
+          for (size_t e = 1; e < 4; ++e) {
+            text += (sign[e] > 0 ? " + " : " - ") + std::string(names[e]) + std::to_string(at(cycle[e].index) + 1);
+          }
+          return text + ") / L";
+        },
+        [&] {
+          fit();
+          return sum / s.L;
+        },
+        [&] {
+          fit();
+          GeometryVector g = -(sum / (s.L * s.L)) * s.dL;
+          for (size_t e = 0; e < 4; ++e) g += (sign[e] / s.L) * length_gradient(cycle[e]);
+          return g;
+        });
+  }
+}
+
 // The 5R families built from two Bennett loops sharing a link: Goldberg's,
 // its symmetric case Myard's and its bent-link variant.
 constexpr bool goldberg_type(Family family) {
@@ -1415,6 +1589,7 @@ inline int condition_sets(Family family, int joints) {
     case Family::goldberg_6r:
       return kGoldberg6RSets;
     case Family::hooke:
+    case Family::bricard_octahedral_collapsible:
     case Family::bennett_dyads:
     case Family::waldron_hybrid:
     case Family::double_goldberg:
@@ -1437,7 +1612,8 @@ constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
          family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus ||
          family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid ||
-         family == Family::goldberg_6r || family == Family::double_goldberg || family == Family::hooke;
+         family == Family::goldberg_6r || family == Family::double_goldberg || family == Family::hooke ||
+         family == Family::bricard_octahedral_collapsible;
 }
 
 template <Family F, class RepresentationView, class Sink>
@@ -1475,6 +1651,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     bricard_octahedral_plane_conditions(set, w, c);
   } else if constexpr (F == Family::hooke) {
     hooke_conditions(w, c);
+  } else if constexpr (F == Family::bricard_octahedral_collapsible) {
+    bricard_octahedral_collapsible_conditions(w, c);
   } else if (set == 0) {
     adjacent_coaxial_conditions(w, c);
   } else {

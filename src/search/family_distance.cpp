@@ -108,6 +108,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       return distance_over_representations<Family::double_goldberg>(geometry, gradient);
     case Family::hooke:
       return distance_over_representations<Family::hooke>(geometry, gradient);
+    case Family::bricard_octahedral_collapsible:
+      return distance_over_representations<Family::bricard_octahedral_collapsible>(geometry, gradient);
     case Family::degenerate:
       throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::unclassified:
@@ -146,6 +148,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::goldberg_6r:
     case Family::double_goldberg:
     case Family::hooke:
+    case Family::bricard_octahedral_collapsible:
       best = best_for(family, geometry, true);
       break;
     case Family::degenerate:

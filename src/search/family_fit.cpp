@@ -89,6 +89,8 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
       return best_over_representations<Family::double_goldberg>(g, by_norm);
     case Family::hooke:
       return best_over_representations<Family::hooke>(g, by_norm);
+    case Family::bricard_octahedral_collapsible:
+      return best_over_representations<Family::bricard_octahedral_collapsible>(g, by_norm);
     case Family::spherical:
     case Family::degenerate:
     case Family::unclassified:
@@ -130,6 +132,7 @@ std::vector<Family> special_families(int n) {
               Family::waldron_hybrid,
               Family::sarrus,
               Family::bricard_octahedral_plane,
+              Family::bricard_octahedral_collapsible,
               Family::hooke};
     default:
       return {};

@@ -53,6 +53,7 @@ constexpr DeflatableFamily kDeflatable[] = {
     {"goldberg_6r", 6, "Goldberg's 6R loops have 6 joints"},
     {"double_goldberg", 6, "double-Goldberg loops have 6 joints"},
     {"hooke", 6, "Hooke's loops have 6 joints"},
+    {"bricard_octahedral_collapsible", 6, "Bricard loops have 6 joints"},
 };
 
 // The settings tables and their keys; anything else is an error.

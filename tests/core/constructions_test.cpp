@@ -739,6 +739,81 @@ TEST(Constructions, HookeClosesAlongItsMotionAboutTheLineOfCentres) {
   EXPECT_THROW(hooke_6r(Hooke6R{}, NAN), std::invalid_argument);
 }
 
+// Bricard's doubly collapsible octahedron, built flat: in each of the four
+// ways the tangents meet, the loop closes in the pose it is built in, every
+// a_i = 0 and every joint angle 0 or pi; its vertices (the frames' origins,
+// where consecutive axes meet) lie in one plane, and the hinges P S, S T,
+// T R, R P lie on lines that touch the circle of radius r1 about the centre
+// and P Q, Q T, T U, U P on lines that touch the one of radius r2, the
+// centre found from the loop alone (the point on the bisectors at P and T of
+// the lines to S and R). Bad radii and vertices are refused.
+TEST(Constructions, CollapsibleOctahedronIsBuiltFlatOnTangents) {
+  for (int way = 0; way < 4; ++way) {
+    OctahedronCollapsible o;
+    o.cross_sr = (way & 1) != 0;
+    o.cross_qu = (way & 2) != 0;
+    const PosedLoop m = bricard_octahedral_collapsible(o);
+    const std::string tag = "way " + std::to_string(way);
+    EXPECT_LT(closure_residual(m.geometry, m.theta).cwiseAbs().maxCoeff(), 1e-12) << tag;
+    for (int k = 0; k < 6; ++k) {
+      EXPECT_LT(m.geometry.a[k], 1e-12) << tag;
+      EXPECT_LT(std::abs(std::sin(m.theta[k])), 1e-12) << tag;
+    }
+    // V[k] is where axes k - 1 and k meet (the frame after k joints): P, S,
+    // Q, T, R, U.
+    std::array<Vector3, 6> V;
+    for (int k = 0; k < 6; ++k) V[static_cast<size_t>(k)] = forward_transform(m.geometry, m.theta, k).translation();
+    const Vector3 normal = (V[1] - V[0]).cross(V[3] - V[0]).normalized();
+    for (const Vector3& x : V) EXPECT_LT(std::abs(normal.dot(x - V[0])), 1e-12) << tag;
+    const auto distance_to_line = [&](const Vector3& c, const Vector3& x, const Vector3& y) {
+      return (c - x).cross((y - x).normalized()).norm();
+    };
+    // The centre: on the line through P that halves the angle between its
+    // lines to S and R, and on T's likewise (either bisector: the one that
+    // puts the centre at r1 from all four lines).
+    const auto bisectors = [&](size_t at, size_t u, size_t v) {
+      const Vector3 a = (V[u] - V[at]).normalized(), b = (V[v] - V[at]).normalized();
+      return std::array<Vector3, 2>{(a + b).normalized(), (a - b).normalized()};
+    };
+    bool found = false;
+    for (const Vector3& bp : bisectors(0, 1, 4)) {
+      for (const Vector3& bt : bisectors(3, 1, 4)) {
+        // The point of P + s bp nearest to the line T + u bt (both in the plane).
+        const Vector3 w = V[0] - V[3];
+        const double b = bp.dot(bt), denominator = 1.0 - b * b;
+        if (denominator < 1e-12) continue;
+        const double s = (b * bt.dot(w) - bp.dot(w)) / denominator;
+        const Vector3 c = V[0] + s * bp;
+        const std::array<double, 4> first = {distance_to_line(c, V[0], V[1]), distance_to_line(c, V[1], V[3]),
+                                             distance_to_line(c, V[3], V[4]), distance_to_line(c, V[4], V[0])};
+        if (std::abs(first[0] - o.r1) > 1e-9) continue;
+        found = true;
+        for (double r : first) EXPECT_NEAR(r, o.r1, 1e-12) << tag;
+        for (double r : {distance_to_line(c, V[0], V[2]), distance_to_line(c, V[2], V[3]),
+                         distance_to_line(c, V[3], V[5]), distance_to_line(c, V[5], V[0])}) {
+          EXPECT_NEAR(r, o.r2, 1e-12) << tag;
+        }
+      }
+    }
+    EXPECT_TRUE(found) << tag;
+  }
+  OctahedronCollapsible bad;
+  bad.r2 = bad.r1;
+  EXPECT_THROW(bricard_octahedral_collapsible(bad), std::invalid_argument);
+  bad = {};
+  bad.r1 = -0.5;
+  EXPECT_THROW(bricard_octahedral_collapsible(bad), std::invalid_argument);
+  bad = {};
+  bad.p = {0.5, 0.5};  // inside the circle of radius 1.1
+  EXPECT_THROW(bricard_octahedral_collapsible(bad), std::invalid_argument);
+  bad = {};
+  bad.t = -bad.p;  // tangents from opposite points are parallel in pairs
+  EXPECT_THROW(bricard_octahedral_collapsible(bad), std::invalid_argument);
+  bad = {};
+  bad.t = {NAN, 1.0};
+  EXPECT_THROW(bricard_octahedral_collapsible(bad), std::invalid_argument);
+}
+
 TEST(Constructions, FusedConstructionsRefuseBadParameters) {
   EXPECT_THROW(goldberg_5r({{-1.0, 1.0, 1.0, 2.0}, kPi}, 0.5), std::invalid_argument);
   EXPECT_THROW(goldberg_5r({{1.0, 0.0, 1.0, 2.0}, kPi}, 0.5), std::invalid_argument);

@@ -236,6 +236,10 @@ std::vector<std::pair<std::string, LoopGeometry>> other_6r_members(Family family
     add(Family::hooke, [&] { return hooke_member(rng).geometry; });
     add(Family::double_goldberg, [&] { return double_goldberg_member(rng).geometry; });
   }
+  for (int i = 0; i < 4; ++i) {
+    add(Family::bricard_octahedral_collapsible,
+        [&] { return bricard_octahedral_collapsible(random_collapsible(rng)).geometry; });
+  }
   return others;
 }
 
@@ -1031,10 +1035,158 @@ TEST(Families, Generic5RAnd6RAreUnclassifiedWithEveryResidualLarge) {
       const Classification c = classify(g, random_angles(n, seed), std::vector<double>(n, 1.0));
       EXPECT_EQ(c.family, Family::unclassified) << n << " " << seed;
       EXPECT_TRUE(c.fitting.empty()) << n << " " << seed;
-      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 16u);
+      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 17u);
       for (const FamilyCheck& check : c.checks) EXPECT_GT(check.residual, 1e-3) << to_string(check.family);
     }
   }
+}
+
+// The flat poses on a traced circuit: the poses where every joint angle is
+// within `near` of 0 or pi, grouped by which (each angle's cosine sign);
+// returned as one representative pattern each.
+std::vector<std::array<bool, 6>> flat_patterns(const VerificationSummary& v, double near) {
+  std::vector<std::array<bool, 6>> patterns;
+  for (const JointVector& theta : v.joint_angles) {
+    bool flat = true;
+    std::array<bool, 6> pattern{};
+    for (int k = 0; k < 6; ++k) {
+      flat = flat && std::abs(std::sin(theta[k])) < near;
+      pattern[static_cast<size_t>(k)] = std::cos(theta[k]) > 0.0;
+    }
+    if (flat && std::find(patterns.begin(), patterns.end(), pattern) == patterns.end()) patterns.push_back(pattern);
+  }
+  return patterns;
+}
+
+// Bricard's doubly collapsible octahedra (his third type), built in a flat
+// pose from two concentric circles and the tangents from two opposite
+// vertices (bricard_octahedral_collapsible, which knows nothing of the
+// family's conditions), in all four ways the tangents meet: traced over
+// their whole motion by the rigid closure, each turns fully and passes
+// through exactly two flat poses, the one it was built in and another
+// (the type's defining property, seen by the tracer, not by the
+// conditions); from a pose off the flat ones each is verified and
+// classified bricard_octahedral_collapsible in every representation, its 21
+// conditions at round-off, far from the other octahedral types.
+TEST(Families, CollapsibleOctahedraFoldFlatTwiceAndAreClassified) {
+  std::mt19937_64 rng(81);
+  for (int i = 0; i < 8; ++i) {
+    const OctahedronCollapsible o = random_collapsible(rng, i % 4);
+    const Posed flat = bricard_octahedral_collapsible(o);
+    const std::string tag = "collapsible " + std::to_string(i);
+    ASSERT_LT(closure_error(flat), 1e-12) << tag;
+    EXPECT_LT(flat.geometry.a.cwiseAbs().maxCoeff(), 1e-12 * length_scale(flat.geometry)) << tag;
+    std::array<bool, 6> built{};
+    for (int k = 0; k < 6; ++k) {
+      EXPECT_LT(std::abs(std::sin(flat.theta[k])), 1e-12) << tag;
+      built[static_cast<size_t>(k)] = std::cos(flat.theta[k]) > 0.0;
+    }
+    const VerificationSummary whole = verify_motion(flat.geometry, nullptr);
+    ASSERT_TRUE(whole.verified) << tag << ": " << whole.limit;
+    EXPECT_TRUE(whole.full_turn) << tag;
+    const std::vector<std::array<bool, 6>> patterns = flat_patterns(whole, 0.05);
+    EXPECT_EQ(patterns.size(), 2u) << tag;
+    EXPECT_NE(std::find(patterns.begin(), patterns.end(), built), patterns.end()) << tag;
+    const Posed m{flat.geometry, off_flat_pose(whole)};
+    expect_constructed_member(m, Family::bricard_octahedral_collapsible, 21, "doubly collapsible",
+                              {Family::bricard_octahedral_plane, Family::bricard_line_symmetric}, i < 2, rng, tag);
+  }
+}
+
+// The dimension. The construction's six numbers (the radii, P and T) moved
+// by 1e-2 each still give a member, and the Jacobian of the 18 DH
+// parameters with respect to them has rank 5: turning the plane about the
+// circles' centre changes nothing. The 21 conditions' gradients at a member
+// have rank 13, so the loops that satisfy them near it form a family of 18 -
+// 13 = 5 dimensions: the constructed ones, and no others nearby.
+TEST(Families, CollapsibleOctahedraHaveFiveFreeParameters) {
+  std::mt19937_64 rng(82);
+  for (int i = 0; i < 4; ++i) {
+    const OctahedronCollapsible o = random_collapsible(rng);
+    const std::string tag = "collapsible " + std::to_string(i);
+    const auto field = [](OctahedronCollapsible& q, int k) -> double& {
+      return k == 0 ? q.r1 : k == 1 ? q.r2 : k < 4 ? q.p[k - 2] : q.t[k - 4];
+    };
+    const Eigen::VectorXd sv = constructor_singular_values(
+        o, 6, [](const OctahedronCollapsible& q) { return bricard_octahedral_collapsible(q); }, field,
+        Family::bricard_octahedral_collapsible, tag);
+    EXPECT_GT(sv[4], 1e-4 * sv[0]) << tag << ": rank below 5";
+    EXPECT_LT(sv[5], 1e-7 * sv[0]) << tag << ": rank above 5";
+    const detail::WrittenOut member(bricard_octahedral_collapsible(o).geometry);
+    detail::Conditions conditions;
+    detail::bricard_octahedral_collapsible_conditions(member, conditions);
+    ASSERT_EQ(conditions.values.size(), 21u) << tag;
+    Eigen::MatrixXd G(21, 18);
+    for (int r = 0; r < 21; ++r) G.row(r) = conditions.gradients[static_cast<size_t>(r)].transpose();
+    const Eigen::VectorXd gv = Eigen::JacobiSVD<Eigen::MatrixXd>(G).singularValues();
+    EXPECT_GT(gv[12], 1e-3 * gv[0]) << tag << ": conditions' rank below 13";
+    EXPECT_LT(gv[13], 1e-9 * gv[0]) << tag << ": conditions' rank above 13";
+  }
+}
+
+// Near misses: an offset or twist of a member moved by 1e-2, 1e-4, 1e-6 and
+// 1e-8 (x L for offsets, rad for twists): the rigid closure cannot follow it
+// from the member's pose, and the family's residual sees the move. A length
+// a_k moved off zero by 1e-3 ... 1e-6 L likewise; by 1e-8 L the tracer still
+// follows it (worst residual 8e-10, within its resolution of 1e-9), so that
+// size is left out for lengths.
+TEST(Families, CollapsibleOctahedronNearMissesAreRigidAndNotClassified) {
+  std::mt19937_64 rng(83);
+  // d1, alpha2, d3, alpha4, alpha5, d6, alpha1, d4
+  const std::array<int, 8> parameters = {12 + 0, 6 + 1, 12 + 2, 6 + 3, 6 + 4, 12 + 5, 6 + 0, 12 + 3};
+  for (size_t i = 0; i < parameters.size(); ++i) {
+    const Posed m = collapsible_member(rng);
+    const std::string tag =
+        "collapsible near miss " + std::to_string(i) + ", parameter " + std::to_string(parameters[i]);
+    expect_rigid_near_misses_down_to_1e8(m, Family::bricard_octahedral_collapsible, parameters[i], tag);
+  }
+  for (int a : {1, 4}) {  // a2, a5
+    expect_near_misses_rigid(collapsible_member(rng), Family::bricard_octahedral_collapsible, a,
+                             "collapsible near miss a" + std::to_string(a + 1));
+  }
+}
+
+// Octahedra of the other kinds are far from the conditions: with no
+// symmetry (rigid), with a mirror plane (bricard_octahedral_plane) and with
+// a half-turn axis (V_{i+3} the turned V_i, Bricard's first type); and the
+// other families' members and generic 6R loops keep their names.
+TEST(Families, OtherOctahedraAndFamiliesAreNotCollapsible) {
+  std::mt19937_64 rng(84);
+  const auto from_vertices = [](const std::array<Vector3, 6>& vertex) {
+    std::vector<Axis> axes;
+    for (size_t k = 0; k < 6; ++k) axes.push_back({vertex[k], (vertex[(k + 1) % 6] - vertex[k]).normalized()});
+    return dh_from_axes(axes);
+  };
+  std::vector<std::pair<std::string, Posed>> octahedra;
+  for (int i = 0; i < 4; ++i) {
+    std::array<Vector3, 6> free, turned;
+    for (size_t k = 0; k < 6; ++k) {
+      const double angle = static_cast<double>(k) * kPi / 3.0 + uniform(rng, -0.3, 0.3);
+      free[k] = {std::cos(angle), std::sin(angle), (k % 2 ? 1.0 : -1.0) * uniform(rng, 0.3, 0.9)};
+    }
+    for (size_t k = 0; k < 3; ++k) {
+      turned[k] = {uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0)};
+      turned[k + 3] = {-turned[k].x(), -turned[k].y(), turned[k].z()};
+    }
+    OctahedronPlane v;
+    v.p = {uniform(rng, 0.5, 1.5), uniform(rng, -0.5, 0.5), 0.0};
+    v.t = {-uniform(rng, 0.5, 1.5), uniform(rng, -0.5, 0.5), 0.0};
+    v.q = {uniform(rng, -0.5, 0.5), uniform(rng, 0.5, 1.5), uniform(rng, 0.3, 1.2)};
+    v.r = {uniform(rng, -0.5, 0.5), -uniform(rng, 0.5, 1.5), uniform(rng, 0.3, 1.2)};
+    octahedra.push_back({"no symmetry " + std::to_string(i), from_vertices(free)});
+    octahedra.push_back({"half-turn axis " + std::to_string(i), from_vertices(turned)});
+    octahedra.push_back({"mirror plane " + std::to_string(i), bricard_octahedral_plane(v)});
+  }
+  for (const auto& [tag, o] : octahedra) {
+    ASSERT_LT(closure_error(o), 1e-12) << tag;
+    const Classification c = classify(o.geometry, o.theta, std::vector<double>(6, 1.0));
+    EXPECT_NE(c.family, Family::bricard_octahedral_collapsible) << tag;
+    for (const FamilyCheck& check : c.checks) {
+      if (check.family == Family::bricard_octahedral_collapsible) EXPECT_GT(check.residual, 1e-3) << tag;
+    }
+  }
+  expect_far_from(Family::bricard_octahedral_collapsible,
+                  other_6r_members(Family::bricard_octahedral_collapsible, rng, 100));
 }
 
 // ---------------------------------------------------------------------------
@@ -1046,25 +1198,28 @@ TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
     Family family;
     LoopGeometry member;
   };
-  std::vector<Case> cases = {{Family::goldberg, goldberg_member(rng, kPi).geometry},
-                             {Family::goldberg, goldberg_member(rng, 0.0).geometry},
-                             {Family::myard, myard_member(rng, kPi).geometry},
-                             {Family::goldberg_bent, goldberg_member(rng, 1.1).geometry},
-                             {Family::goldberg_bent, goldberg_member(rng, -2.3).geometry},
-                             {Family::bricard_line_symmetric, bricard_line_geometry(rng)},
-                             {Family::bricard_plane_symmetric, bricard_plane_geometry(rng)},
-                             {Family::bricard_trihedral, bricard_trihedral_geometry(rng)},
-                             {Family::bennett_pair, bennett_pair_member(rng).geometry},
-                             {Family::bennett_dyads, bennett_dyads_geometry(rng)},
-                             {Family::sarrus, sarrus_geometry(rng)},
-                             {Family::bricard_octahedral_plane, bricard_octahedral_plane(OctahedronPlane{}).geometry},
-                             {Family::waldron_hybrid, waldron_member(rng).geometry},
-                             {Family::waldron_hybrid, waldron_member(rng).geometry},
-                             {Family::goldberg_6r, goldberg_6r_member(rng, 1).geometry},
-                             {Family::goldberg_6r, goldberg_6r_member(rng, 4).geometry},
-                             {Family::hooke, hooke_member(rng).geometry},
-                             {Family::hooke, hooke_member(rng).geometry},
-                             {Family::double_goldberg, double_goldberg_member(rng).geometry}};
+  std::vector<Case> cases = {
+      {Family::goldberg, goldberg_member(rng, kPi).geometry},
+      {Family::goldberg, goldberg_member(rng, 0.0).geometry},
+      {Family::myard, myard_member(rng, kPi).geometry},
+      {Family::goldberg_bent, goldberg_member(rng, 1.1).geometry},
+      {Family::goldberg_bent, goldberg_member(rng, -2.3).geometry},
+      {Family::bricard_line_symmetric, bricard_line_geometry(rng)},
+      {Family::bricard_plane_symmetric, bricard_plane_geometry(rng)},
+      {Family::bricard_trihedral, bricard_trihedral_geometry(rng)},
+      {Family::bennett_pair, bennett_pair_member(rng).geometry},
+      {Family::bennett_dyads, bennett_dyads_geometry(rng)},
+      {Family::sarrus, sarrus_geometry(rng)},
+      {Family::bricard_octahedral_plane, bricard_octahedral_plane(OctahedronPlane{}).geometry},
+      {Family::waldron_hybrid, waldron_member(rng).geometry},
+      {Family::waldron_hybrid, waldron_member(rng).geometry},
+      {Family::goldberg_6r, goldberg_6r_member(rng, 1).geometry},
+      {Family::goldberg_6r, goldberg_6r_member(rng, 4).geometry},
+      {Family::hooke, hooke_member(rng).geometry},
+      {Family::hooke, hooke_member(rng).geometry},
+      {Family::double_goldberg, double_goldberg_member(rng).geometry},
+      {Family::bricard_octahedral_collapsible, bricard_octahedral_collapsible(OctahedronCollapsible{}).geometry},
+      {Family::bricard_octahedral_collapsible, bricard_octahedral_collapsible(random_collapsible(rng)).geometry}};
   for (const Case& c : cases) {
     const int n = c.member.joints();
     EXPECT_LT(family_distance(c.family, c.member), 1e-12) << to_string(c.family);
@@ -1114,7 +1269,7 @@ TEST(Families, DistanceNeedsTheRightJointCountAndIsAllocationFree) {
   for (Family f : {Family::goldberg, Family::myard, Family::goldberg_bent}) sum += family_distance(f, g5, &gradient);
   for (Family f : {Family::bricard_line_symmetric, Family::bricard_plane_symmetric, Family::bricard_trihedral,
                    Family::bennett_pair, Family::bennett_dyads, Family::waldron_hybrid, Family::goldberg_6r,
-                   Family::hooke, Family::double_goldberg}) {
+                   Family::hooke, Family::double_goldberg, Family::bricard_octahedral_collapsible}) {
     sum += family_distance(f, g6, &gradient);
   }
   EXPECT_EQ(testing::allocations() - before, 0);

@@ -293,6 +293,55 @@ inline bool closed_pose(const LoopGeometry& g, std::mt19937_64& rng, JointVector
   return false;
 }
 
+// Bricard's doubly collapsible octahedron (bricard_octahedral_collapsible's
+// flat pose): the two radii apart, P and T outside both circles and at least
+// 0.7 rad from each other and from the opposite direction (where tangents
+// from them are parallel), and the two ways each pair of tangents meets.
+// Drawn again while tangents meet far out (an offset above 6) or two
+// consecutive hinges are within 10 degrees of one line: nearly degenerate
+// octahedra, whose conditions read round-off times their large lengths.
+// `way` 0-3 fixes the pairings (bit 0: cross_sr, bit 1: cross_qu).
+inline OctahedronCollapsible random_collapsible(std::mt19937_64& rng, int way = -1) {
+  while (true) {
+    OctahedronCollapsible o;
+    o.r1 = uniform(rng, 0.4, 0.8);
+    o.r2 = uniform(rng, 1.0, 1.4);
+    const double phi = uniform(rng, -kPi, kPi);
+    const double psi = phi + (rng() % 2 ? 1.0 : -1.0) * uniform(rng, 0.7, kPi - 0.7);
+    o.p = uniform(rng, 1.8, 2.6) * Eigen::Vector2d(std::cos(phi), std::sin(phi));
+    o.t = uniform(rng, 1.8, 2.6) * Eigen::Vector2d(std::cos(psi), std::sin(psi));
+    o.cross_sr = way < 0 ? rng() % 2 != 0 : (way & 1) != 0;
+    o.cross_qu = way < 0 ? rng() % 2 != 0 : (way & 2) != 0;
+    const LoopGeometry g = bricard_octahedral_collapsible(o).geometry;
+    if (g.d.cwiseAbs().maxCoeff() < 6.0 && g.alpha.array().sin().abs().minCoeff() > std::sin(10.0 * kPi / 180.0)) {
+      return o;
+    }
+  }
+}
+
+// The pose of a traced motion farthest from its flat poses, which are
+// singular points of a doubly collapsible octahedron's motion: the one on
+// the reported circuit whose joint angle nearest 0 or pi is farthest from it.
+inline JointVector off_flat_pose(const VerificationSummary& whole) {
+  EXPECT_TRUE(whole.verified) << whole.limit;
+  JointVector best = JointVector::Zero(6);
+  double farthest = -1.0;
+  for (const JointVector& theta : whole.joint_angles) {
+    const double nearest = theta.array().sin().abs().minCoeff();
+    if (nearest > farthest) {
+      farthest = nearest;
+      best = theta;
+    }
+  }
+  return best;
+}
+
+// A doubly collapsible octahedron in a pose off its flat ones.
+inline Posed collapsible_member(std::mt19937_64& rng) {
+  const LoopGeometry g = bricard_octahedral_collapsible(random_collapsible(rng)).geometry;
+  return {g, off_flat_pose(verify_motion(g, nullptr))};
+}
+
 // Bricard line-symmetric 6R: a_i = a_{i+3}, alpha_i = alpha_{i+3}, d_i = d_{i+3}.
 inline LoopGeometry bricard_line_geometry(std::mt19937_64& rng) {
   std::array<double, 3> a, t, d;

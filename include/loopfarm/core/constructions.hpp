@@ -13,7 +13,9 @@
 //   their DH parameters read off the joint axes (dh_from_axes);
 // - Waldron's hybrid 6R (two Bennett loops sharing a joint axis), the
 //   Sarrus 6R (two chains of parallel axes) and Hooke's double-spherical 6R
-//   (two chains of concurrent axes), also read off their axes.
+//   (two chains of concurrent axes), also read off their axes;
+// - Bricard's plane-symmetric octahedron from its vertices, and his doubly
+//   collapsible one from a flat pose: two circles and tangents to them.
 //
 // Angles in radians; lengths in the geometry's unit. Bad arguments throw
 // std::invalid_argument naming the value.
@@ -338,5 +340,26 @@ struct OctahedronPlane {
   Vector3 q{0.1, 1.1, 0.8}, r{0.3, -1.0, 0.6};   // off it
 };
 PosedLoop bricard_octahedral_plane(const OctahedronPlane& vertices);
+
+// ---------------------------------------------------------------------------
+// Bricard's doubly collapsible octahedron (his third type) as a 6R loop, in
+// one of its two flat poses
+//
+// In the plane z = 0, two circles about the origin, of radii r1 and r2, and
+// two opposite vertices P and T outside both. From P and from T the two
+// tangents to the first circle meet in pairs at the opposite vertices S and
+// R, and the tangents to the second circle at the opposite vertices Q and U:
+// S where P's first tangent meets one of T's (its first, or its second when
+// `cross_sr`), R where the other two meet; Q and U likewise (`cross_qu`).
+// The loop's joints are the hinges PS, SQ, QT, TR, RU, UP as for
+// bricard_octahedral_plane, every a_i = 0, and the pose is the flat one the
+// vertices give (every joint angle 0 or pi). Flat poses are singular
+// points of the motion: start a tracer from another pose.
+struct OctahedronCollapsible {
+  double r1 = 0.6, r2 = 1.1;                  // the circles' radii, positive and different
+  Eigen::Vector2d p{2.0, 0.3}, t{-1.7, 1.4};  // outside both circles
+  bool cross_sr = false, cross_qu = false;
+};
+PosedLoop bricard_octahedral_collapsible(const OctahedronCollapsible& flat);
 
 }  // namespace loopfarm

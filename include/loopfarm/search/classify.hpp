@@ -49,6 +49,12 @@
 //              points are the vertices of an octahedron with a mirror plane
 //              through two opposite vertices that maps each other vertex onto
 //              its opposite one (six pairs of equal edges)
+//   bricard_octahedral_collapsible (n = 6) every a_i = 0: the axes' meeting
+//              points are the vertices of a doubly collapsible octahedron
+//              (Bricard's third type, two flat poses): at each vertex the
+//              opposite face angles are equal or supplementary, and the four
+//              edges of each of the three four-edge cycles through two
+//              opposite pairs add up to zero with signs
 //   hooke      (n = 6) Hooke's double-spherical loop: axes 1-3 of a
 //              representation through one point (a1 = a2 = d2 = 0), axes 4-6
 //              through another (a4 = a5 = d5 = 0), and links 3 and 6 hold the
@@ -114,6 +120,9 @@ enum class Family {
   // 6R: Hooke's double-spherical loop, axes 1-3 through one point and axes
   // 4-6 through another; links 3 and 6 turn about the line through both
   hooke,
+  // 6R: every a_i = 0, the axes' meeting points a doubly collapsible Bricard
+  // octahedron (his third type, with two flat poses)
+  bricard_octahedral_collapsible,
 };
 const char* to_string(Family family);
 
@@ -141,6 +150,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::goldberg_6r,
     Family::double_goldberg,
     Family::hooke,
+    Family::bricard_octahedral_collapsible,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -197,7 +207,8 @@ struct Classification {
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, goldberg_6r,
   // double_goldberg, bennett_dyads, waldron_hybrid, sarrus,
-  // bricard_octahedral_plane, hooke (the order they are tried).
+  // bricard_octahedral_plane, bricard_octahedral_collapsible, hooke (the order
+  // they are tried).
   std::vector<FamilyCheck> checks;
 };
 
