@@ -12,6 +12,13 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+// A twist's quantum: (-pi, pi], with -pi + eps snapped to pi so both sides
+// of the cut agree.
+long long twist_quantum(double alpha, double tolerance) {
+  if (alpha < -kPi + tolerance) alpha += 2 * kPi;
+  return std::llround(alpha / tolerance);
+}
+
 // Quantised values of a scaled representation, (a, alpha, d).
 std::vector<long long> quantised(const LoopGeometry& g, double tolerance) {
   const int n = g.joints();
@@ -19,12 +26,7 @@ std::vector<long long> quantised(const LoopGeometry& g, double tolerance) {
   q.reserve(static_cast<size_t>(3 * n));
   auto quantum = [tolerance](double v) { return std::llround(v / tolerance); };
   for (int k = 0; k < n; ++k) q.push_back(quantum(g.a[k]));
-  for (int k = 0; k < n; ++k) {
-    // (-pi, pi], with -pi + eps snapped to pi so both sides of the cut agree.
-    double alpha = g.alpha[k];
-    if (alpha < -kPi + tolerance) alpha += 2 * kPi;
-    q.push_back(quantum(alpha));
-  }
+  for (int k = 0; k < n; ++k) q.push_back(twist_quantum(g.alpha[k], tolerance));
   for (int k = 0; k < n; ++k) q.push_back(quantum(g.d[k]));
   return q;
 }
@@ -37,12 +39,35 @@ std::string decimal(long long quantum, int decimals, double tolerance) {
 }
 
 // The representation of `unit` (length scale 1) whose rank(.) is smallest,
-// written into form's geometry and transformation; returns that rank.
-template <typename Rank>
-std::vector<long long> smallest_representation(const LoopGeometry& unit, Rank rank, CanonicalForm& form) {
+// written into form's geometry and transformation; returns that rank. At a
+// link the key writes as zero length (its length quantised to 0) the twist's
+// sign is free (representation.hpp): each such twist is negated when
+// prefer_negated(twist, negated twist) says so. Both ranks used here order
+// the twists of one representation independently of one another (a
+// lexicographic order of their quanta, after a count of negative ones), so
+// choosing each sign on its own gives the smallest rank over all 2^z sign
+// choices. A loop without such a link does no more than before.
+template <typename Rank, typename PreferNegated>
+std::vector<long long> smallest_representation(const LoopGeometry& unit, double tolerance, Rank rank,
+                                               PreferNegated prefer_negated, CanonicalForm& form) {
+  const int n = unit.joints();
+  const auto zero_length = [tolerance](double a) { return std::llround(a / tolerance) == 0; };
+  bool any_zero_length = false;
+  for (int k = 0; k < n; ++k) any_zero_length = any_zero_length || zero_length(unit.a[k]);
   std::vector<long long> best;
-  for (const detail::Representation& r : detail::representations(unit.joints())) {
-    const LoopGeometry candidate = detail::apply(r, unit);
+  for (const detail::Representation& r : detail::representations(n)) {
+    LoopGeometry candidate = detail::apply(r, unit);
+    std::uint32_t negated = 0;
+    if (any_zero_length) {
+      for (int k = 0; k < n; ++k) {
+        if (!zero_length(candidate.a[k])) continue;
+        const double flipped = detail::with_negated_twists(candidate, 1u << k).alpha[k];
+        if (prefer_negated(candidate.alpha[k], flipped)) {
+          candidate.alpha[k] = flipped;
+          negated |= 1u << k;
+        }
+      }
+    }
     std::vector<long long> order = rank(candidate);
     if (best.empty() || order < best) {
       best = std::move(order);
@@ -50,6 +75,7 @@ std::vector<long long> smallest_representation(const LoopGeometry& unit, Rank ra
       form.shift = r.shift;
       form.reversed = r.reversed;
       form.flips = r.flips;
+      form.negated_twists = negated;
     }
   }
   return best;
@@ -64,7 +90,11 @@ CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance) {
   CanonicalForm best;
   best.scale = length_scale(geometry);
   const std::vector<long long> best_key = smallest_representation(
-      scaled(geometry, best.scale), [tolerance](const LoopGeometry& g) { return quantised(g, tolerance); }, best);
+      scaled(geometry, best.scale), tolerance, [tolerance](const LoopGeometry& g) { return quantised(g, tolerance); },
+      [tolerance](double twist, double negated) {
+        return twist_quantum(negated, tolerance) < twist_quantum(twist, tolerance);
+      },
+      best);
   const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(tolerance) - 1e-9)));
   std::string key = std::to_string(n) + "R";
   const char* names[] = {" a=", " alpha=", " d="};
@@ -86,7 +116,7 @@ CanonicalForm conventional_form(const LoopGeometry& geometry, double tolerance) 
   // twist a hair above -pi is pi, as the key reads it.
   auto is_negative_twist = [tolerance](double alpha) { return alpha < -tolerance && alpha >= -kPi + tolerance; };
   smallest_representation(
-      scaled(geometry, best.scale),
+      scaled(geometry, best.scale), tolerance,
       [&](const LoopGeometry& g) {
         long long negative_twists = 0, negative_offsets = 0;
         for (int k = 0; k < n; ++k) {
@@ -98,6 +128,11 @@ CanonicalForm conventional_form(const LoopGeometry& geometry, double tolerance) 
         order.insert(order.end(), values.begin(), values.end());
         return order;
       },
+      [&](double twist, double negated) {
+        const bool negative = is_negative_twist(twist), negated_negative = is_negative_twist(negated);
+        if (negative != negated_negative) return negated_negative < negative;
+        return twist_quantum(negated, tolerance) < twist_quantum(twist, tolerance);
+      },
       best);
   for (int k = 0; k < n; ++k) {
     if (best.geometry.alpha[k] < -kPi + tolerance) best.geometry.alpha[k] += 2 * kPi;
@@ -108,7 +143,7 @@ CanonicalForm conventional_form(const LoopGeometry& geometry, double tolerance) 
 JointVector canonical_angles(const CanonicalForm& form, const JointVector& theta) {
   for (const detail::Representation& r : detail::representations(static_cast<int>(theta.size()))) {
     if (r.shift == form.shift && r.reversed == form.reversed && r.flips == form.flips)
-      return detail::apply_angles(r, theta);
+      return detail::negated_twist_angles(detail::apply_angles(r, theta), form.negated_twists);
   }
   throw std::invalid_argument("canonical_angles: the form does not belong to a loop of this size");
 }

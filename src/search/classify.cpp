@@ -78,8 +78,8 @@ struct FoldingGoldberg {
 FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double family_residual, double tolerance) {
   FoldingGoldberg out;
   if (!goldberg_type(family)) return out;
-  const Best best = best_for(family, g, false);
-  const LoopGeometry w = detail::apply(*best.representation, g);
+  const Best best = best_for(family, g, false, tolerance);
+  const LoopGeometry w = written_out(best, g);
   const double L = length_scale(w);
   auto fold = [&](int loop, double& length, double& denominator) {
     const int link = loop + 1;
@@ -126,12 +126,12 @@ FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double fa
 }
 
 // The detail line of a 5R or 6R family found.
-std::string special_detail(Family family, const LoopGeometry& g) {
+std::string special_detail(Family family, const LoopGeometry& g, double tolerance) {
   if (family == Family::goldberg_bent) {
     // The fusion angle |psi| from the real cosine rule of the best representation:
     // cos(alpha5) = cos(alpha2) cos(alpha3) + sin(alpha2) sin(alpha3) cos(psi).
-    const Best best = best_over_representations<Family::goldberg_bent>(g, false);
-    const LoopGeometry w = detail::apply(*best.representation, g);
+    const Best best = best_over_representations<Family::goldberg_bent>(g, false, tolerance);
+    const LoopGeometry w = written_out(best, g);
     const double cos_psi = (std::cos(w.alpha[4]) - std::cos(w.alpha[1]) * std::cos(w.alpha[2])) /
                            (std::sin(w.alpha[1]) * std::sin(w.alpha[2]));
     const double psi_deg = std::acos(std::clamp(cos_psi, -1.0, 1.0)) * 180.0 / kPi;
@@ -144,8 +144,8 @@ std::string special_detail(Family family, const LoopGeometry& g) {
     return buffer;
   }
   if (family == Family::bennett_pair) {
-    const Best best = best_over_representations<Family::bennett_pair>(g, false);
-    const LoopGeometry w = detail::apply(*best.representation, g);
+    const Best best = best_over_representations<Family::bennett_pair>(g, false, tolerance);
+    const LoopGeometry w = written_out(best, g);
     char buffer[256];
     std::snprintf(buffer, sizeof buffer,
                   "two Bennett loops (links 1-3 and 4-6 of the best representation) sharing a removed link (%.4g L, "
@@ -155,8 +155,8 @@ std::string special_detail(Family family, const LoopGeometry& g) {
     return buffer;
   }
   if (family == Family::bennett_dyads) {
-    const Best best = best_over_representations<Family::bennett_dyads>(g, false);
-    const LoopGeometry w = detail::apply(*best.representation, g);
+    const Best best = best_over_representations<Family::bennett_dyads>(g, false, tolerance);
+    const LoopGeometry w = written_out(best, g);
     const double L = length_scale(w);
     char buffer[256];
     std::snprintf(buffer, sizeof buffer,
@@ -169,8 +169,8 @@ std::string special_detail(Family family, const LoopGeometry& g) {
   if (family == Family::waldron_hybrid) {
     // The dyads' Bennett ratios and how far apart the two loops' feet lie on
     // the fourth axis (Waldron's slide), from the fit of the best representation.
-    const Best best = best_over_representations<Family::waldron_hybrid>(g, false);
-    const LoopGeometry w = detail::apply(*best.representation, g);
+    const Best best = best_over_representations<Family::waldron_hybrid>(g, false, tolerance);
+    const LoopGeometry w = written_out(best, g);
     const WrittenOut written(w);
     const WaldronFit fit = waldron_fit(waldron_parameters(written));
     const double L = length_scale(w);
@@ -185,8 +185,8 @@ std::string special_detail(Family family, const LoopGeometry& g) {
   }
   if (family == Family::double_goldberg) {
     // The one Bennett ratio of the three loops, from the best representation.
-    const Best best = best_over_representations<Family::double_goldberg>(g, false);
-    const LoopGeometry w = detail::apply(*best.representation, g);
+    const Best best = best_over_representations<Family::double_goldberg>(g, false, tolerance);
+    const LoopGeometry w = written_out(best, g);
     char buffer[320];
     std::snprintf(buffer, sizeof buffer,
                   "double-Goldberg: Bennett dyads (links 1-2 and 4-5 of the best representation, |sin alpha| / a = "
@@ -199,8 +199,8 @@ std::string special_detail(Family family, const LoopGeometry& g) {
     // Which link of the Goldberg 5R the third Bennett loop shares (P, the
     // removed joint, is the 5R's joint set / 4), the third loop's ratio and
     // the fusion angle about P, from the fit of the best representation.
-    const Best best = best_over_representations<Family::goldberg_6r>(g, false);
-    const LoopGeometry w = detail::apply(*best.representation, g);
+    const Best best = best_over_representations<Family::goldberg_6r>(g, false, tolerance);
+    const LoopGeometry w = written_out(best, g);
     const WrittenOut written(w);
     const int k = best.set / 4, setup = best.set % 4;
     const Goldberg6RFit fit = goldberg_6r_fit(goldberg_6r_parameters(written), k, setup);
@@ -218,8 +218,8 @@ std::string special_detail(Family family, const LoopGeometry& g) {
   if (family == Family::hooke) {
     // How far apart the two centres are (the distance both links 3 and 6
     // hold), from the best representation.
-    const Best best = best_over_representations<Family::hooke>(g, false);
-    const LoopGeometry w = detail::apply(*best.representation, g);
+    const Best best = best_over_representations<Family::hooke>(g, false, tolerance);
+    const LoopGeometry w = written_out(best, g);
     const double distance =
         std::sqrt(w.d[2] * w.d[2] + w.a[2] * w.a[2] + w.d[3] * w.d[3] + 2.0 * w.d[2] * w.d[3] * std::cos(w.alpha[2]));
     char buffer[256];
@@ -251,8 +251,8 @@ std::string special_detail(Family family, const LoopGeometry& g) {
         return "";
     }
   }
-  const Best best = family == Family::goldberg ? best_over_representations<Family::goldberg>(g, false)
-                                               : best_over_representations<Family::myard>(g, false);
+  const Best best = family == Family::goldberg ? best_over_representations<Family::goldberg>(g, false, tolerance)
+                                               : best_over_representations<Family::myard>(g, false, tolerance);
   std::string d =
       (best.set & 4) ? "fused links on the same side (a5 = a2 - a3)" : "fused links on opposite sides (a5 = a2 + a3)";
   d += std::string(", Bennett loops ") + ((best.set & 1) ? "line-symmetric" : "asymmetric") + " and " +
@@ -279,7 +279,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   bennett.family = Family::bennett;
   bennett.residual = kInf;
   if (n == 4) {
-    const Best best = best_over_representations<Family::bennett>(geometry, false);
+    const Best best = best_over_representations<Family::bennett>(geometry, false, options.tolerance);
     bennett = check_from(Family::bennett, best);
     bennett.setup = best.setup_sign > 0 ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
     const WrittenOut as_written(geometry);
@@ -292,7 +292,8 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
       bennett.setup = as_written_asym <= as_written_line ? BennettSetup::asymmetric : BennettSetup::line_symmetric;
     }
   }
-  FamilyCheck planar = check_from(Family::planar, best_over_representations<Family::planar>(geometry, false));
+  FamilyCheck planar =
+      check_from(Family::planar, best_over_representations<Family::planar>(geometry, false, options.tolerance));
   Best spherical_best;
   spherical_conditions(geometry, true, spherical_best.conditions);
   spherical_best.score = spherical_best.conditions.max_abs();
@@ -338,7 +339,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
       if (locked.residual < check.residual) check = locked_check;
     }
     out.checks.push_back(check);
-    for (Family f : special_families(n)) out.checks.push_back(family_check(f, geometry));
+    for (Family f : special_families(n)) out.checks.push_back(family_check(f, geometry, options.tolerance));
   }
   const double tol = options.tolerance;
   // The first of the 5R/6R families (after degenerate) that fits, in the order
@@ -385,7 +386,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   } else if (special) {
     out.family = special->family;
     out.residual = special->residual;
-    out.detail = special_detail(special->family, geometry);
+    out.detail = special_detail(special->family, geometry, options.tolerance);
     // A member whose motion found is another one (some members have several).
     if (locked.residual <= tol) out.detail += "; the motion found: " + locked.detail;
   } else if (folding.folds) {

@@ -1616,6 +1616,26 @@ constexpr bool reads_cosines(Family family) {
          family == Family::bricard_octahedral_collapsible;
 }
 
+// Whether a family's score can depend on the sign of a twist (the freedom at
+// a zero-length link, representation.hpp): not where every condition reads
+// twists only through cos(alpha) or |sin(alpha)|, as planar's, trivial's on
+// five or more joints (adjacent axes coaxial), the trihedral Bricard loop's
+// and the two octahedral ones' (edge lengths and face angles) do.
+// Classification tries the twist signs only for the others (family_fit.hpp).
+constexpr bool reads_twist_signs(Family family, int joints) {
+  switch (family) {
+    case Family::planar:
+    case Family::bricard_trihedral:
+    case Family::bricard_octahedral_plane:
+    case Family::bricard_octahedral_collapsible:
+      return false;
+    case Family::trivial:
+      return joints == 4;  // axes 1 and 3 coaxial: twist differences
+    default:
+      return true;
+  }
+}
+
 template <Family F, class RepresentationView, class Sink>
 void condition_set(int set, const RepresentationView& w, Sink& c) {
   static_assert(F != Family::spherical && F != Family::degenerate && F != Family::unclassified);

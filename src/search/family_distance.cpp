@@ -126,7 +126,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
   switch (family) {
     case Family::bennett:
       if (n != 4) throw std::invalid_argument("family_distance_report: Bennett loops have 4 joints");
-      best = best_over_representations<Family::bennett>(geometry, true);
+      best = best_over_representations<Family::bennett>(geometry, true, kNoZeroLength);
       break;
     case Family::spherical:
       spherical_conditions(geometry, false, best.conditions);
@@ -149,7 +149,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::double_goldberg:
     case Family::hooke:
     case Family::bricard_octahedral_collapsible:
-      best = best_for(family, geometry, true);
+      best = best_for(family, geometry, true, kNoZeroLength);
       break;
     case Family::degenerate:
       throw std::invalid_argument("family_distance_report: degenerate loops have no distance");

@@ -53,44 +53,44 @@ FamilyCheck check_from(Family family, const Best& best) {
 // Families decided by the geometry alone, by joint count, for classify() and
 // for the merged loop of a degenerate one.
 
-Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
+Best best_for(Family family, const LoopGeometry& g, bool by_norm, double zero_length) {
   switch (family) {
     case Family::bennett:
-      return best_over_representations<Family::bennett>(g, by_norm);
+      return best_over_representations<Family::bennett>(g, by_norm, zero_length);
     case Family::planar:
-      return best_over_representations<Family::planar>(g, by_norm);
+      return best_over_representations<Family::planar>(g, by_norm, zero_length);
     case Family::trivial:
-      return best_over_representations<Family::trivial>(g, by_norm);
+      return best_over_representations<Family::trivial>(g, by_norm, zero_length);
     case Family::goldberg:
-      return best_over_representations<Family::goldberg>(g, by_norm);
+      return best_over_representations<Family::goldberg>(g, by_norm, zero_length);
     case Family::myard:
-      return best_over_representations<Family::myard>(g, by_norm);
+      return best_over_representations<Family::myard>(g, by_norm, zero_length);
     case Family::goldberg_bent:
-      return best_over_representations<Family::goldberg_bent>(g, by_norm);
+      return best_over_representations<Family::goldberg_bent>(g, by_norm, zero_length);
     case Family::bricard_line_symmetric:
-      return best_over_representations<Family::bricard_line_symmetric>(g, by_norm);
+      return best_over_representations<Family::bricard_line_symmetric>(g, by_norm, zero_length);
     case Family::bricard_plane_symmetric:
-      return best_over_representations<Family::bricard_plane_symmetric>(g, by_norm);
+      return best_over_representations<Family::bricard_plane_symmetric>(g, by_norm, zero_length);
     case Family::bricard_trihedral:
-      return best_over_representations<Family::bricard_trihedral>(g, by_norm);
+      return best_over_representations<Family::bricard_trihedral>(g, by_norm, zero_length);
     case Family::bennett_pair:
-      return best_over_representations<Family::bennett_pair>(g, by_norm);
+      return best_over_representations<Family::bennett_pair>(g, by_norm, zero_length);
     case Family::bennett_dyads:
-      return best_over_representations<Family::bennett_dyads>(g, by_norm);
+      return best_over_representations<Family::bennett_dyads>(g, by_norm, zero_length);
     case Family::sarrus:
-      return best_over_representations<Family::sarrus>(g, by_norm);
+      return best_over_representations<Family::sarrus>(g, by_norm, zero_length);
     case Family::bricard_octahedral_plane:
-      return best_over_representations<Family::bricard_octahedral_plane>(g, by_norm);
+      return best_over_representations<Family::bricard_octahedral_plane>(g, by_norm, zero_length);
     case Family::waldron_hybrid:
-      return best_over_representations<Family::waldron_hybrid>(g, by_norm);
+      return best_over_representations<Family::waldron_hybrid>(g, by_norm, zero_length);
     case Family::goldberg_6r:
-      return best_over_representations<Family::goldberg_6r>(g, by_norm);
+      return best_over_representations<Family::goldberg_6r>(g, by_norm, zero_length);
     case Family::double_goldberg:
-      return best_over_representations<Family::double_goldberg>(g, by_norm);
+      return best_over_representations<Family::double_goldberg>(g, by_norm, zero_length);
     case Family::hooke:
-      return best_over_representations<Family::hooke>(g, by_norm);
+      return best_over_representations<Family::hooke>(g, by_norm, zero_length);
     case Family::bricard_octahedral_collapsible:
-      return best_over_representations<Family::bricard_octahedral_collapsible>(g, by_norm);
+      return best_over_representations<Family::bricard_octahedral_collapsible>(g, by_norm, zero_length);
     case Family::spherical:
     case Family::degenerate:
     case Family::unclassified:
@@ -99,13 +99,13 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm) {
   throw std::logic_error(std::string("best_for: no representations for ") + to_string(family));
 }
 
-FamilyCheck family_check(Family family, const LoopGeometry& g) {
+FamilyCheck family_check(Family family, const LoopGeometry& g, double zero_length) {
   Best best;
   if (family == Family::spherical) {
     spherical_conditions(g, true, best.conditions);
     best.score = best.conditions.max_abs();
   } else {
-    best = best_for(family, g, false);
+    best = best_for(family, g, false, zero_length);
   }
   FamilyCheck check = check_from(family, best);
   if (family == Family::bennett) {
@@ -145,7 +145,7 @@ GeometricFit geometric_fit(const LoopGeometry& g, double tolerance) {
   std::vector<Family> families = {Family::planar, Family::spherical};
   for (Family f : special_families(n)) families.push_back(f);
   for (Family f : families) {
-    const FamilyCheck c = family_check(f, g);
+    const FamilyCheck c = family_check(f, g, tolerance);
     if (c.residual < best.residual && !(best.residual <= tolerance)) {
       best = {f, c.residual, to_string(f)};
       if (f == Family::bennett) best.detail += std::string(" (") + to_string(c.setup) + " setup)";

@@ -125,4 +125,33 @@ GeometryVector pull_back(const Representation& r, const GeometryVector& gradient
   return out;
 }
 
+std::uint32_t zero_length_links(const LoopGeometry& g, double zero_length) {
+  if (!(zero_length >= 0.0)) return 0u;
+  const double bound = zero_length * length_scale(g);
+  std::uint32_t links = 0;
+  for (int k = 0; k < g.joints(); ++k) {
+    if (g.a[k] <= bound) links |= 1u << k;
+  }
+  return links;
+}
+
+LoopGeometry with_negated_twists(const LoopGeometry& g, std::uint32_t links) {
+  LoopGeometry out = g;
+  for (int k = 0; k < g.joints(); ++k) {
+    if (links >> k & 1u) out.alpha[k] = wrap_angle(0.0 - g.alpha[k]);  // 0 stays +0
+  }
+  return out;
+}
+
+JointVector negated_twist_angles(const JointVector& theta, std::uint32_t links) {
+  const auto n = static_cast<int>(theta.size());
+  JointVector out = theta;
+  for (int k = 0; k < n; ++k) {
+    if (!(links >> k & 1u)) continue;
+    out[k] += kPi;
+    out[(k + 1) % n] -= kPi;
+  }
+  return out;
+}
+
 }  // namespace loopfarm::detail

@@ -5,6 +5,14 @@
 // on twists), so a condition evaluated on any representation can be
 // differentiated back to the parameters as written. Internal to the library:
 // canonical form, classification and family distances share it.
+//
+// One more freedom is not an affine map of the parameters: where a link has
+// zero length (a_k = 0) the direction of its common normal is free, so its
+// twist may be written with either sign, alpha_k or -alpha_k, with theta_k and
+// theta_{k+1} turned by pi (Rz(pi) Rx(-alpha) = Rx(alpha) Rz(pi)). Which
+// links count as zero-length depends on a tolerance, so the callers apply it
+// on top of the representations (with_negated_twists): the canonical form at
+// its key's resolution, classification at its tolerance.
 #pragma once
 
 #include <array>
@@ -39,5 +47,19 @@ JointVector apply_angles(const Representation& r, const JointVector& theta);
 // A gradient with respect to the representation's parameters, mapped back to
 // the parameters as written.
 GeometryVector pull_back(const Representation& r, const GeometryVector& gradient);
+
+// The links whose length is at most zero_length * L (L = length_scale(g)),
+// one bit per link: those whose twist sign is free. None when zero_length is
+// negative (or NaN).
+std::uint32_t zero_length_links(const LoopGeometry& g, double zero_length);
+
+// The geometry with the twists of `links` (one bit per link) negated, then
+// wrapped to (-pi, pi]: the same loop where those links have zero length.
+LoopGeometry with_negated_twists(const LoopGeometry& g, std::uint32_t links);
+
+// The joint angles that go with it: for each link k in `links`, theta_k + pi
+// and theta_{k+1} - pi (not wrapped; a joint between two such links keeps its
+// angle).
+JointVector negated_twist_angles(const JointVector& theta, std::uint32_t links);
 
 }  // namespace loopfarm::detail

@@ -120,9 +120,12 @@ struct RepresentationSearch {
 
 // The representation and condition set of family F that fit g best: by the
 // norm of the conditions (Sink = SquaredNorm) or by their max |value|
-// (Sink = MaxAbs).
+// (Sink = MaxAbs). With Sink = MaxAbs and a finite `bound`, only a
+// representation whose score is below it counts (representation -1 if none):
+// the search over twist signs (best_over_representations) passes the best
+// score so far.
 template <Family F, class Sink>
-RepresentationSearch best_representation(const LoopGeometry& g) {
+RepresentationSearch best_representation(const LoopGeometry& g, double bound_score = kInf) {
   const int n = g.joints();
   const RepresentationTable& table = representation_table(n);
   // Cosines only where a condition's value reads them; elsewhere they enter gradients alone.
@@ -130,6 +133,7 @@ RepresentationSearch best_representation(const LoopGeometry& g) {
   const int sets = condition_sets(F, n);
   const int flips = 1 << n;
   RepresentationSearch best;
+  if constexpr (std::is_same_v<Sink, MaxAbs>) best.score = bound_score;
   auto bound = [&best] {
     if constexpr (std::is_same_v<Sink, SquaredNorm>) {
       return best.sum;

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {
@@ -162,6 +163,103 @@ TEST(Canonical, TheConventionalFormHasPositiveTwistsWhereTheLoopAllows) {
         EXPECT_LE(negatives(form.geometry), negatives(r.g)) << n << " " << seed << " " << k;
       }
     }
+  }
+}
+
+// The line-symmetric octahedral Bricard loop: every a_i = 0.
+LoopGeometry octahedral_line_loop() {
+  return LoopGeometry::from_degrees(std::vector<double>(6, 0.0), std::vector<double>{50, 70, 110, 50, 70, 110},
+                                    std::vector<double>{1, 1.3, 0.7, 1, 1.3, 0.7});
+}
+
+// The loop with the twists of `links` negated and the joint angles on either
+// side of each turned by pi (Rz(pi) Rx(-alpha) = Rx(alpha) Rz(pi): the same
+// loop where those links have zero length).
+Rewritten negate_twists(const LoopGeometry& g, const JointVector& theta, std::uint32_t links) {
+  constexpr double kPi = 3.14159265358979323846;
+  Rewritten r{g, theta};
+  for (int k = 0; k < g.joints(); ++k) {
+    if (!(links >> k & 1u)) continue;
+    r.g.alpha[k] = -g.alpha[k];
+    r.theta[k] += kPi;
+    r.theta[(k + 1) % g.joints()] -= kPi;
+  }
+  return r;
+}
+
+// Where a link has zero length its twist's sign is free: the same loop
+// written with any of those twists negated (and in any other
+// representation) has the same key, and the form's angles close it.
+TEST(Canonical, ATwistNegatedAtAZeroLengthLinkKeepsTheKey) {
+  const LoopGeometry g = octahedral_line_loop();
+  const VerificationSummary motion = verify_motion(g, nullptr);
+  ASSERT_TRUE(motion.verified);
+  const JointVector theta = motion.pose();
+  ASSERT_LT(closure_residual(g, theta).norm(), 1e-12);
+  const std::string key = canonical_form(g).key;
+  std::uint64_t seed = 1;
+  for (std::uint32_t links = 1; links < 64; ++links) {
+    const Rewritten negated = negate_twists(g, theta, links);
+    // The same loop: every joint axis the same line (forward kinematics). With
+    // link 6's twist negated, theta_1 turns by -pi: the whole loop then turns
+    // by -pi about axis 1, which is undone here.
+    const Eigen::Isometry3d undo((links >> 5 & 1u) ? Eigen::AngleAxisd(3.14159265358979323846, Vector3::UnitZ())
+                                                   : Eigen::AngleAxisd(0.0, Vector3::UnitZ()));
+    for (int k = 0; k < 6; ++k) {
+      const Eigen::Isometry3d x = forward_transform(g, theta, k);
+      const Eigen::Isometry3d y = undo * forward_transform(negated.g, negated.theta, k);
+      EXPECT_LT((x.translation() - y.translation()).norm(), 1e-12) << links << " " << k;
+      EXPECT_LT((x.linear().col(2) - y.linear().col(2)).norm(), 1e-12) << links << " " << k;
+    }
+    EXPECT_EQ(canonical_form(negated.g).key, key) << links;
+    const Rewritten r = rewrite(negated.g, negated.theta, ++seed);
+    const CanonicalForm form = canonical_form(r.g);
+    EXPECT_EQ(form.key, key) << links;
+    // The negated loop closes at the adjusted angles, and the canonical
+    // angles close the canonical geometry.
+    EXPECT_LT(closure_residual(r.g, r.theta).norm(), 1e-11) << links;
+    EXPECT_LT(closure_residual(form.geometry, canonical_angles(form, r.theta)).norm(), 1e-11) << links;
+    const CanonicalForm conventional = conventional_form(r.g);
+    EXPECT_EQ(conventional.key, key);
+    for (int k = 0; k < 6; ++k) EXPECT_GT(conventional.geometry.alpha[k], 0.0) << links << " " << k;
+    EXPECT_LT(closure_residual(conventional.geometry, canonical_angles(conventional, r.theta)).norm(), 1e-11) << links;
+  }
+}
+
+// A spherical 4R (every a_i and d_i zero) with any twist negated: the same key.
+TEST(Canonical, ASphericalLoopWithATwistNegatedKeepsTheKey) {
+  const LoopGeometry g = LoopGeometry::from_degrees(std::vector<double>(4, 0.0), std::vector<double>{35, 80, 65, 100},
+                                                    std::vector<double>(4, 0.0));
+  const std::string key = canonical_form(g).key;
+  for (std::uint32_t links = 1; links < 16; ++links) {
+    EXPECT_EQ(canonical_form(negate_twists(g, random_angles(4, 1), links).g).key, key) << links;
+  }
+}
+
+// A link longer than the key resolves as zero (a / L rounds to a nonzero
+// quantum) has a fixed twist sign: negating it gives another loop's key. Just
+// below, the sign is free. A loop with no zero-length link gets no negated twist.
+TEST(Canonical, ATwistNegatedAtALinkTheKeyResolvesIsAnotherLoop) {
+  const double tolerance = 1e-6;
+  for (double length : {0.6e-6, 0.4e-6}) {
+    LoopGeometry g = octahedral_line_loop();
+    g.a.setConstant(length * length_scale(g));
+    const std::string key = canonical_form(g, tolerance).key;
+    LoopGeometry negated = g;
+    negated.alpha[0] = -negated.alpha[0];
+    if (length > 0.5e-6) {
+      EXPECT_NE(canonical_form(negated, tolerance).key, key);
+    } else {
+      EXPECT_EQ(canonical_form(negated, tolerance).key, key);
+    }
+  }
+  for (int n = 4; n <= 8; ++n) {
+    const LoopGeometry loop = random_loop(n, 900 + n);
+    const CanonicalForm form = canonical_form(loop);
+    EXPECT_EQ(form.negated_twists, 0u);
+    LoopGeometry negated = loop;
+    negated.alpha[1] = -negated.alpha[1];
+    EXPECT_NE(canonical_form(negated).key, form.key) << n;
   }
 }
 

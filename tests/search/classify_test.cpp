@@ -13,6 +13,7 @@
 #include "allocation_counter.hpp"
 #include "family_fit.hpp"
 #include "loopfarm/core/sample_loops.hpp"
+#include "loopfarm/search/verify.hpp"
 #include "test_support.hpp"
 
 namespace loopfarm {
@@ -321,7 +322,7 @@ template <Family F>
 void expect_same_pick(const LoopGeometry& g, const std::string& where, long& compared) {
   for (bool by_norm : {false, true}) {
     const detail::Best reference = every_representation_written_out<F>(g, by_norm);
-    const detail::Best best = detail::best_over_representations<F>(g, by_norm);
+    const detail::Best best = detail::best_over_representations<F>(g, by_norm, detail::kNoZeroLength);
     const std::string what = where + " " + to_string(F) + (by_norm ? " by norm" : " by max");
     ASSERT_EQ(best.representation, reference.representation) << what;
     EXPECT_EQ(best.set, reference.set) << what;
@@ -370,6 +371,231 @@ TEST(FamilyFit, PicksTheRepresentationThatWritingEveryOneOutPicks) {
     }
   }
   EXPECT_EQ(compared, 2 * (300 * 3 + 60 * 5 + 24 * 12 + 1));
+}
+
+// The least max |condition| over every representation and every set of
+// negated twists at the links `free` (one bit per link), each written out as
+// the geometry with those twists negated, its score the larger of its
+// conditions' and max a_k / L over the negated links: the reference for the
+// search over twist signs.
+template <Family F>
+double least_over_twist_signs_written_out(const LoopGeometry& g, std::uint32_t free) {
+  double least = detail::kInf;
+  const double L = length_scale(g);
+  for (std::uint32_t links = 0; links < (1u << g.joints()); ++links) {
+    if ((links & ~free) != 0u) continue;
+    double zero = 0.0;
+    for (int k = 0; k < g.joints(); ++k) {
+      if (links >> k & 1u) zero = std::max(zero, g.a[k] / L);
+    }
+    const LoopGeometry negated = detail::with_negated_twists(g, links);
+    for (const detail::Representation& r : detail::representations(g.joints())) {
+      const detail::WrittenOut w(detail::apply(r, negated));
+      for (int set = 0; set < detail::condition_sets(F, g.joints()); ++set) {
+        detail::Conditions c;
+        detail::condition_set<F>(set, w, c);
+        least = std::min(least, std::max(c.max_abs(), zero));
+      }
+    }
+  }
+  return least;
+}
+
+// A loop with some links of zero length (or within the tolerance of it) and
+// the twists there of random sign.
+LoopGeometry with_zero_length_links(int n, std::uint64_t seed, double tolerance) {
+  std::mt19937_64 rng(seed);
+  LoopGeometry g = comparison_geometry(n, seed);
+  const double L = length_scale(g);
+  for (int k = 0; k < n; ++k) {
+    if (rng() % 2) g.a[k] = (rng() % 2) ? 0.0 : 0.5 * tolerance * L;
+  }
+  return g;
+}
+
+template <Family F>
+void expect_least_over_twist_signs(const LoopGeometry& g, double tolerance, const std::string& where) {
+  const detail::Best best = detail::best_over_representations<F>(g, false, tolerance);
+  const bool signs = detail::reads_twist_signs(F, g.joints());
+  const std::uint32_t free = signs ? detail::zero_length_links(g, tolerance) : 0u;
+  const double reference = least_over_twist_signs_written_out<F>(g, free);
+  const std::string what = where + " " + to_string(F);
+  EXPECT_EQ(best.score, reference) << what;
+  // The pick written out scores what the search scored.
+  ASSERT_NE(best.representation, nullptr) << what;
+  EXPECT_EQ((best.negated_twists & ~free), 0u) << what;
+  detail::Conditions c;
+  detail::condition_set<F>(best.set, detail::WrittenOut(detail::written_out(best, g)), c);
+  double zero = 0.0;
+  for (int k = 0; k < g.joints(); ++k) {
+    if (best.negated_twists >> k & 1u) zero = std::max(zero, g.a[k] / length_scale(g));
+  }
+  EXPECT_EQ(std::max(c.max_abs(), zero), best.score) << what;
+  // A family that reads no twist sign scores the same whichever signs (to
+  // round-off: a negated twist plus pi rounds differently).
+  if (!signs) {
+    EXPECT_NEAR(least_over_twist_signs_written_out<F>(g, detail::zero_length_links(g, tolerance)), reference, 1e-14)
+        << what;
+  }
+}
+
+// Classification takes the twist sign at every zero-length link as free: its
+// search finds the least score over every representation and every set of
+// negated twists there, written out one by one. The families it does not
+// search over signs (reads_twist_signs) score the same whichever sign.
+TEST(FamilyFit, TakesTheLeastOverTheTwistSignsAtZeroLengthLinks) {
+  const double tolerance = 1e-8;
+  int compared = 0;
+  for (std::uint64_t seed = 0; seed < 12; ++seed) {
+    const std::string where = "seed=" + std::to_string(seed);
+    const LoopGeometry g4 = with_zero_length_links(4, 100 + seed, tolerance);
+    expect_least_over_twist_signs<Family::bennett>(g4, tolerance, where);
+    expect_least_over_twist_signs<Family::planar>(g4, tolerance, where);
+    expect_least_over_twist_signs<Family::trivial>(g4, tolerance, where);
+    const LoopGeometry g5 = with_zero_length_links(5, 200 + seed, tolerance);
+    expect_least_over_twist_signs<Family::trivial>(g5, tolerance, where);
+    expect_least_over_twist_signs<Family::goldberg>(g5, tolerance, where);
+    if (seed < 2) {
+      const LoopGeometry g6 = with_zero_length_links(6, 300 + seed, tolerance);
+      expect_least_over_twist_signs<Family::bricard_line_symmetric>(g6, tolerance, where);
+      expect_least_over_twist_signs<Family::bricard_plane_symmetric>(g6, tolerance, where);
+      expect_least_over_twist_signs<Family::bricard_trihedral>(g6, tolerance, where);
+      expect_least_over_twist_signs<Family::bricard_octahedral_plane>(g6, tolerance, where);
+      expect_least_over_twist_signs<Family::bricard_octahedral_collapsible>(g6, tolerance, where);
+      expect_least_over_twist_signs<Family::sarrus>(g6, tolerance, where);
+    }
+    ++compared;
+  }
+  EXPECT_EQ(compared, 12);
+}
+
+// The line-symmetric octahedral Bricard loop (every a_i = 0) and the same
+// loop with twists negated: classify's tolerance (1e-8) decides which links
+// count as zero-length.
+const LoopGeometry kOctahedralLine =
+    LoopGeometry::from_degrees(std::vector<double>(6, 0.0), std::vector<double>{50, 70, 110, 50, 70, 110},
+                               std::vector<double>{1, 1.3, 0.7, 1, 1.3, 0.7});
+
+// A closed pose of its motion and every joint's travel there (the motion
+// as verify traces it).
+struct Posed {
+  JointVector pose;
+  std::vector<double> travel;
+};
+Posed octahedral_line_motion() {
+  const VerificationSummary motion = verify_motion(kOctahedralLine, nullptr);
+  EXPECT_TRUE(motion.verified);
+  return {motion.pose(), std::vector<double>(motion.joint_travel.data(), motion.joint_travel.data() + 6)};
+}
+
+// The joint axes of a loop at angles theta, as lines: each joint's origin
+// and direction (forward kinematics, independent of the representations).
+std::vector<std::pair<Vector3, Vector3>> joint_axes(const LoopGeometry& g, const JointVector& theta) {
+  std::vector<std::pair<Vector3, Vector3>> axes;
+  for (int k = 0; k < g.joints(); ++k) {
+    const Eigen::Isometry3d frame = forward_transform(g, theta, k);
+    axes.push_back({frame.translation(), frame.linear().col(2)});
+  }
+  return axes;
+}
+
+TEST(Classify, ATwistNegatedAtAZeroLengthLinkIsTheSameLoopAndFamily) {
+  const LoopGeometry& g = kOctahedralLine;
+  const Posed posed = octahedral_line_motion();
+  const JointVector& theta = posed.pose;
+  ASSERT_LT(closure_residual(g, theta).norm(), 1e-12);
+  const std::vector<double>& travel = posed.travel;
+  const Classification as_written = classify(g, theta, travel);
+  ASSERT_EQ(as_written.family, Family::bricard_line_symmetric) << as_written.detail;
+  ASSERT_LE(as_written.residual, 1e-12);
+  const auto axes = joint_axes(g, theta);
+  std::mt19937_64 rng(17);
+  // Each twist negated alone, then random sets of them.
+  std::vector<std::uint32_t> sets;
+  for (int k = 0; k < 6; ++k) sets.push_back(1u << k);
+  for (int i = 0; i < 12; ++i) sets.push_back(static_cast<std::uint32_t>(rng() % 63 + 1));
+  for (std::uint32_t links : sets) {
+    const std::string where = "negated " + std::to_string(links);
+    LoopGeometry negated = g;
+    JointVector angles = theta;
+    for (int k = 0; k < 6; ++k) {
+      if (!(links >> k & 1u)) continue;
+      negated.alpha[k] = -g.alpha[k];
+      angles[k] += 3.14159265358979323846;
+      angles[(k + 1) % 6] -= 3.14159265358979323846;
+    }
+    // The same loop: it closes at the adjusted angles, with every joint axis
+    // the same line in space.
+    EXPECT_LT(closure_residual(negated, angles).norm(), 1e-12) << where;
+    auto negated_axes = joint_axes(negated, angles);
+    if (links >> 5 & 1u) {
+      // theta_1 turned by -pi turns the whole loop by -pi about axis 1: undone.
+      const Eigen::AngleAxisd undo(3.14159265358979323846, Vector3::UnitZ());
+      for (auto& [origin, direction] : negated_axes) {
+        origin = undo * origin;
+        direction = undo * direction;
+      }
+    }
+    for (int k = 0; k < 6; ++k) {
+      EXPECT_LT((negated_axes[k].first - axes[k].first).norm(), 1e-12) << where << " joint " << k;
+      EXPECT_LT((negated_axes[k].second - axes[k].second).norm(), 1e-12) << where << " joint " << k;
+    }
+    // The same family, to round-off as written.
+    const Classification c = classify(negated, angles, travel);
+    EXPECT_EQ(c.family, Family::bricard_line_symmetric) << where << ": " << c.detail;
+    EXPECT_LE(c.residual, 1e-12) << where;
+    EXPECT_EQ(c.detail, as_written.detail) << where;
+    // The twists as written fit only where the negated set is itself
+    // line-symmetric (links i and i + 3 both or neither): elsewhere the sign
+    // freedom made the difference.
+    if ((links & 7u) == (links >> 3)) {
+      EXPECT_LT(family_distance(Family::bricard_line_symmetric, negated), 1e-12) << where;
+    } else {
+      EXPECT_GT(family_distance(Family::bricard_line_symmetric, negated), 0.1) << where;
+    }
+  }
+}
+
+TEST(Classify, ATwistNegatedAtALinkLongerThanTheToleranceIsAnotherLoop) {
+  // Every a_i just above classify's tolerance (1e-8 L): the twists' signs are
+  // no longer free, and the loop with alpha1 negated is not line-symmetric.
+  LoopGeometry g = kOctahedralLine;
+  g.a.setConstant(3e-8 * length_scale(g));
+  LoopGeometry negated = g;
+  negated.alpha[0] = -negated.alpha[0];
+  const Posed posed = octahedral_line_motion();
+  const JointVector& theta = posed.pose;
+  const std::vector<double>& travel = posed.travel;
+  EXPECT_EQ(detail::zero_length_links(negated, 1e-8), 0u);
+  const FamilyCheck line = detail::family_check(Family::bricard_line_symmetric, negated, 1e-8);
+  EXPECT_GT(line.residual, 0.1);
+  EXPECT_NE(classify(negated, theta, travel).family, Family::bricard_line_symmetric);
+  // Written as it is, it still fits (to its lengths' size).
+  EXPECT_LE(detail::family_check(Family::bricard_line_symmetric, g, 1e-8).residual, 1e-12);
+  // Just below the tolerance the sign is free again, at the cost of a_k / L.
+  LoopGeometry close = negated;
+  close.a.setConstant(0.5e-8 * length_scale(kOctahedralLine));
+  const FamilyCheck fits = detail::family_check(Family::bricard_line_symmetric, close, 1e-8);
+  EXPECT_LE(fits.residual, 1e-8);
+  EXPECT_GE(fits.residual, 0.4e-8);
+  EXPECT_NE(fits.conditions.back().name.find("negated"), std::string::npos) << fits.conditions.back().name;
+}
+
+// A loop with no zero-length link is searched as before: the sign freedom
+// changes neither its checks nor its classification.
+TEST(Classify, LoopsWithoutZeroLengthLinksAreClassifiedAsBefore) {
+  for (int n = 4; n <= 6; ++n) {
+    for (std::uint64_t seed = 0; seed < 8; ++seed) {
+      const LoopGeometry g = comparison_geometry(n, 500 + 10 * static_cast<std::uint64_t>(n) + seed);
+      if (detail::zero_length_links(g, 1e-8) != 0u) continue;
+      for (Family f : detail::special_families(n)) {
+        const FamilyCheck with = detail::family_check(f, g, 1e-8);
+        const FamilyCheck without = detail::family_check(f, g, detail::kNoZeroLength);
+        EXPECT_EQ(with.residual, without.residual) << to_string(f) << " n=" << n << " seed=" << seed;
+        ASSERT_EQ(with.conditions.size(), without.conditions.size());
+      }
+    }
+  }
 }
 
 // The reporting path names the best representation's conditions.
