@@ -1393,12 +1393,12 @@ void hooke_conditions(const RepresentationView& w, Sink& c) {
 // every vertex are, in their order round it, f1, f2, f3, f4 with f1 = f3 and
 // f2 = f4, or f1 = pi - f3 and f2 = pi - f4: two conditions on their cosines
 // per vertex, with the sign s = +-1 of the closer fit. And the four edges of
-// each cycle V_k V_{k+1} V_{k+3} V_{k+4} (and its shifts) touch one circle in
-// that pose, so they add up to zero with signs: h_k +- D_{k+1} +- h_{k+3}
-// +- D_{k+4} = 0, the signs those of the closest fit. The lengths
+// each cycle V_{k-1} V_k V_{k+2} V_{k+3} (through two opposite pairs) touch
+// one circle in that pose, so they add up to zero with signs: h_k +- D_{k+1}
+// +- h_{k+3} +- D_{k+4} = 0, the signs those of the closest fit. The lengths
 // and angles are the octahedron's own, so the conditions hold in every pose
-// and every representation. A vertex or a diagonal of zero length (no
-// octahedron) fails every angle condition at it by 1.
+// and every representation. A vertex with an edge of zero length at it (no
+// octahedron) fails its angle conditions by 1.
 template <class RepresentationView, class Sink>
 void bricard_octahedral_collapsible_conditions(const RepresentationView& w, Sink& c) {
   const int n = 6;
