@@ -75,10 +75,10 @@ struct FoldingGoldberg {
   FamilyCheck check;
 };
 
-FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double family_residual, double tolerance) {
+FoldingGoldberg folding_goldberg(Family family, const Best& best, const LoopGeometry& g, double family_residual,
+                                 double tolerance) {
   FoldingGoldberg out;
   if (!goldberg_type(family)) return out;
-  const Best best = best_for(family, g, false, tolerance);
   const LoopGeometry w = written_out(best, g);
   const double L = length_scale(w);
   auto fold = [&](int loop, double& length, double& denominator) {
@@ -125,12 +125,12 @@ FoldingGoldberg folding_goldberg(Family family, const LoopGeometry& g, double fa
   return out;
 }
 
-// The detail line of a 5R or 6R family found.
-std::string special_detail(Family family, const LoopGeometry& g, double tolerance) {
+// The detail line of a 5R or 6R family found, from its best representation
+// (the one its check was read from).
+std::string special_detail(Family family, const Best& best, const LoopGeometry& g) {
   if (family == Family::goldberg_bent) {
     // The fusion angle |psi| from the real cosine rule of the best representation:
     // cos(alpha5) = cos(alpha2) cos(alpha3) + sin(alpha2) sin(alpha3) cos(psi).
-    const Best best = best_over_representations<Family::goldberg_bent>(g, false, tolerance);
     const LoopGeometry w = written_out(best, g);
     const double cos_psi = (std::cos(w.alpha[4]) - std::cos(w.alpha[1]) * std::cos(w.alpha[2])) /
                            (std::sin(w.alpha[1]) * std::sin(w.alpha[2]));
@@ -144,7 +144,6 @@ std::string special_detail(Family family, const LoopGeometry& g, double toleranc
     return buffer;
   }
   if (family == Family::bennett_pair) {
-    const Best best = best_over_representations<Family::bennett_pair>(g, false, tolerance);
     const LoopGeometry w = written_out(best, g);
     char buffer[256];
     std::snprintf(buffer, sizeof buffer,
@@ -155,7 +154,6 @@ std::string special_detail(Family family, const LoopGeometry& g, double toleranc
     return buffer;
   }
   if (family == Family::bennett_dyads) {
-    const Best best = best_over_representations<Family::bennett_dyads>(g, false, tolerance);
     const LoopGeometry w = written_out(best, g);
     const double L = length_scale(w);
     char buffer[256];
@@ -169,7 +167,6 @@ std::string special_detail(Family family, const LoopGeometry& g, double toleranc
   if (family == Family::waldron_hybrid) {
     // The dyads' Bennett ratios and how far apart the two loops' feet lie on
     // the fourth axis (Waldron's slide), from the fit of the best representation.
-    const Best best = best_over_representations<Family::waldron_hybrid>(g, false, tolerance);
     const LoopGeometry w = written_out(best, g);
     const WrittenOut written(w);
     const WaldronFit fit = waldron_fit(waldron_parameters(written));
@@ -185,7 +182,6 @@ std::string special_detail(Family family, const LoopGeometry& g, double toleranc
   }
   if (family == Family::double_goldberg) {
     // The one Bennett ratio of the three loops, from the best representation.
-    const Best best = best_over_representations<Family::double_goldberg>(g, false, tolerance);
     const LoopGeometry w = written_out(best, g);
     char buffer[320];
     std::snprintf(buffer, sizeof buffer,
@@ -199,7 +195,6 @@ std::string special_detail(Family family, const LoopGeometry& g, double toleranc
     // Which link of the Goldberg 5R the third Bennett loop shares (P, the
     // removed joint, is the 5R's joint set / 4), the third loop's ratio and
     // the fusion angle about P, from the fit of the best representation.
-    const Best best = best_over_representations<Family::goldberg_6r>(g, false, tolerance);
     const LoopGeometry w = written_out(best, g);
     const WrittenOut written(w);
     const int k = best.set / 4, setup = best.set % 4;
@@ -218,7 +213,6 @@ std::string special_detail(Family family, const LoopGeometry& g, double toleranc
   if (family == Family::hooke) {
     // How far apart the two centres are (the distance both links 3 and 6
     // hold), from the best representation.
-    const Best best = best_over_representations<Family::hooke>(g, false, tolerance);
     const LoopGeometry w = written_out(best, g);
     const double distance =
         std::sqrt(w.d[2] * w.d[2] + w.a[2] * w.a[2] + w.d[3] * w.d[3] + 2.0 * w.d[2] * w.d[3] * std::cos(w.alpha[2]));
@@ -251,8 +245,6 @@ std::string special_detail(Family family, const LoopGeometry& g, double toleranc
         return "";
     }
   }
-  const Best best = family == Family::goldberg ? best_over_representations<Family::goldberg>(g, false, tolerance)
-                                               : best_over_representations<Family::myard>(g, false, tolerance);
   std::string d =
       (best.set & 4) ? "fused links on the same side (a5 = a2 - a3)" : "fused links on opposite sides (a5 = a2 + a3)";
   d += std::string(", Bennett loops ") + ((best.set & 1) ? "line-symmetric" : "asymmetric") + " and " +
@@ -325,6 +317,10 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   out.checks = {bennett, planar, spherical, trivial};
   // 5R and 6R: degenerate, then the joint count's own families.
   GeometricFit degenerate, locked;
+  // The joint count's own families' best representations, in the order
+  // tried, their checks the last of out.checks: the detail line and the fold
+  // test read the one that fits.
+  std::vector<Best> special_fits;
   if (n == 5 || n == 6) {
     FamilyCheck check;
     degenerate = degenerate_fit(geometry, options.tolerance, check);
@@ -339,24 +335,28 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
       if (locked.residual < check.residual) check = locked_check;
     }
     out.checks.push_back(check);
-    for (Family f : special_families(n)) out.checks.push_back(family_check(f, geometry, options.tolerance));
+    for (Family f : special_families(n)) {
+      special_fits.push_back(best_for(f, geometry, false, options.tolerance));
+      out.checks.push_back(check_from(f, special_fits.back()));
+    }
   }
   const double tol = options.tolerance;
   // The first of the 5R/6R families (after degenerate) that fits, in the order
   // tried; not a Goldberg-type loop one of whose Bennett loops only folds:
   // that one is degenerate (folding_goldberg), and its check is degenerate's.
   const FamilyCheck* special = nullptr;
+  const Best* special_fit = nullptr;
   FoldingGoldberg folding;
-  for (Family f : special_families(n)) {
-    if (n == 4) break;  // Bennett, handled below as before
-    for (const FamilyCheck& c : out.checks) {
-      if (c.family != f || !(c.residual <= tol) || special) continue;
-      FoldingGoldberg fold = folding_goldberg(f, geometry, c.residual, tol);
-      if (!fold.folds) {
-        special = &c;
-      } else if (!folding.folds) {
-        folding = std::move(fold);
-      }
+  const size_t first_special = out.checks.size() - special_fits.size();
+  for (size_t i = 0; i < special_fits.size() && !special; ++i) {
+    const FamilyCheck& c = out.checks[first_special + i];
+    if (!(c.residual <= tol)) continue;
+    FoldingGoldberg fold = folding_goldberg(c.family, special_fits[i], geometry, c.residual, tol);
+    if (!fold.folds) {
+      special = &c;
+      special_fit = &special_fits[i];
+    } else if (!folding.folds) {
+      folding = std::move(fold);
     }
   }
   if (folding.folds && !special) {
@@ -386,7 +386,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   } else if (special) {
     out.family = special->family;
     out.residual = special->residual;
-    out.detail = special_detail(special->family, geometry, options.tolerance);
+    out.detail = special_detail(special->family, *special_fit, geometry);
     // A member whose motion found is another one (some members have several).
     if (locked.residual <= tol) out.detail += "; the motion found: " + locked.detail;
   } else if (folding.folds) {
