@@ -107,7 +107,9 @@ TEST(Families, AnOctahedronWithoutAMirrorIsRigidAndNotPlaneSymmetric) {
     const Classification c = classified(loop, v);
     EXPECT_NE(c.family, Family::bricard_octahedral_plane) << tag;
     for (const FamilyCheck& check : c.checks) {
-      if (check.family == Family::bricard_octahedral_plane) EXPECT_GT(check.residual, 1e-3) << tag;
+      if (check.family == Family::bricard_octahedral_plane) {
+        EXPECT_GT(check.residual, 1e-3) << tag;
+      }
     }
   }
 }
@@ -194,7 +196,9 @@ void expect_rigid_near_misses_down_to_1e8(const Posed& m, Family family, int p, 
     const Classification c = classified({g, m.theta}, v);
     if (eps < 1e-6 && within != Family::unclassified && v.verified) {
       for (const FamilyCheck& check : c.checks) {
-        if (check.family == within) EXPECT_LE(check.residual, 1e-8) << tag << " + " << eps;
+        if (check.family == within) {
+          EXPECT_LE(check.residual, 1e-8) << tag << " + " << eps;
+        }
       }
     } else {
       EXPECT_FALSE(v.verified) << tag << " + " << eps << ": worst residual " << v.worst_residual;
@@ -838,7 +842,9 @@ TEST(Families, WaldronHybridsOfOneRatioMeetingTheAxisAtOnePointAreDoubleGoldberg
         const Classification co = classified(off, vo);
         EXPECT_EQ(co.family, Family::waldron_hybrid) << off_tag << ": " << co.detail;
         for (const FamilyCheck& check : co.checks) {
-          if (check.family == Family::double_goldberg) EXPECT_GT(check.residual, eps / 10) << off_tag;
+          if (check.family == Family::double_goldberg) {
+            EXPECT_GT(check.residual, eps / 10) << off_tag;
+          }
         }
       }
     }
@@ -1182,7 +1188,9 @@ TEST(Families, OtherOctahedraAndFamiliesAreNotCollapsible) {
     const Classification c = classify(o.geometry, o.theta, std::vector<double>(6, 1.0));
     EXPECT_NE(c.family, Family::bricard_octahedral_collapsible) << tag;
     for (const FamilyCheck& check : c.checks) {
-      if (check.family == Family::bricard_octahedral_collapsible) EXPECT_GT(check.residual, 1e-3) << tag;
+      if (check.family == Family::bricard_octahedral_collapsible) {
+        EXPECT_GT(check.residual, 1e-3) << tag;
+      }
     }
   }
   expect_far_from(Family::bricard_octahedral_collapsible,
