@@ -12,7 +12,8 @@
 #   sampler_test            the job's parameter space and sampler (job.cpp, job_space.cpp, toml_hazard.cpp,
 #                           parameter_space.cpp, sampler.cpp)
 #   results_database_test   the results database, SQLite's C API (results_database.cpp, results_queries.cpp,
-#                           results_schema.cpp, sqlite_support.cpp, candidate_index.cpp)
+#                           results_schema.cpp, sqlite_support.cpp, candidate_index.cpp, results_rekey.cpp
+#                           with the canonical form it calls: canonical.cpp, representation.cpp)
 #   cycle_start_test        the rigid motion's tracer and the cycle started on it
 #                           (closure_solver.cpp, circuit_trace.cpp, motion.cpp, motion_start.cpp, cycle.cpp,
 #                           cycle_derivatives.cpp, cycle_start.cpp, constructions.cpp)
@@ -49,7 +50,8 @@ target_link_libraries(sampler_test PRIVATE tomlplusplus::tomlplusplus NLopt::nlo
 loopfarm_add_sanitized_test(farm/results_database_test ${PROJECT_SOURCE_DIR}/src/farm/results_database.cpp
   ${PROJECT_SOURCE_DIR}/src/farm/results_queries.cpp ${PROJECT_SOURCE_DIR}/src/farm/results_schema.cpp
   ${PROJECT_SOURCE_DIR}/src/farm/sqlite_support.cpp ${PROJECT_SOURCE_DIR}/src/farm/candidate_index.cpp
-  ${PROJECT_SOURCE_DIR}/src/core/loop.cpp)
+  ${PROJECT_SOURCE_DIR}/src/farm/results_rekey.cpp ${PROJECT_SOURCE_DIR}/src/search/canonical.cpp
+  ${PROJECT_SOURCE_DIR}/src/search/representation.cpp ${PROJECT_SOURCE_DIR}/src/core/loop.cpp)
 target_link_libraries(results_database_test PRIVATE SQLite::SQLite3)
 loopfarm_add_sanitized_test(core/cycle_start_test ${loopfarm_geometry}
   ${PROJECT_SOURCE_DIR}/src/core/equilibrium.cpp ${PROJECT_SOURCE_DIR}/src/core/assembly.cpp

@@ -592,7 +592,7 @@ Subcommand add_bonds_command(CLI::App& parent) {
   args->store_option = app->add_flag(
       "--store", args->store,
       "with DB: store each measured fingerprint with its candidate (those not stored yet), in one transaction "
-      "at the end; upgrades an older database to schema version 5");
+      "at the end; upgrades an older database to the current schema version");
   args->recompute_option = app->add_flag("--recompute", args->recompute,
                                          "with --store: measure and store again the fingerprints stored already");
   add_format_option(*app, args->format, {OutputFormat::text, OutputFormat::json}, "print the relations as");

@@ -206,12 +206,13 @@ void ResultsDatabase::Impl::index_candidate(std::int64_t id, const CanonicalEntr
 // back by id and counts only if its key, or its grid_cell, is that one. A new
 // linkage (nearly every verified start) costs no SQL at all, and a lookup the
 // same whatever the number of candidates.
-std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const CanonicalEntry& incoming, double tolerance) {
+std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const CanonicalEntry& incoming, double tolerance,
+                                                                    std::int64_t exclude) {
   if (!candidate_index.loaded()) refresh_candidate_index();
   const int n = incoming.joints;
   std::optional<CanonicalEntry> by_key;
   candidate_index.for_each(key_hash(n, incoming.key), [&](std::int64_t id) {
-    if (by_key && by_key->id <= id) return;
+    if (id == exclude || (by_key && by_key->id <= id)) return;
     std::optional<StoredCandidate> stored = read_candidate(id);
     if (stored && stored->entry.joints == n && stored->entry.key == incoming.key) by_key = std::move(stored->entry);
   });
@@ -220,6 +221,7 @@ std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const Canoni
   std::optional<CanonicalEntry> best;
   double best_distance = 0.0;
   auto consider = [&](CanonicalEntry other) {
+    if (other.id == exclude) return;
     const double distance = canonical_distance(incoming, other, tolerance);
     if (distance > tolerance) return;
     if (!best || distance < best_distance || (distance == best_distance && other.id < best->id)) {
@@ -454,7 +456,10 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
 
 void ResultsDatabase::Impl::upgrade_schema() {
   for (int version = schema_version; version < kDatabaseSchemaVersion; ++version) {
-    exec(path, db(), schema_upgrade_sql(version), "cannot upgrade the schema");
+    const std::string sql = schema_upgrade_sql(version);
+    if (!sql.empty()) exec(path, db(), sql, "cannot upgrade the schema");
+    // 5 to 6 changes rows, not the schema: the keys of candidates with a zero-length link.
+    if (version == 5) rekey_zero_length_links();
   }
   exec(path, db(), "PRAGMA user_version = " + std::to_string(kDatabaseSchemaVersion), "cannot set the schema version");
 }

@@ -69,6 +69,14 @@ struct ResultsDatabase::Impl {
   // transaction; schema_version follows once it commits (upgraded_schema).
   void upgrade_schema();
   void upgraded_schema() { schema_version = kDatabaseSchemaVersion; }
+  // Schema version 5 to 6 (results_rekey.cpp): every candidate whose stored
+  // canonical geometry has a link the key reads as zero length keyed again
+  // as a run keys a new start, and the rows that then name one linkage
+  // merged as one run would have stored them. Inside the caller's transaction.
+  void rekey_zero_length_links();
+  // Folds candidate `other` into `survivor` (the lower id): hits added, the
+  // earlier representative kept, the starts re-pointed, `other` deleted.
+  void merge_candidate_rows(std::int64_t survivor, std::int64_t other);
 
   struct StoredCandidate {
     store::CanonicalEntry entry;
@@ -77,7 +85,9 @@ struct ResultsDatabase::Impl {
   void refresh_candidate_index();
   std::optional<StoredCandidate> read_candidate(std::int64_t id);
   void index_candidate(std::int64_t id, const store::CanonicalEntry& c, const store::CellOptions& own_cell);
-  std::optional<store::CanonicalEntry> find_candidate(const store::CanonicalEntry& incoming, double tolerance);
+  // `exclude`: a candidate_id never returned (the row being looked up itself), 0 for none.
+  std::optional<store::CanonicalEntry> find_candidate(const store::CanonicalEntry& incoming, double tolerance,
+                                                      std::int64_t exclude = 0);
   std::int64_t place_candidate(std::int64_t run_id, const StartRecord& r, double tolerance, CommitSummary& summary);
   void bind_candidate(store::Statement& s, std::int64_t run_id, const StartRecord& r, const std::string& grid_cell);
 };

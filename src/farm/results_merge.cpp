@@ -43,6 +43,7 @@
 #include "loopfarm/core/loop.hpp"
 #include "loopfarm/farm/results_database.hpp"
 #include "results_database_impl.hpp"
+#include "results_rekey.hpp"
 #include "results_schema.hpp"
 #include "sqlite_support.hpp"
 
@@ -532,6 +533,20 @@ MergeSummary ResultsDatabase::merge(const std::string& output, const std::vector
             entry.values[n + i] = twist_from_stored(c.real(kCandidateGeometry + kMaxJoints + i));
             entry.values[2 * n + i] = c.real(kCandidateGeometry + 2 * kMaxJoints + i);
           }
+          // An input older than schema version 6 may hold the key written
+          // before the twist at a zero-length link was taken with either sign:
+          // such a row is keyed again, as the upgrade does (results_rekey.hpp).
+          std::optional<RekeyedCandidate> rekeyed;
+          if (kept.schema_version < 6) {
+            bool complete = true;
+            for (int list = 0; list < 3; ++list) {
+              for (int i = 0; i < n; ++i) complete = complete && !c.is_null(kCandidateGeometry + list * kMaxJoints + i);
+            }
+            entry.first_run = run_id;
+            entry.first_start = static_cast<std::int64_t>(index);
+            if (complete) rekeyed = rekey_zero_length_link(entry);
+            if (rekeyed) entry = rekeyed->entry;
+          }
           if (const std::optional<CanonicalEntry> match = m.find_candidate(entry, dedup_tolerance)) {
             merged_candidate = match->id;
             hit.reset();
@@ -547,6 +562,19 @@ MergeSummary ResultsDatabase::merge(const std::string& output, const std::vector
                 insert_candidate.bind(i + 1, static_cast<std::int64_t>(index));
               } else if (i == kGridCellColumn) {
                 insert_candidate.bind(i + 1, cell_name(own_cell, CellChoice{}));
+              } else if (rekeyed && i == kCanonicalKey) {
+                insert_candidate.bind(i + 1, rekeyed->entry.key);
+              } else if (rekeyed && i >= kCandidateGeometry && i < kCandidateGeometry + kGeometryColumns) {
+                // Twists in degrees, as a run stores them.
+                const int list = (i - kCandidateGeometry) / kMaxJoints, k = (i - kCandidateGeometry) % kMaxJoints;
+                const LoopGeometry& g = rekeyed->geometry;
+                if (k >= g.joints()) {
+                  insert_candidate.bind_null(i + 1);
+                } else if (list == 1) {
+                  insert_candidate.bind(i + 1, stored_twist(g.alpha[k]));
+                } else {
+                  insert_candidate.bind(i + 1, list == 0 ? g.a[k] : g.d[k]);
+                }
               } else {
                 insert_candidate.bind_value(i + 1, c.value(i));
               }

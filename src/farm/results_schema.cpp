@@ -227,6 +227,14 @@ const char* const kUpgradeToVersion4 = "ALTER TABLE candidates ADD COLUMN famili
 // measured, as in every row written before. Nothing else changes.
 const char* const kUpgradeToVersion5 = "ALTER TABLE candidates ADD COLUMN bond_fingerprint TEXT;\n";
 
+// Version 5 to 6: no SQL. The canonical key takes the twist at a zero-length
+// link (a_k / L quantised to 0) with either sign, which keys written before
+// did not; the upgrade recomputes, in C++, the key, canonical geometry and
+// grid cell of every candidate with such a link and merges the rows that
+// then name one linkage (ResultsDatabase::Impl::rekey_zero_length_links,
+// results_rekey.cpp). The schema itself does not change.
+const char* const kUpgradeToVersion6 = "";
+
 }  // namespace
 
 std::string schema_upgrade_sql(int from_version) {
@@ -239,6 +247,8 @@ std::string schema_upgrade_sql(int from_version) {
       return kUpgradeToVersion4;
     case 4:
       return kUpgradeToVersion5;
+    case 5:
+      return kUpgradeToVersion6;
     default:
       throw std::logic_error("schema_upgrade_sql: no upgrade from version " + std::to_string(from_version));
   }

@@ -24,6 +24,7 @@ std::string schema_sql();
 
 // The statements that upgrade a database of schema version `from_version` to
 // the next (the caller sets PRAGMA user_version, in the same transaction).
+// Empty where the step is C++ only (5 to 6: ResultsDatabase::Impl::upgrade_schema).
 std::string schema_upgrade_sql(int from_version);
 
 // The schema version of a loopfarm database (kOldestDatabaseSchemaVersion to

@@ -19,6 +19,9 @@ long long twist_quantum(double alpha, double tolerance) {
   return std::llround(alpha / tolerance);
 }
 
+// A link the key writes as zero length: its length (at length scale 1) quantised to 0.
+bool zero_length(double a, double tolerance) { return std::llround(a / tolerance) == 0; }
+
 // Quantised values of a scaled representation, (a, alpha, d).
 std::vector<long long> quantised(const LoopGeometry& g, double tolerance) {
   const int n = g.joints();
@@ -51,16 +54,15 @@ template <typename Rank, typename PreferNegated>
 std::vector<long long> smallest_representation(const LoopGeometry& unit, double tolerance, Rank rank,
                                                PreferNegated prefer_negated, CanonicalForm& form) {
   const int n = unit.joints();
-  const auto zero_length = [tolerance](double a) { return std::llround(a / tolerance) == 0; };
   bool any_zero_length = false;
-  for (int k = 0; k < n; ++k) any_zero_length = any_zero_length || zero_length(unit.a[k]);
+  for (int k = 0; k < n; ++k) any_zero_length = any_zero_length || zero_length(unit.a[k], tolerance);
   std::vector<long long> best;
   for (const detail::Representation& r : detail::representations(n)) {
     LoopGeometry candidate = detail::apply(r, unit);
     std::uint32_t negated = 0;
     if (any_zero_length) {
       for (int k = 0; k < n; ++k) {
-        if (!zero_length(candidate.a[k])) continue;
+        if (!zero_length(candidate.a[k], tolerance)) continue;
         const double flipped = detail::with_negated_twists(candidate, 1u << k).alpha[k];
         if (prefer_negated(candidate.alpha[k], flipped)) {
           candidate.alpha[k] = flipped;
@@ -107,6 +109,19 @@ CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance) {
   }
   best.key = key;
   return best;
+}
+
+bool has_zero_length_link(const LoopGeometry& geometry, double tolerance) {
+  validate_geometry(geometry);
+  if (!(tolerance > 0.0 && tolerance < 1.0)) {
+    throw std::invalid_argument("has_zero_length_link: tolerance must be in (0, 1)");
+  }
+  // As canonical_form reads the lengths: scaled to length scale 1.
+  const LoopGeometry unit = scaled(geometry, length_scale(geometry));
+  for (int k = 0; k < unit.joints(); ++k) {
+    if (zero_length(unit.a[k], tolerance)) return true;
+  }
+  return false;
 }
 
 CanonicalForm conventional_form(const LoopGeometry& geometry, double tolerance) {

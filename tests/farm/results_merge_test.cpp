@@ -4,8 +4,10 @@
 // a version 2 one (before de-duplication moved into memory, schema-v2.sqlite),
 // a version 3 one (before the families whose conditions hold were recorded,
 // schema-v3.sqlite) and a version 4 one (before bond fingerprints were stored,
-// schema-v4.sqlite: its fingerprints measured here and stored), and
-// ResultsDatabase::merge: three slices merged equal one run of the same
+// schema-v4.sqlite: its fingerprints measured here and stored), a version 5
+// one (before the keys of loops with a zero-length link took its twist with
+// either sign, schema-v5-zero-length.sqlite: re-keyed and its duplicates
+// merged), and ResultsDatabase::merge: three slices merged equal one run of the same
 // starts (candidates de-duplicated across the slices, row for row), overlaps,
 // provenance, and every refusal leaving no file behind. Records are built by
 // hand; no search runs.
@@ -29,6 +31,7 @@
 #include "loopfarm/farm/candidate_pose.hpp"
 #include "loopfarm/farm/results_database.hpp"
 #include "loopfarm/search/bond_relations.hpp"
+#include "loopfarm/search/canonical.hpp"
 #include "loopfarm/search/verify.hpp"
 
 #ifndef LOOPFARM_SOURCE_DIR
@@ -623,6 +626,259 @@ TEST_F(MergeTest, AVersion4DatabaseIsUpgradedWhenItsFingerprintsAreStoredAndKeep
   }
   EXPECT_EQ(value(path, "SELECT COUNT(*) FROM candidates WHERE bond_fingerprint IS NULL"), "1");
   EXPECT_EQ(value(path, "SELECT bond_fingerprint IS NULL FROM candidates WHERE first_start = 25"), "1");
+}
+
+// --- a database written before the key took a zero-length link's twist with either sign: version 5 ----
+
+// tests/farm/fixtures/README.md: one run of a 6R job (seed 11, 12 starts). Its
+// first session, as the build before wrote it, committed starts 4..9 under the
+// keys canonical_form gave before it took the twist at a zero-length link with
+// either sign: the line-symmetric octahedral Bricard loop O (every a_i = 0) as
+// candidate 1 (start 4, hit again by start 8) and, written with the twist of
+// link 1 negated, as candidate 3 (start 7), each under another key; a loop G
+// without a zero-length link as candidate 2 (start 6). Its second session, as
+// the current build writes, committed starts 0..3, 10 and 11: O under the new
+// key as candidate 4 (starts 1, 3 and 10), G found again by key (start 2,
+// which then represents it).
+const std::string kVersion5Fixture =
+    std::string(LOOPFARM_SOURCE_DIR) + "/tests/farm/fixtures/schema-v5-zero-length.sqlite";
+
+RunIdentity version5_identity(const std::string& path, std::uint64_t starts) {
+  RunIdentity own = fixture_identity(path, starts);
+  own.seed = 11;
+  own.joints = 6;
+  return own;
+}
+
+// The line-symmetric octahedral Bricard loop of the fixture, and a verified
+// start of it written with the twists of `links` negated (the same loop).
+LoopGeometry octahedral_loop(std::uint32_t links = 0) {
+  LoopGeometry g = geometry_deg(std::vector<double>(6, 0.0), {50, 70, 110, 50, 70, 110}, {1, 1.3, 0.7, 1, 1.3, 0.7});
+  for (int k = 0; k < 6; ++k) {
+    if (links >> k & 1u) g.alpha[k] = -g.alpha[k];
+  }
+  return g;
+}
+StartRecord verified_start(std::uint64_t index, const LoopGeometry& g) {
+  StartRecord r = start(0);
+  r.index = index;
+  r.final_geometry = g;
+  r.final_angles = JointVector::Zero(g.joints());
+  const CanonicalForm form = canonical_form(g);
+  r.candidate.canonical_key = form.key;
+  r.candidate.canonical_geometry = form.geometry;
+  r.candidate.detail = "start " + std::to_string(index);
+  return r;
+}
+
+TEST_F(MergeTest, AVersion5DatabaseHasItsZeroLengthLinksKeyedAgainAndTheirDuplicatesMerged) {
+  const std::string path = file("v5.sqlite");
+  fs::copy_file(kVersion5Fixture, path);
+  ASSERT_EQ(value(path, "PRAGMA user_version"), "5");
+  const std::string before = file_bytes(path);
+  const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
+  const Rows candidates = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
+  const std::string run_columns =
+      "SELECT run_id, job_path, job_text, job_hash, seed, starts, status, starts_done FROM runs";
+  const Rows runs = rows(path, run_columns);
+  ASSERT_EQ(starts.size(), 12u);
+  ASSERT_EQ(candidates.size(), 4u);
+  // Candidates 1, 3 and 4 are one loop under three keys; 4's is the current one.
+  const std::string current_key = canonical_form(octahedral_loop()).key;
+  EXPECT_EQ(rows(path, "SELECT candidate_id FROM candidates WHERE canonical_key = '" + current_key + "'"),
+            (Rows{{"4"}}));
+  EXPECT_EQ(value(path, "SELECT COUNT(DISTINCT canonical_key) FROM candidates"), "4");
+  {
+    // Read: as it is, nothing written.
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
+    EXPECT_EQ(db.candidate_count(), 4);
+  }
+  EXPECT_EQ(file_bytes(path), before);
+  {
+    // Another job refused: nothing of the upgrade is written.
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    EXPECT_NE(error_of([&] { db.open_run(identity("[search]\nseed = 99\n", 99)); }).find("--new-run"),
+              std::string::npos);
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), "5");
+  EXPECT_EQ(rows(path, "SELECT * FROM candidates ORDER BY candidate_id"), candidates);
+  EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
+
+  // Its own job resumes it: upgraded in the same transaction.
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const RunInfo run = db.open_run(version5_identity(path, 12));
+    EXPECT_FALSE(run.created);
+    EXPECT_EQ(run.committed_count(), 12u);
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
+  expect_schema_of_a_new_database(path);
+  // One row of O: candidate_id 1 (committed first), represented by its
+  // earliest start (1, candidate 4's row), its hits those of the three rows.
+  // G, without a zero-length link, exactly as it was.
+  const Rows merged = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
+  ASSERT_EQ(merged.size(), 2u);
+  Rows expected = {candidates[3], candidates[1]};
+  expected[0][0] = "1";
+  const Rows names = rows(path, "SELECT name FROM pragma_table_info('candidates')");
+  const auto hits_column =
+      static_cast<size_t>(std::find(names.begin(), names.end(), std::vector<std::string>{"hits"}) - names.begin());
+  ASSERT_LT(hits_column, names.size());
+  expected[0][hits_column] = "6";  // 2 + 1 + 3
+  EXPECT_EQ(merged, expected);
+  EXPECT_EQ(value(path, "SELECT canonical_key FROM candidates WHERE candidate_id = 1"), current_key);
+  EXPECT_EQ(value(path, "SELECT canonical_key FROM candidates WHERE candidate_id = 2"), candidates[1][5]);
+  // Every start as it was, those of candidates 3 and 4 now naming 1.
+  Rows repointed = starts;
+  for (auto& row : repointed) {
+    if (row[11] == "3" || row[11] == "4") row[11] = "1";
+  }
+  EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), repointed);
+  EXPECT_EQ(rows(path,
+                 "SELECT c.candidate_id, c.hits, COUNT(s.start_index) FROM candidates AS c "
+                 "JOIN starts AS s ON s.candidate_id = c.candidate_id GROUP BY c.candidate_id"),
+            (Rows{{"1", "6", "6"}, {"2", "2", "2"}}));
+  EXPECT_EQ(rows(path, run_columns), runs);
+
+  // The old key of O no longer splits it: O written yet another way, and G, are hits.
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const RunInfo run = db.open_run(version5_identity(path, 14));
+    // G as the fixture wrote it (README.md), relabelled.
+    const LoopGeometry g =
+        geometry_deg({1, 1.2, 0.8, 1.1, 0.9, 0.7}, {40, 75, 120, -35, 65, 100}, {0.3, -0.2, 0.5, 0.1, 0.4, -0.3});
+    const CommitSummary hits =
+        db.commit(run.run_id, {verified_start(12, octahedral_loop(0b100010u)), verified_start(13, relabelled(g, 2))});
+    EXPECT_EQ(hits.new_candidates, 0);
+    EXPECT_EQ(hits.repeat_hits, 2);
+  }
+  EXPECT_EQ(rows(path, "SELECT candidate_id, hits FROM candidates ORDER BY candidate_id"),
+            (Rows{{"1", "7"}, {"2", "3"}}));
+}
+
+// A merge of the version 5 file keys its rows again as the upgrade does: the
+// same candidates as the upgraded file.
+TEST_F(MergeTest, AVersion5DatabaseMergedHasItsZeroLengthLinksKeyedAgain) {
+  const std::string input = file("v5-input.sqlite"), upgraded = file("v5.sqlite");
+  fs::copy_file(kVersion5Fixture, input);
+  fs::copy_file(kVersion5Fixture, upgraded);
+  {
+    ResultsDatabase db = ResultsDatabase::open(upgraded, DatabaseMode::write);
+    db.open_run(version5_identity(upgraded, 12));
+  }
+  const std::string merged = file("merged.sqlite");
+  const MergeSummary summary = ResultsDatabase::merge(merged, {input});
+  EXPECT_EQ(summary.candidates, 2);
+  const std::string all = "SELECT * FROM candidates ORDER BY candidate_id";
+  EXPECT_EQ(rows(merged, all), rows(upgraded, all));
+  EXPECT_EQ(rows(merged, "SELECT start_index, candidate_id FROM starts ORDER BY start_index"),
+            rows(upgraded, "SELECT start_index, candidate_id FROM starts ORDER BY start_index"));
+
+  // The first session alone (what the build before wrote, made so with SQL):
+  // O's earliest start is under an old key, which the merge stores keyed
+  // again, as the upgrade does.
+  const std::string old_only = file("v5-old-only.sqlite"), old_upgraded = file("v5-old-upgraded.sqlite");
+  fs::copy_file(kVersion5Fixture, old_only);
+  exec(old_only,
+       "DELETE FROM starts WHERE start_index IN (0, 1, 2, 3, 10, 11); DELETE FROM candidates WHERE candidate_id = 4; "
+       "UPDATE candidates SET first_start = 6, hits = 1, detail = 'start 6' WHERE candidate_id = 2");
+  fs::copy_file(old_only, old_upgraded);
+  {
+    ResultsDatabase db = ResultsDatabase::open(old_upgraded, DatabaseMode::write);
+    db.open_run(version5_identity(old_upgraded, 12));
+  }
+  const std::string merged_old = file("merged-old.sqlite");
+  EXPECT_EQ(ResultsDatabase::merge(merged_old, {old_only}).candidates, 2);
+  EXPECT_EQ(rows(merged_old, all), rows(old_upgraded, all));
+  EXPECT_EQ(value(merged_old, "SELECT canonical_key FROM candidates WHERE candidate_id = 1"),
+            canonical_form(octahedral_loop()).key);
+  EXPECT_EQ(value(merged_old, "SELECT hits FROM candidates WHERE candidate_id = 1"), "3");
+}
+
+// An upgrade that fails (here a trigger refuses the removal of a merged row)
+// leaves the file as it was, version 5, and says which file.
+TEST_F(MergeTest, AVersion5UpgradeThatFailsLeavesTheFileAsItWas) {
+  const std::string path = file("v5.sqlite");
+  fs::copy_file(kVersion5Fixture, path);
+  exec(path, "CREATE TRIGGER keep_candidates BEFORE DELETE ON candidates BEGIN SELECT RAISE(ABORT, 'kept'); END");
+  const Rows candidates = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
+  const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
+  const Rows runs = rows(path, "SELECT * FROM runs");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::string message = error_of([&] { db.open_run(version5_identity(path, 12)); });
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_NE(message.find("kept"), std::string::npos) << message;
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), "5");
+  EXPECT_EQ(rows(path, "SELECT * FROM candidates ORDER BY candidate_id"), candidates);
+  EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
+  EXPECT_EQ(rows(path, "SELECT * FROM runs"), runs);
+}
+
+// Loops of 4 to 8 joints without a zero-length link, and O under the current
+// key: a version 5 database of them is upgraded row for row as it was, every
+// key byte for byte (and each key is what canonical_form gives its stored
+// geometry). Written by this build, then PRAGMA user_version = 5: version 6
+// changed no schema.
+TEST_F(MergeTest, AVersion5DatabaseWithoutOldKeysOfZeroLengthLinksIsUpgradedRowForRow) {
+  for (const bool with_current_zero_length_row : {false, true}) {
+    const std::string path = file(with_current_zero_length_row ? "v5-current.sqlite" : "v5-generic.sqlite");
+    {
+      ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+      const std::int64_t run = db.open_run(identity()).run_id;
+      std::vector<StartRecord> records;
+      for (std::uint64_t i = 0; i < 20; ++i) records.push_back(start(i));  // 4R, hand-made keys
+      for (int n = 4; n <= 8; ++n) {
+        std::vector<double> a, alpha, d;
+        for (int k = 0; k < n; ++k) {
+          a.push_back(0.4 + 0.13 * k);
+          alpha.push_back(-70.0 + 29.0 * k);
+          d.push_back(0.2 * (k % 3) - 0.15);
+        }
+        LoopGeometry g = geometry_deg(a, alpha, d);
+        ASSERT_FALSE(has_zero_length_link(g));
+        if (n != 4) continue;  // the run is of 4R loops; the others only checked above
+        records.push_back(verified_start(20, g));
+      }
+      db.commit(run, records);
+    }
+    if (with_current_zero_length_row) {
+      // O under its current key: the fixture's candidate 4, copied with SQL
+      // (a 6R row in a 4R run; the upgrade reads each row's own joints).
+      exec(path, "ATTACH '" + kVersion5Fixture +
+                     "' AS f; INSERT INTO candidates SELECT * FROM f.candidates "
+                     "WHERE candidate_id = 4; DETACH f");
+    }
+    exec(path, "PRAGMA user_version = 5");
+    const Rows candidates = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
+    const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
+    ASSERT_GE(candidates.size(), 3u);
+    {
+      ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+      db.open_run(identity());
+    }
+    EXPECT_EQ(value(path, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
+    EXPECT_EQ(rows(path, "SELECT * FROM candidates ORDER BY candidate_id"), candidates);
+    EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
+    const Rows keys = rows(path, "SELECT canonical_key FROM candidates ORDER BY candidate_id");
+    for (size_t i = 0; i < keys.size(); ++i) EXPECT_EQ(keys[i][0], candidates[i][5]);
+  }
+  // Every real key of a loop without a zero-length link is the key of its stored geometry.
+  for (int n = 4; n <= 8; ++n) {
+    std::vector<double> a, alpha, d;
+    for (int k = 0; k < n; ++k) {
+      a.push_back(0.4 + 0.13 * k);
+      alpha.push_back(-70.0 + 29.0 * k);
+      d.push_back(0.2 * (k % 3) - 0.15);
+    }
+    const LoopGeometry g = geometry_deg(a, alpha, d);
+    const CanonicalForm form = canonical_form(g);
+    LoopGeometry stored = form.geometry;
+    for (int k = 0; k < n; ++k)
+      stored.alpha[k] = form.geometry.alpha[k] * (180.0 / 3.14159265358979323846) * (3.14159265358979323846 / 180.0);
+    EXPECT_EQ(canonical_form(stored).key, form.key) << n;
+  }
 }
 
 // --- merge ---------------------------------------------------------------------

@@ -50,8 +50,11 @@ inline constexpr std::int32_t kDatabaseApplicationId = 0x4C4F4F50;
 // PRAGMA user_version: the schema version this build writes. It reads every
 // version from kOldestDatabaseSchemaVersion on, and upgrades an older file to
 // this one when it opens it for writing (results_schema.cpp says what changed).
-inline constexpr int kDatabaseSchemaVersion = 5;
+inline constexpr int kDatabaseSchemaVersion = 6;
 inline constexpr int kOldestDatabaseSchemaVersion = 1;
+// The de-duplication's numeric tolerance unless a caller gives another
+// (commit, merge); the upgrade to schema version 6 merges with it.
+inline constexpr double kDefaultDedupTolerance = 1e-5;
 // busy_timeout: how long a connection waits for another one's lock.
 inline constexpr int kDatabaseBusyTimeoutMs = 10000;
 
@@ -311,7 +314,8 @@ class ResultsDatabase {
   // thrown (a start index already committed for the run is an error).
   // `dedup_tolerance` bounds the difference of every canonical-geometry value
   // (lengths at length scale 1, twists in radians, wrapped) of one linkage.
-  CommitSummary commit(std::int64_t run_id, const std::vector<StartRecord>& records, double dedup_tolerance = 1e-5);
+  CommitSummary commit(std::int64_t run_id, const std::vector<StartRecord>& records,
+                       double dedup_tolerance = kDefaultDedupTolerance);
 
   // --- reading (either mode). A query's failure throws DatabaseError: refused
   // when SQLite finds the file damaged, failed otherwise. `run_id` empty: every run.
@@ -356,7 +360,7 @@ class ResultsDatabase {
   // loopfarm database, of another job or seed, rows that differ, `output`
   // already there) or a failure leaves no file behind and the inputs as they were.
   static MergeSummary merge(const std::string& output, const std::vector<std::string>& inputs,
-                            double dedup_tolerance = 1e-5);
+                            double dedup_tolerance = kDefaultDedupTolerance);
 
   // One read transaction: every query while it lives sees the same committed
   // state, even while a writer commits. Ends when it goes.

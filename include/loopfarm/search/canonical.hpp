@@ -46,6 +46,11 @@ struct CanonicalForm {
 // tolerance that is not in (0, 1).
 CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance = 1e-6);
 
+// True when some link of `geometry` is one the key writes as zero length
+// (a_k / L quantised to 0 at `tolerance`): where canonical_form takes the
+// twist with either sign. Throws as canonical_form does.
+bool has_zero_length_link(const LoopGeometry& geometry, double tolerance = 1e-6);
+
 // The representation a person reads, for display only (the key and the
 // de-duplication are canonical_form's): among every representation scaled to
 // length scale 1, the one with the fewest negative twists (alpha in (-pi, pi],
