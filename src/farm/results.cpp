@@ -197,6 +197,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::double_goldberg:
       case Family::hooke:
       case Family::bricard_octahedral_collapsible:
+      case Family::cubic_321:
       case Family::degenerate:
       case Family::unclassified:
         break;

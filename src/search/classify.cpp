@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "cubic_motion_fit.hpp"
 #include "family_conditions.hpp"
 #include "family_fit.hpp"
 #include "representation.hpp"
@@ -252,6 +253,31 @@ std::string special_detail(Family family, const Best& best, const LoopGeometry& 
   return d;
 }
 
+// The cubic-motion-polynomial loop's check: the fit's thirteen residuals at
+// the pose.
+FamilyCheck cubic_check(const CubicMotionFit& fit) {
+  FamilyCheck check;
+  check.family = Family::cubic_321;
+  check.residual = fit.solved ? fit.residual : kInf;
+  if (fit.solved) {
+    for (int i = 0; i < kCubicResiduals; ++i) {
+      check.conditions.push_back({cubic_residual_name(i), fit.residuals[static_cast<size_t>(i)]});
+    }
+  }
+  return check;
+}
+
+std::string cubic_detail(const CubicMotionFit& fit) {
+  const auto& v = fit.unknowns;
+  char buffer[320];
+  std::snprintf(buffer, sizeof buffer,
+                "a cubic motion polynomial's two factorisations: joints 1 and 4, 2 and 5, 3 and 6 share the norm "
+                "factors (t - x)^2 + y^2 and turn by equal angles (up to sign); at this pose (t = infinity) x = 0, "
+                "%.4g, %.4g and y = 1, %.4g, %.4g",
+                v[1], v[3], v[2], v[4]);
+  return buffer;
+}
+
 }  // namespace
 
 Classification classify(const LoopGeometry& geometry, const JointVector& pose, std::span<const double> joint_travel,
@@ -321,6 +347,7 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   // tried, their checks the last of out.checks: the detail line and the fold
   // test read the one that fits.
   std::vector<Best> special_fits;
+  CubicMotionFit cubic;
   if (n == 5 || n == 6) {
     FamilyCheck check;
     degenerate = degenerate_fit(geometry, options.tolerance, check);
@@ -338,6 +365,15 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
     for (Family f : special_families(n)) {
       special_fits.push_back(best_for(f, geometry, false, options.tolerance));
       out.checks.push_back(check_from(f, special_fits.back()));
+      // The "321" cubic-motion-polynomial loop after the doubly collapsible
+      // octahedra, which are of its kind (docs/guide/families.md): decided at
+      // the pose, not over representations (its Best stays empty, read by
+      // neither the fold test nor the detail).
+      if (f == Family::bricard_octahedral_collapsible) {
+        cubic = cubic_321_fit(geometry, pose);
+        special_fits.emplace_back();
+        out.checks.push_back(cubic_check(cubic));
+      }
     }
   }
   const double tol = options.tolerance;
@@ -386,7 +422,8 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
   } else if (special) {
     out.family = special->family;
     out.residual = special->residual;
-    out.detail = special_detail(special->family, *special_fit, geometry);
+    out.detail = special->family == Family::cubic_321 ? cubic_detail(cubic)
+                                                      : special_detail(special->family, *special_fit, geometry);
     // A member whose motion found is another one (some members have several).
     if (locked.residual <= tol) out.detail += "; the motion found: " + locked.detail;
   } else if (folding.folds) {

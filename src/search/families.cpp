@@ -50,6 +50,8 @@ const char* to_string(Family family) {
       return "hooke";
     case Family::bricard_octahedral_collapsible:
       return "bricard_octahedral_collapsible";
+    case Family::cubic_321:
+      return "cubic_321";
   }
   return "unknown";
 }
@@ -81,6 +83,7 @@ int family_joints(Family family) {
     case Family::double_goldberg:
     case Family::hooke:
     case Family::bricard_octahedral_collapsible:
+    case Family::cubic_321:
       return 6;
     case Family::planar:
     case Family::spherical:
@@ -92,7 +95,11 @@ int family_joints(Family family) {
   return 0;
 }
 
-bool has_family_distance(Family family) { return family != Family::degenerate && family != Family::unclassified; }
+// degenerate and cubic_321 are decided from the motion or a pose of it, not
+// by conditions on the geometry.
+bool has_family_distance(Family family) {
+  return family != Family::degenerate && family != Family::unclassified && family != Family::cubic_321;
+}
 
 std::optional<int> family_dimension(Family family, int joints) {
   const int needs = family_joints(family);
@@ -156,6 +163,11 @@ std::optional<int> family_dimension(Family family, int joints) {
       // turn about the circles' centre: the construction's Jacobian has rank
       // 5, and the 21 conditions' gradients rank 13 of 18 (docs/guide/families.md).
       return 5;
+    case Family::cubic_321:
+      // Three rotation factors (6 numbers each) less the rigid motions (6)
+      // and the reparametrisations of the motion (3): 9; local_dimension
+      // reads 9 on members (docs/guide/families.md).
+      return 9;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
     case Family::unclassified:

@@ -1600,6 +1600,7 @@ inline int condition_sets(Family family, int joints) {
       return 1;
     case Family::spherical:
     case Family::degenerate:
+    case Family::cubic_321:
     case Family::unclassified:
       break;
   }
@@ -1638,7 +1639,8 @@ constexpr bool reads_twist_signs(Family family, int joints) {
 
 template <Family F, class RepresentationView, class Sink>
 void condition_set(int set, const RepresentationView& w, Sink& c) {
-  static_assert(F != Family::spherical && F != Family::degenerate && F != Family::unclassified);
+  static_assert(F != Family::spherical && F != Family::degenerate && F != Family::unclassified &&
+                F != Family::cubic_321);
   if constexpr (F == Family::bennett) {
     bennett_conditions(w, set == 0 ? 1.0 : -1.0, c);
   } else if constexpr (F == Family::planar) {

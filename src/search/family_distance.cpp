@@ -112,6 +112,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       return distance_over_representations<Family::bricard_octahedral_collapsible>(geometry, gradient);
     case Family::degenerate:
       throw std::invalid_argument("family_distance: degenerate loops have no distance");
+    case Family::cubic_321:
+      throw std::invalid_argument("family_distance: cubic_321 loops have no distance (decided at a pose)");
     case Family::unclassified:
       break;
   }
@@ -153,6 +155,8 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
       break;
     case Family::degenerate:
       throw std::invalid_argument("family_distance_report: degenerate loops have no distance");
+    case Family::cubic_321:
+      throw std::invalid_argument("family_distance_report: cubic_321 loops have no distance (decided at a pose)");
     case Family::unclassified:
       throw std::invalid_argument("family_distance_report: not a family");
   }

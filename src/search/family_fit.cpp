@@ -93,6 +93,7 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm, double zero_le
       return best_over_representations<Family::bricard_octahedral_collapsible>(g, by_norm, zero_length);
     case Family::spherical:
     case Family::degenerate:
+    case Family::cubic_321:
     case Family::unclassified:
       break;
   }

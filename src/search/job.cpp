@@ -18,6 +18,7 @@
 #include <toml++/toml.h>
 
 #include "job_reader.hpp"
+#include "loopfarm/search/classify.hpp"
 
 namespace loopfarm {
 
@@ -236,6 +237,12 @@ Job parse_table(const toml::table& root, const std::string& file) {
               for (const DeflatableFamily& f : kDeflatable) {
                 if (family == f.name) known = &f;
                 names += std::string(names.empty() ? "" : ", ") + f.name;
+              }
+              if (known == nullptr && family_from_string(family).has_value()) {
+                // degenerate and cubic_321: decided from the motion, with no distance to the geometry.
+                r.fail(item.source(), full,
+                       "\"" + family + "\" cannot be deflated: it is decided from the motion, not by a distance; " +
+                           "expected one of " + names);
               }
               if (known == nullptr) {
                 r.fail(item.source(), full, "unknown family \"" + family + "\"; expected one of " + names);

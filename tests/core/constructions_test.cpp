@@ -18,6 +18,7 @@
 #include "four_bar_cases.hpp"
 #include "loopfarm/core/constructions.hpp"
 #include "loopfarm/core/loop.hpp"
+#include "loopfarm/core/motion_polynomial.hpp"
 #include "loopfarm/core/sample_loops.hpp"
 #include "test_support.hpp"
 
@@ -613,6 +614,112 @@ TEST(Constructions, WaldronHybridClosesAlongItsMotion) {
     EXPECT_NEAR(at.geometry.d[1], 0.0, 1e-10) << tag;
     EXPECT_NEAR(at.geometry.d[4], 0.0, 1e-10) << tag;
   }
+}
+
+// Dual quaternions against Eigen's rotations: a rotation factor t - h, h = x
+// + y l, moves a line as the rotation about l by the angle phi with
+// cot(phi / 2) = (t - x) / y, in the sense opposite to y l's direction
+// (t - h is proportional to cos(phi/2) - sin(phi/2) l); its norm is (t -
+// x)^2 + y^2; and a product of factors moves lines as the product of their
+// rotations, composed in the order written (the rightmost acts first).
+TEST(Constructions, RotationFactorsMoveLinesAsRotationsAboutTheirAxes) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto random_axis = [&] {
+    return Axis{Vector3(u(rng), u(rng), u(rng)), Vector3(u(rng), u(rng), u(rng)).normalized()};
+  };
+  const auto rotation = [](const RotationFactor& f, double t) {
+    const double phi = 2.0 * std::atan2(f.y, t - f.x);  // cot(phi/2) = (t - x) / y
+    return Eigen::Isometry3d(Eigen::Translation3d(f.axis.point) *
+                             Eigen::AngleAxisd(-phi, f.axis.direction.normalized()) *
+                             Eigen::Translation3d(-f.axis.point));
+  };
+  for (int trial = 0; trial < 20; ++trial) {
+    const RotationFactor f1{random_axis(), u(rng), 0.3 + std::abs(u(rng))};
+    const RotationFactor f2{random_axis(), u(rng), -0.3 - std::abs(u(rng))};
+    const Axis line = random_axis();
+    const double t = 3.0 * u(rng);
+    DualQuaternion one;
+    one.primal[0] = 1.0;
+    const DualQuaternion p1 = t * one - rotation_quaternion(f1), p2 = t * one - rotation_quaternion(f2);
+    // Its norm: p p* = (t - x)^2 + y^2, real, with no dual part.
+    const DualQuaternion norm = p1 * conjugate(p1);
+    EXPECT_NEAR(norm.primal[0], (t - f1.x) * (t - f1.x) + f1.y * f1.y, 1e-12);
+    EXPECT_LT(norm.primal.tail<3>().norm() + norm.dual.norm(), 1e-12);
+    const Eigen::Isometry3d r = rotation(f1, t) * rotation(f2, t);
+    const Axis moved = axis_of_line(moved_line(p1 * p2, line_of(line)));
+    const Vector3 direction = r.linear() * line.direction.normalized();
+    EXPECT_LT((moved.direction - direction).norm(), 1e-12) << trial;
+    // The same line: the moved point lies on it.
+    const Vector3 gap = r * line.point - moved.point;
+    EXPECT_LT((gap - gap.dot(direction) * direction).norm(), 1e-12) << trial;
+    // inverse(x) x = 1.
+    const DualQuaternion identity = inverse(p1) * p1;
+    EXPECT_LT((identity.primal - one.primal).norm() + identity.dual.norm(), 1e-12) << trial;
+  }
+}
+
+// refactor_cubic: the k's multiply back to the same cubic, their norms are
+// h3's, h2's and h1's (321) or h2's, h3's and h1's (231), and a cubic with a
+// real quadratic factor is refused.
+TEST(Constructions, CubicMotionPolynomialsFactorAgainInEitherOrder) {
+  std::mt19937_64 rng(18);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::array<DualQuaternion, 3> h;
+    for (DualQuaternion& x : h) {
+      x = rotation_quaternion(RotationFactor{Axis{Vector3(u(rng), u(rng), u(rng)), Vector3(u(rng), u(rng), u(rng))},
+                                             u(rng), 0.4 + std::abs(u(rng))});
+    }
+    const std::array<DualQuaternion, 4> cubic = cubic_product(h[0], h[1], h[2]);
+    for (const std::array<int, 3>& order : {std::array<int, 3>{2, 1, 0}, std::array<int, 3>{1, 2, 0}}) {
+      const std::array<DualQuaternion, 3> k = refactor_cubic(h, order);
+      const std::array<DualQuaternion, 4> again = cubic_product(k[0], k[1], k[2]);
+      for (size_t i = 0; i < 4; ++i) {
+        EXPECT_LT((again[i].primal - cubic[i].primal).norm() + (again[i].dual - cubic[i].dual).norm(), 1e-11) << trial;
+      }
+      for (size_t j = 0; j < 3; ++j) {
+        const DualQuaternion& norm_of = h[static_cast<size_t>(order[j])];
+        EXPECT_NEAR(k[j].primal[0], norm_of.primal[0], 1e-11) << trial;
+        EXPECT_NEAR(k[j].primal.squaredNorm(), norm_of.primal.squaredNorm(), 1e-11) << trial;
+        EXPECT_LT(std::abs(k[j].primal.tail<3>().dot(k[j].dual.tail<3>())) + std::abs(k[j].dual[0]), 1e-11)
+            << trial << ": not a rotation factor (the Pluecker condition)";
+      }
+    }
+  }
+  // h2 turning back about h1's line: (t - h1)(t - h2) is h1's norm, a real
+  // factor of the cubic, which leaves no remainder to split off a factor of
+  // that norm with.
+  const Axis line{Vector3(0.3, -0.2, 0.1), Vector3(0.2, 1.0, -0.4)};
+  const std::array<DualQuaternion, 3> back = {
+      rotation_quaternion(RotationFactor{line, 0.5, 1.0}), rotation_quaternion(RotationFactor{line, 0.5, -1.0}),
+      rotation_quaternion(RotationFactor{Axis{Vector3(1.0, 0.0, 0.0), Vector3::UnitY()}, -0.4, 0.7})};
+  EXPECT_THROW(refactor_cubic(back, {2, 1, 0}), std::invalid_argument);
+}
+
+// cubic_motion_6r keeps one geometry along its motion, in both orders, with
+// one degree of freedom; bad arguments throw naming the value.
+TEST(Constructions, CubicMotion6RClosesAlongItsMotion) {
+  CubicMotion6R p;
+  p.factors = {RotationFactor{Axis{Vector3(0.0, 0.0, 0.0), Vector3(0.2, 0.1, 1.0)}, 0.1, 0.8},
+               RotationFactor{Axis{Vector3(1.0, 0.2, -0.3), Vector3(-0.5, 1.0, 0.3)}, -0.6, -1.1},
+               RotationFactor{Axis{Vector3(0.4, 1.1, 0.5), Vector3(0.9, -0.2, 0.6)}, 0.7, 0.5}};
+  for (const std::array<int, 3>& order : {std::array<int, 3>{2, 1, 0}, std::array<int, 3>{1, 2, 0}}) {
+    p.order = order;
+    const std::string tag =
+        "order " + std::to_string(order[0] + 1) + std::to_string(order[1] + 1) + std::to_string(order[2] + 1);
+    expect_closes_along([&](double t) { return cubic_motion_6r(p, t); }, {-4.0, -1.0, 0.0, 0.5, 2.0, 30.0}, tag);
+    expect_one_freedom(cubic_motion_6r(p, 0.3), tag);
+  }
+  CubicMotion6R bad = p;
+  bad.factors[1].y = 0.0;
+  EXPECT_THROW(cubic_motion_6r(bad, 0.0), std::invalid_argument);
+  bad = p;
+  bad.order = {0, 2, 1};
+  EXPECT_THROW(cubic_motion_6r(bad, 0.0), std::invalid_argument);
+  bad.order = {2, 2, 0};
+  EXPECT_THROW(cubic_motion_6r(bad, 0.0), std::invalid_argument);
+  EXPECT_THROW(cubic_motion_6r(p, std::nan("")), std::invalid_argument);
 }
 
 TEST(Constructions, DoubleGoldberg6RClosesAlongItsMotionInEverySetupAndFusion) {

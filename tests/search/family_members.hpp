@@ -20,6 +20,7 @@
 #include "allocation_counter.hpp"
 #include "loopfarm/core/constructions.hpp"
 #include "loopfarm/core/loop.hpp"
+#include "loopfarm/core/motion_polynomial.hpp"
 #include "loopfarm/core/sample_loops.hpp"
 #include "loopfarm/search/classify.hpp"
 #include "loopfarm/search/verify.hpp"
@@ -340,6 +341,48 @@ inline JointVector off_flat_pose(const VerificationSummary& whole) {
 inline Posed collapsible_member(std::mt19937_64& rng) {
   const LoopGeometry g = bricard_octahedral_collapsible(random_collapsible(rng)).geometry;
   return {g, off_flat_pose(verify_motion(g, nullptr))};
+}
+
+// The 6R of a cubic motion polynomial in the order "321"
+// (motion_polynomial.hpp's cubic_motion_6r, built from three rotation
+// factors, not from the fit): axes through points in [-1, 1]^3 with random
+// directions, x in [-1, 1], |y| in [0.4, 1.6] of either sign, the three
+// norm factors' roots x + i |y| at least 0.3 apart. Drawn again while the
+// loop has a link within 10 degrees of parallel axes, a length or offset
+// above 6 L or below 0.05 L (nearly degenerate loops: their residuals read
+// round-off times large numbers), or t (in [-3, 3]) leaves no closed pose.
+inline CubicMotion6R random_cubic(std::mt19937_64& rng) {
+  while (true) {
+    CubicMotion6R p;
+    for (RotationFactor& f : p.factors) {
+      f.axis.point = Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+      f.axis.direction = Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+      if (!(f.axis.direction.norm() > 0.3)) f.axis.direction = Vector3::UnitZ();
+      f.x = uniform(rng, -1, 1);
+      f.y = uniform(rng, 0.4, 1.6) * (rng() % 2 ? 1.0 : -1.0);
+    }
+    bool apart = true;
+    for (size_t i = 0; i < 3; ++i) {
+      for (size_t j = i + 1; j < 3; ++j) {
+        apart = apart &&
+                std::hypot(p.factors[i].x - p.factors[j].x, std::abs(p.factors[i].y) - std::abs(p.factors[j].y)) > 0.3;
+      }
+    }
+    if (!apart) continue;
+    const LoopGeometry g = cubic_motion_6r(p, 0.0).geometry;
+    const double L = length_scale(g);
+    const double largest = std::max(g.a.cwiseAbs().maxCoeff(), g.d.cwiseAbs().maxCoeff()) / L;
+    if (largest < 6.0 && g.a.minCoeff() > 0.05 * L &&
+        g.alpha.array().sin().abs().minCoeff() > std::sin(10.0 * kPi / 180.0)) {
+      return p;
+    }
+  }
+}
+
+inline Posed cubic_member(std::mt19937_64& rng) {
+  const CubicMotion6R p = random_cubic(rng);
+  const PosedLoop m = cubic_motion_6r(p, uniform(rng, -3, 3));
+  return {m.geometry, m.theta};
 }
 
 // Bricard line-symmetric 6R: a_i = a_{i+3}, alpha_i = alpha_{i+3}, d_i = d_{i+3}.

@@ -55,6 +55,12 @@
 //              opposite face angles are equal or supplementary, and the four
 //              edges of each of the three four-edge cycles through two
 //              opposite pairs add up to zero with signs
+//   cubic_321  (n = 6) the two factorisations (t - h1)(t - h2)(t - h3) =
+//              (t - k1)(t - k2)(t - k3) of a cubic motion polynomial, the
+//              k's norms those of h3, h2, h1, closed into the loop h1 h2 h3
+//              k3 k2 k1 (Hegedus, Schicho, Schroecker 2013): decided at the
+//              pose, by fitting the construction to the loop's axes there
+//              (cubic_motion_fit.hpp); no distance
 //   hooke      (n = 6) Hooke's double-spherical loop: axes 1-3 of a
 //              representation through one point (a1 = a2 = d2 = 0), axes 4-6
 //              through another (a4 = a5 = d5 = 0), and links 3 and 6 hold the
@@ -123,6 +129,10 @@ enum class Family {
   // 6R: every a_i = 0, the axes' meeting points a doubly collapsible Bricard
   // octahedron (his third type, with two flat poses)
   bricard_octahedral_collapsible,
+  // 6R: the loop of a cubic motion polynomial's two factorisations in the
+  // order "321" (opposite joints share a norm factor and turn by equal
+  // angles); decided at a pose of the motion
+  cubic_321,
 };
 const char* to_string(Family family);
 
@@ -151,6 +161,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::double_goldberg,
     Family::hooke,
     Family::bricard_octahedral_collapsible,
+    Family::cubic_321,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -207,8 +218,8 @@ struct Classification {
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, goldberg_6r,
   // double_goldberg, bennett_dyads, waldron_hybrid, sarrus,
-  // bricard_octahedral_plane, bricard_octahedral_collapsible, hooke (the order
-  // they are tried).
+  // bricard_octahedral_plane, bricard_octahedral_collapsible, cubic_321, hooke
+  // (the order they are tried).
   std::vector<FamilyCheck> checks;
 };
 
