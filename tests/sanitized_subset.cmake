@@ -10,7 +10,7 @@
 #   loop_test               the loop's geometry and frames (loop.cpp, sample_loops.cpp)
 #   equilibrium_test        the equilibrium solve and assembly (equilibrium.cpp, assembly.cpp)
 #   sampler_test            the job's parameter space and sampler (job.cpp, job_space.cpp, toml_hazard.cpp,
-#                           parameter_space.cpp, sampler.cpp)
+#                           parameter_space.cpp, sampler.cpp, and families.cpp for the family names)
 #   results_database_test   the results database, SQLite's C API (results_database.cpp, results_queries.cpp,
 #                           results_schema.cpp, sqlite_support.cpp, candidate_index.cpp, results_rekey.cpp
 #                           with the canonical form it calls: canonical.cpp, representation.cpp)
@@ -45,7 +45,7 @@ loopfarm_add_sanitized_test(search/sampler_test
   ${PROJECT_SOURCE_DIR}/src/search/job.cpp ${PROJECT_SOURCE_DIR}/src/search/job_space.cpp
   ${PROJECT_SOURCE_DIR}/src/search/toml_hazard.cpp ${PROJECT_SOURCE_DIR}/src/search/parameter_space.cpp
   ${PROJECT_SOURCE_DIR}/src/search/sampler.cpp ${PROJECT_SOURCE_DIR}/src/search/nlopt_algorithms.cpp
-  ${PROJECT_SOURCE_DIR}/src/core/loop.cpp)
+  ${PROJECT_SOURCE_DIR}/src/search/families.cpp ${PROJECT_SOURCE_DIR}/src/core/loop.cpp)
 target_link_libraries(sampler_test PRIVATE tomlplusplus::tomlplusplus NLopt::nlopt)
 loopfarm_add_sanitized_test(farm/results_database_test ${PROJECT_SOURCE_DIR}/src/farm/results_database.cpp
   ${PROJECT_SOURCE_DIR}/src/farm/results_queries.cpp ${PROJECT_SOURCE_DIR}/src/farm/results_schema.cpp
