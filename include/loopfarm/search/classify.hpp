@@ -168,8 +168,8 @@ std::optional<Family> family_from_string(std::string_view name);
 // The joint count the family's conditions are written for; 0 for any
 // (planar, spherical, trivial, unclassified) and for degenerate (n = 5, 6).
 int family_joints(Family family);
-// Whether family_distance measures it: every family but degenerate and
-// unclassified.
+// Whether family_distance measures it: every family but degenerate,
+// cubic_321 (both decided from the motion or a pose of it) and unclassified.
 bool has_family_distance(Family family);
 // The family's dimension for `joints` joints: its free real parameters,
 // the scale included (docs/guide/families.md, docs/guide/classification.md); none for a
@@ -249,8 +249,8 @@ Classification classify(const LoopGeometry& geometry, const JointVector& pose, s
 // lists them (waldron_hybrid's fit differentiated by central differences).
 // Throws std::invalid_argument for an invalid
 // geometry, a family for another joint count (Bennett with n != 4, ...),
-// Family::degenerate (its conditions depend on which axes are merged) or
-// Family::unclassified.
+// Family::degenerate (its conditions depend on which axes are merged),
+// Family::cubic_321 (decided at a pose) or Family::unclassified.
 double family_distance(Family family, const LoopGeometry& geometry, GeometryVector* gradient = nullptr);
 
 // The same distance (and gradient) by the reporting path: every representation
