@@ -48,7 +48,7 @@ std::array<Axis, 3> chain_axes(const CubicMotionParameters& p, double theta2) {
 
 // The construction's six lines for the unknowns v = (theta2, x2, y2, x3, y3).
 struct Hexagon {
-  std::array<Vector3, 6> point, direction;
+  std::array<Axis, 6> axes;
   bool ok = false;
 };
 
@@ -65,22 +65,20 @@ Hexagon hexagon(const CubicMotionParameters& p, const Unknowns& v) {
     return out;  // a real quadratic factor: no second factorisation
   }
   for (size_t i = 0; i < 3; ++i) {
-    out.point[i] = axes[i].point;
-    out.direction[i] = axes[i].direction;
+    out.axes[i] = axes[i];
     DualQuaternion line = k[2 - i];  // joints 4, 5, 6: k3, k2, k1
     line.primal[0] = 0.0;
     if (!(line.primal.squaredNorm() > 1e-24) || !line.primal.allFinite() || !line.dual.allFinite()) return out;
-    const Axis axis = axis_of_line(line);
-    out.point[3 + i] = axis.point;
-    out.direction[3 + i] = axis.direction;
+    out.axes[3 + i] = axis_of_line(line);
   }
   out.ok = true;
   return out;
 }
 
-// The hexagon's DH values in the signed form: cos(alpha_k), a'_k along u_k x
-// u_{k+1}, d_k; none where two consecutive axes are parallel (no common
-// normal of their own, and not this construction's generic kind).
+// The hexagon's DH values (read off its axes by dh_from_axes) in the signed
+// form: cos(alpha_k), a'_k = a_k signed along u_k x u_{k+1}, d_k; none where
+// two consecutive axes are parallel (|sin alpha_k| <= 1e-7: no common normal
+// of their own, and not this construction's generic kind).
 struct SignedDh {
   std::array<double, 6> cos{}, a{}, d{};
   bool ok = false;
@@ -89,20 +87,20 @@ struct SignedDh {
 SignedDh signed_dh(const Hexagon& l) {
   SignedDh out;
   if (!l.ok) return out;
-  std::array<double, 6> in{}, outgoing{};
-  for (size_t k = 0; k < 6; ++k) {
-    const size_t j = (k + 1) % 6;
-    const Vector3 &u1 = l.direction[k], &u2 = l.direction[j];
-    const double b = u1.dot(u2), s2 = 1.0 - b * b;
-    if (!(s2 > 1e-14)) return out;
-    const Vector3 w0 = l.point[k] - l.point[j];
-    const double e1 = u1.dot(w0), e2 = u2.dot(w0);
-    outgoing[k] = (b * e2 - e1) / s2;  // the common normal's foot on line k
-    in[j] = (e2 - b * e1) / s2;        // and on line k + 1
-    out.cos[k] = b;
-    out.a[k] = (l.point[j] - l.point[k]).dot(u1.cross(u2)) / std::sqrt(s2);
+  LoopGeometry g;
+  try {
+    g = dh_from_axes(l.axes).geometry;
+  } catch (const std::invalid_argument&) {
+    return out;  // an axis not finite
   }
-  for (size_t k = 0; k < 6; ++k) out.d[k] = outgoing[k] - in[k];
+  for (size_t k = 0; k < 6; ++k) {
+    const auto j = static_cast<Eigen::Index>(k);
+    const double sine = std::sin(g.alpha[j]);
+    if (!(std::abs(sine) > 1e-7)) return out;
+    out.cos[k] = std::cos(g.alpha[j]);
+    out.a[k] = (sine < 0.0 ? -1.0 : 1.0) * g.a[j];
+    out.d[k] = g.d[j];
+  }
   out.ok = true;
   return out;
 }
