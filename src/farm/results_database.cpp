@@ -182,12 +182,7 @@ std::optional<ResultsDatabase::Impl::StoredCandidate> ResultsDatabase::Impl::rea
   c.first_run = s.integer(2);
   c.first_start = s.integer(3);
   c.joints = static_cast<int>(s.integer(4 + 3 * kMaxJoints));
-  const int n = std::clamp(c.joints, 0, kMaxJoints);
-  for (int i = 0; i < n; ++i) {
-    c.values[i] = s.real(4 + i);
-    c.values[n + i] = twist_from_stored(s.real(4 + kMaxJoints + i));
-    c.values[2 * n + i] = s.real(4 + 2 * kMaxJoints + i);
-  }
+  read_canonical_values(s, 4, std::clamp(c.joints, 0, kMaxJoints), c);
   out.grid_cell = s.text(5 + 3 * kMaxJoints);
   s.reset();
   return out;
@@ -243,11 +238,7 @@ std::optional<CanonicalEntry> ResultsDatabase::Impl::find_candidate(const Canoni
       c.first_run = all.integer(2);
       c.first_start = all.integer(3);
       c.joints = n;
-      for (int i = 0; i < n; ++i) {
-        c.values[i] = all.real(4 + i);
-        c.values[n + i] = twist_from_stored(all.real(4 + kMaxJoints + i));
-        c.values[2 * n + i] = all.real(4 + 2 * kMaxJoints + i);
-      }
+      read_canonical_values(all, 4, n, c);
       consider(std::move(c));
     }
     return best;

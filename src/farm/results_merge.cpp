@@ -528,20 +528,12 @@ MergeSummary ResultsDatabase::merge(const std::string& output, const std::vector
           }
           const int n = entry.joints;
           entry.key = c.text(kCanonicalKey);
-          for (int i = 0; i < n; ++i) {
-            entry.values[i] = c.real(kCandidateGeometry + i);
-            entry.values[n + i] = twist_from_stored(c.real(kCandidateGeometry + kMaxJoints + i));
-            entry.values[2 * n + i] = c.real(kCandidateGeometry + 2 * kMaxJoints + i);
-          }
+          const bool complete = read_canonical_values(c, kCandidateGeometry, n, entry);
           // An input older than schema version 6 may hold the key written
           // before the twist at a zero-length link was taken with either sign:
           // such a row is keyed again, as the upgrade does (results_rekey.hpp).
           std::optional<RekeyedCandidate> rekeyed;
           if (kept.schema_version < 6) {
-            bool complete = true;
-            for (int list = 0; list < 3; ++list) {
-              for (int i = 0; i < n; ++i) complete = complete && !c.is_null(kCandidateGeometry + list * kMaxJoints + i);
-            }
             entry.first_run = run_id;
             entry.first_start = static_cast<std::int64_t>(index);
             if (complete) rekeyed = rekey_zero_length_link(entry);

@@ -95,17 +95,8 @@ void ResultsDatabase::Impl::rekey_zero_length_links() {
       c.first_start = all.integer(3);
       c.joints = static_cast<int>(all.integer(4));
       if (c.joints < kMinJoints || c.joints > kMaxJoints) continue;
-      const int n = c.joints;
-      bool complete = true;
-      for (int list = 0; list < 3; ++list) {
-        for (int i = 0; i < n; ++i) {
-          const int column = kGeometry + list * kMaxJoints + i;
-          complete = complete && !all.is_null(column);
-          const double v = all.real(column);
-          c.values[list * n + i] = list == 1 ? twist_from_stored(v) : v;
-        }
-      }
-      if (!complete) continue;  // a row without its geometry is no loop to key
+      // A row without its geometry is no loop to key.
+      if (!read_canonical_values(all, kGeometry, c.joints, c)) continue;
       if (std::optional<RekeyedCandidate> r = rekey_zero_length_link(c)) rekeyed.push_back(std::move(*r));
     }
   }

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "candidate_index.hpp"
 #include "loopfarm/core/loop.hpp"
 #include "loopfarm/farm/results_database.hpp"
 #include "sqlite_support.hpp"
@@ -34,6 +35,19 @@ std::string geometry_columns(const std::string& prefix, const std::string& suffi
     }
   }
   return out;
+}
+
+bool read_canonical_values(const Statement& row, int first, int n, CanonicalEntry& c) {
+  bool complete = true;
+  for (int list = 0; list < 3; ++list) {
+    for (int i = 0; i < n; ++i) {
+      const int column = first + list * kMaxJoints + i;
+      complete = complete && !row.is_null(column);
+      const double v = row.real(column);
+      c.values[static_cast<size_t>(list * n + i)] = list == 1 ? twist_from_stored(v) : v;
+    }
+  }
+  return complete;
 }
 
 // The candidate columns that describe the representative start, in bind order

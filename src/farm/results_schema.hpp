@@ -10,10 +10,19 @@
 
 namespace loopfarm::store {
 
+class Statement;
+struct CanonicalEntry;
+
 // a1..a8, alpha1_deg..alpha8_deg, d1..d8, each with `prefix` and `suffix`;
 // the three lists separated by `list_separator`.
 std::string geometry_columns(const std::string& prefix, const std::string& suffix,
                              const std::string& list_separator = ", ");
+
+// A candidate row's values for `n` joints read into c.values (a, alpha [rad]
+// from its stored degrees, d), its geometry_columns starting at column
+// `first` of `row`. False when one of those n-joint values is NULL (a row
+// without its geometry; the value read is then 0).
+bool read_canonical_values(const Statement& row, int first, int n, CanonicalEntry& c);
 
 // The candidate columns that describe the representative start, in bind order
 // (the geometry expands to its 24 columns); everything but candidate_id and hits.
