@@ -73,6 +73,17 @@ int run_loopfarm(int argc, char** argv) {
       loopfarm::cli::add_groundtruth_command(app), loopfarm::cli::add_tradeoff_command(app),
   };
 
+  // No option takes an empty value: "--db $OUT" with OUT unset would otherwise
+  // read as --db not given (the job's own database), "--starts $N" as the
+  // job's whole count. Flags take no value and are left alone.
+  for (const auto& command : commands) {
+    for (CLI::Option* option : command.app->get_options()) {
+      if (option->get_type_size() == 0) continue;
+      option->check([](const std::string& value) { return value.empty() ? std::string("empty value") : std::string(); },
+                    "", "nonempty");
+    }
+  }
+
   // CLI11 would call a mistyped subcommand "missing"; name it instead.
   if (argc > 1 && argv[1][0] != '-') {
     bool known = false;

@@ -66,7 +66,9 @@ int run_verify(const VerifyArguments& args) {
   CycleSummary cycle;
   EquilibriumSummary assembly;
   Eigen::MatrixXd jacobian;
-  if (window) {
+  // No cycle where the input joint does not move on the circuit (range 0).
+  const bool cycled = window && window->range > 0.0;
+  if (cycled) {
     assembly = assemble_from_angles(model, workspace, window->pose);
     CycleOptions cycle_options;
     cycle_options.samples = static_cast<int>(samples);
@@ -93,7 +95,7 @@ int run_verify(const VerifyArguments& args) {
          {"theta0_deg", "cycle_range_deg", "status", "E_mean", "E_max", "failed_samples", "theta_deg"}) {
       record[field] = nullptr;
     }
-    if (window) {
+    if (cycled) {
       record["theta0_deg"] = window->theta0 * kDegreesPerRadian;
       record["cycle_range_deg"] = window->range * kDegreesPerRadian;
       record["status"] = to_string(assembly.status);
@@ -111,7 +113,7 @@ int run_verify(const VerifyArguments& args) {
   std::printf("  alpha_deg             %s\n", degrees_text(geometry.alpha).c_str());
   std::printf("  d                     %s\n", lengths_text(geometry.d).c_str());
   print_candidate(candidate);
-  if (window) {
+  if (cycled) {
     std::printf("cycle energy along the motion (%d samples, %s from theta0 = %s deg)\n", static_cast<int>(samples),
                 window->range >= 2.0 * 3.14159265358979323846
                     ? "full turn"

@@ -247,14 +247,8 @@ PosedLoop dh_from_axes(std::span<const Axis> axes) {
     const Axis& u = axes[static_cast<size_t>(k)];
     const Axis& v = axes[static_cast<size_t>((k + 1) % n)];
     // Closest points u.point + s u.direction and v.point + t v.direction.
-    const Vector3 w = u.point - v.point;
-    const double b = u.direction.dot(v.direction), du = u.direction.dot(w), dv = v.direction.dot(w);
-    const double den = 1.0 - b * b;
-    double s, t;
-    if (den > 1e-12) {
-      s = (b * dv - du) / den;
-      t = (dv - b * du) / den;
-    } else {
+    double s = 0.0, t = 0.0;
+    if (!common_normal_feet(u.point, u.direction, v.point, v.direction, 1e-12, s, t)) {
       // Parallel axes: every normal is common; take the one through the
       // incoming normal's foot on axis k (d_k = 0).
       s = k > 0 ? (in_foot[static_cast<size_t>(k)] - u.point).dot(u.direction) : 0.0;
@@ -273,7 +267,7 @@ PosedLoop dh_from_axes(std::span<const Axis> axes) {
     out_foot[static_cast<size_t>(k)] = fu;
     in_foot[static_cast<size_t>((k + 1) % n)] = fv;
     r.geometry.a[k] = a;
-    r.geometry.alpha[k] = std::atan2(u.direction.cross(v.direction).dot(dir), b);
+    r.geometry.alpha[k] = std::atan2(u.direction.cross(v.direction).dot(dir), u.direction.dot(v.direction));
   }
   for (int k = 0; k < n; ++k) {
     const Vector3& prev = x[static_cast<size_t>((k + n - 1) % n)];

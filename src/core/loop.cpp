@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace loopfarm {
@@ -64,6 +65,15 @@ void validate_geometry(const LoopGeometry& g) {
     if (g.a[i] < 0.0) fail("a" + k + ": a link length must be >= 0, got " + std::to_string(g.a[i]));
     if (!std::isfinite(g.alpha[i])) fail("alpha" + k + ": not a finite number");
     if (!std::isfinite(g.d[i])) fail("d" + k + ": not a finite number");
+    // Squares of lengths (the length scale, the energy) must not overflow.
+    for (const auto& [name, value] : {std::pair{"a", g.a[i]}, std::pair{"d", g.d[i]}}) {
+      if (std::abs(value) > kMaxLength) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%g", value);
+        fail(name + k + ": " + text + " is too large to compute with (its square overflows; |value| must be <= 1e150)" +
+             ": scale the loop down");
+      }
+    }
   }
 }
 
@@ -152,6 +162,62 @@ JointVector axis_flipped_angles(const JointVector& theta, int joint) {
   JointVector out = theta;
   out[joint] = -theta[joint];
   return out;
+}
+
+LoopGeometry centred_parallel_normals(const LoopGeometry& g, double tolerance) {
+  const int n = g.joints();
+  auto parallel = [&](int k) { return std::abs(std::sin(g.alpha[k])) <= tolerance; };
+  // Offsets first .. first + count - 1 (mod n), each signed along axis
+  // `first`, share their sum equally.
+  LoopGeometry out = g;
+  auto share = [&](int first, int count) {
+    double sign = 1.0, total = 0.0;
+    for (int j = 0; j < count; ++j) {
+      const int k = (first + j) % n;
+      total += sign * g.d[k];
+      if (std::cos(g.alpha[k]) < 0.0) sign = -sign;
+    }
+    sign = 1.0;
+    for (int j = 0; j < count; ++j) {
+      const int k = (first + j) % n;
+      out.d[k] = sign * total / count;
+      if (std::cos(g.alpha[k]) < 0.0) sign = -sign;
+    }
+  };
+  int start = -1;  // a link that is not parallel: runs end there
+  for (int k = 0; k < n && start < 0; ++k) {
+    if (!parallel(k)) start = k;
+  }
+  if (start < 0) {
+    share(0, n);
+    return out;
+  }
+  for (int j = 1; j <= n;) {
+    const int first = (start + j) % n;
+    if (!parallel(first)) {
+      ++j;
+      continue;
+    }
+    int links = 0;
+    while (j + links <= n && parallel((first + links) % n)) ++links;
+    share(first, links + 1);
+    j += links;
+  }
+  return out;
+}
+
+bool common_normal_feet(const Vector3& p, const Vector3& u, const Vector3& q, const Vector3& v, double min_sin2,
+                        double& s, double& t) {
+  const Vector3 n = u.cross(v);
+  const double nn = n.squaredNorm();
+  if (!(nn > min_sin2)) return false;
+  // (p + s u) - (q + t v) is along n: s is the coordinate of q - p along u in
+  // the basis (u, v, n). t is then the foot of p + s u on the second line,
+  // so that the segment between the feet is normal to both lines to
+  // round-off even where s itself is uncertain.
+  s = (q - p).cross(v).dot(n) / nn;
+  t = (p + s * u - q).dot(v);
+  return true;
 }
 
 Eigen::Isometry3d joint_transform(double theta, double d, double a, double alpha) {

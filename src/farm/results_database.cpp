@@ -432,6 +432,9 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
   // An older schema is upgraded by the first write that needs it (open_run),
   // so that a database refused after this (another job) is left as it was.
   impl->schema_version = check_identity(path, db, !update);
+  // Again on this connection: a read-only one (the probe's) does not test the
+  // CHECK constraints, so a row that breaks one passes there.
+  if (impl->schema_version != 0) check_integrity(path, db);
   if (impl->schema_version == 0) {
     exec(path, db, schema_sql(), "cannot create the schema");
     exec(path, db,
@@ -449,9 +452,10 @@ void ResultsDatabase::Impl::upgrade_schema() {
   for (int version = schema_version; version < kDatabaseSchemaVersion; ++version) {
     const std::string sql = schema_upgrade_sql(version);
     if (!sql.empty()) exec(path, db(), sql, "cannot upgrade the schema");
-    // 5 to 6 changes rows, not the schema: the keys of candidates with a zero-length link.
-    if (version == 5) rekey_zero_length_links();
   }
+  // 5 to 6 and 6 to 7 change rows, not the schema: the keys of candidates
+  // with a zero-length link or parallel axes, computed again once.
+  if (schema_version < 7) rekey_candidates();
   exec(path, db(), "PRAGMA user_version = " + std::to_string(kDatabaseSchemaVersion), "cannot set the schema version");
 }
 
@@ -522,6 +526,19 @@ RunInfo ResultsDatabase::open_run(const RunIdentity& identity, bool new_run) {
                        std::to_string(held_starts) + ", or pass --new-run)");
     }
     latest.reset();
+    // A run's target may grow (more starts of the same job), never drop
+    // starts it has committed.
+    Statement highest;
+    highest.prepare(m.path, db, "SELECT MAX(start_index) FROM starts WHERE run_id = ?1");
+    highest.bind(1, run_id);
+    if (highest.step("cannot read the committed starts") && !highest.is_null(0) &&
+        static_cast<std::uint64_t>(highest.integer(0)) >= identity.starts) {
+      const auto needed = static_cast<std::uint64_t>(highest.integer(0)) + 1;
+      fail(m.path, "run " + std::to_string(run_id) + " has committed starts up to index " + std::to_string(needed - 1) +
+                       ", and this invocation asks for " + std::to_string(identity.starts) + " starts: give --starts " +
+                       std::to_string(needed) + " or more, or pass --new-run");
+    }
+    highest.reset();
     Statement update;
     update.prepare(
         m.path, db,

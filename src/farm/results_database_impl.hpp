@@ -69,11 +69,12 @@ struct ResultsDatabase::Impl {
   // transaction; schema_version follows once it commits (upgraded_schema).
   void upgrade_schema();
   void upgraded_schema() { schema_version = kDatabaseSchemaVersion; }
-  // Schema version 5 to 6 (results_rekey.cpp): every candidate whose stored
-  // canonical geometry has a link the key reads as zero length keyed again
-  // as a run keys a new start, and the rows that then name one linkage
-  // merged as one run would have stored them. Inside the caller's transaction.
-  void rekey_zero_length_links();
+  // Schema versions 5 and 6 to 7 (results_rekey.cpp): every candidate whose
+  // stored canonical geometry has a link the key reads as zero length, or one
+  // joining parallel axes, keyed again as a run keys a new start, and the
+  // rows that then name one linkage merged as one run would have stored
+  // them. Inside the caller's transaction.
+  void rekey_candidates();
   // Folds candidate `other` into `survivor` (the lower id): hits added, the
   // earlier representative kept, the starts re-pointed, `other` deleted.
   void merge_candidate_rows(std::int64_t survivor, std::int64_t other);

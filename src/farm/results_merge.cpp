@@ -529,14 +529,15 @@ MergeSummary ResultsDatabase::merge(const std::string& output, const std::vector
           const int n = entry.joints;
           entry.key = c.text(kCanonicalKey);
           const bool complete = read_canonical_values(c, kCandidateGeometry, n, entry);
-          // An input older than schema version 6 may hold the key written
-          // before the twist at a zero-length link was taken with either sign:
-          // such a row is keyed again, as the upgrade does (results_rekey.hpp).
+          // An input older than schema version 7 may hold the key written
+          // before the twist at a zero-length link was taken with either sign,
+          // or before the normal between parallel axes was centred: such a
+          // row is keyed again, as the upgrade does (results_rekey.hpp).
           std::optional<RekeyedCandidate> rekeyed;
-          if (kept.schema_version < 6) {
+          if (kept.schema_version < 7) {
             entry.first_run = run_id;
             entry.first_start = static_cast<std::int64_t>(index);
-            if (complete) rekeyed = rekey_zero_length_link(entry);
+            if (complete) rekeyed = rekey_candidate(entry);
             if (rekeyed) entry = rekeyed->entry;
           }
           if (const std::optional<CanonicalEntry> match = m.find_candidate(entry, dedup_tolerance)) {

@@ -1,12 +1,15 @@
-// Schema version 5 to 6: the candidates whose canonical geometry has a
-// zero-length link keyed again (results_rekey.hpp, results_database_impl.hpp;
-// docs/guide/database.md, "Schema versions" and "De-duplication").
+// Schema versions 5 to 6 and 6 to 7: the candidates whose canonical geometry
+// has a zero-length link or parallel axes keyed again (results_rekey.hpp,
+// results_database_impl.hpp; docs/guide/database.md, "Schema versions" and
+// "De-duplication").
 //
 // The canonical key takes the twist at a link whose length it writes as 0
-// (a_k / L quantised to 0) with either sign. A key written before it did so
-// may differ for a loop with such a link, and a run that finds the linkage
-// again under the new key adds a second row. The upgrade, inside the
-// transaction of the first write that needs it, therefore
+// (a_k / L quantised to 0) with either sign (version 6), and reads the
+// offsets between parallel axes with their common normal centred (version
+// 7). A key written before it did so may differ for a loop with such a link,
+// and a run that finds the linkage again under the new key adds a second
+// row; two starts of one such loop may even have stored two rows. The
+// upgrade, inside the transaction of the first write that needs it, therefore
 //   - recomputes, for every candidate whose stored canonical geometry has
 //     such a link, its canonical_key, canonical geometry (a*, alpha*_deg, d*)
 //     and grid_cell from that geometry, with the functions a run uses for a
@@ -40,7 +43,7 @@
 namespace loopfarm {
 namespace store {
 
-std::optional<RekeyedCandidate> rekey_zero_length_link(const CanonicalEntry& stored) {
+std::optional<RekeyedCandidate> rekey_candidate(const CanonicalEntry& stored) {
   const int n = stored.joints;
   if (n < kMinJoints || n > kMaxJoints) return std::nullopt;
   LoopGeometry g;
@@ -53,7 +56,7 @@ std::optional<RekeyedCandidate> rekey_zero_length_link(const CanonicalEntry& sto
     g.d[i] = stored.values[2 * n + i];
   }
   try {
-    if (!has_zero_length_link(g)) return std::nullopt;
+    if (!has_zero_length_link(g) && !has_parallel_link(g)) return std::nullopt;
     // As a run: the start's canonical form (analyse_candidate), its record
     // (make_start_record), the entry and grid cell the store computes of it
     // (place_candidate).
@@ -78,7 +81,7 @@ std::optional<RekeyedCandidate> rekey_zero_length_link(const CanonicalEntry& sto
 
 using namespace store;
 
-void ResultsDatabase::Impl::rekey_zero_length_links() {
+void ResultsDatabase::Impl::rekey_candidates() {
   // Every candidate whose key changes, with its new values.
   std::vector<RekeyedCandidate> rekeyed;
   {
@@ -97,7 +100,7 @@ void ResultsDatabase::Impl::rekey_zero_length_links() {
       if (c.joints < kMinJoints || c.joints > kMaxJoints) continue;
       // A row without its geometry is no loop to key.
       if (!read_canonical_values(all, kGeometry, c.joints, c)) continue;
-      if (std::optional<RekeyedCandidate> r = rekey_zero_length_link(c)) rekeyed.push_back(std::move(*r));
+      if (std::optional<RekeyedCandidate> r = rekey_candidate(c)) rekeyed.push_back(std::move(*r));
     }
   }
   if (rekeyed.empty()) return;

@@ -1,8 +1,14 @@
 // The results database's schema and the checks of a file (results_schema.hpp).
 #include "results_schema.hpp"
 
+#include <algorithm>
 #include <cstdio>
+#include <map>
+#include <mutex>
+#include <optional>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "candidate_index.hpp"
 #include "loopfarm/core/loop.hpp"
@@ -245,9 +251,15 @@ const char* const kUpgradeToVersion5 = "ALTER TABLE candidates ADD COLUMN bond_f
 // link (a_k / L quantised to 0) with either sign, which keys written before
 // did not; the upgrade recomputes, in C++, the key, canonical geometry and
 // grid cell of every candidate with such a link and merges the rows that
-// then name one linkage (ResultsDatabase::Impl::rekey_zero_length_links,
+// then name one linkage (ResultsDatabase::Impl::rekey_candidates,
 // results_rekey.cpp). The schema itself does not change.
 const char* const kUpgradeToVersion6 = "";
+
+// Version 6 to 7: no SQL. The canonical key reads the offsets between
+// parallel axes with the common normal centred (canonical.hpp), which keys
+// written before did not; the same recomputation as for version 6, over the
+// candidates with such a link (rekey_candidates, once for both).
+const char* const kUpgradeToVersion7 = "";
 
 }  // namespace
 
@@ -263,6 +275,8 @@ std::string schema_upgrade_sql(int from_version) {
       return kUpgradeToVersion5;
     case 5:
       return kUpgradeToVersion6;
+    case 6:
+      return kUpgradeToVersion7;
     default:
       throw std::logic_error("schema_upgrade_sql: no upgrade from version " + std::to_string(from_version));
   }
@@ -304,7 +318,84 @@ int check_identity(const std::string& path, sqlite3* db, bool allow_empty) {
                    std::to_string(kDatabaseSchemaVersion) + "): use a newer loopfarm");
   }
   if (version < kOldestDatabaseSchemaVersion) fail(path, "unknown schema version " + std::to_string(version));
+  // Its tables, indexes and views, where SQLite can read the schema (damage
+  // there is quick_check's to report, with its own words).
+  check_schema_objects(path, db, static_cast<int>(version), false);
   return static_cast<int>(version);
+}
+
+namespace {
+
+// (type, name) of every table, index and view of a schema, sorted.
+using SchemaObjects = std::vector<std::pair<std::string, std::string>>;
+
+// Empty when SQLite cannot read the schema and `strict` is off.
+std::optional<SchemaObjects> schema_objects(const std::string& path, sqlite3* db, bool strict) {
+  // Read as check_identity reads: damage where SQLite reads the schema is
+  // reported as damage ("damaged (...)"), not as a failure.
+  SchemaObjects out;
+  sqlite3_stmt* list = nullptr;
+  int rc = sqlite3_prepare_v2(db,
+                              "SELECT type, name FROM sqlite_schema WHERE type IN ('table', 'index', 'view') AND "
+                              "name NOT LIKE 'sqlite_%' ORDER BY type, name",
+                              -1, &list, nullptr);
+  while (rc == SQLITE_OK || rc == SQLITE_ROW) {
+    rc = sqlite3_step(list);
+    if (rc != SQLITE_ROW) break;
+    out.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(list, 0)),
+                     reinterpret_cast<const char*>(sqlite3_column_text(list, 1)));
+  }
+  const std::string message = sqlite3_errmsg(db);
+  sqlite3_finalize(list);
+  if (rc != SQLITE_DONE) {
+    if (!strict) return std::nullopt;
+    fail_read(path, rc, "cannot read the schema", message);
+  }
+  return out;
+}
+
+// The objects of schema version `version`: version 1 and the upgrades to it,
+// made in a database in memory (once per version).
+const SchemaObjects& expected_objects(int version) {
+  static std::mutex mutex;
+  static std::map<int, SchemaObjects> made;
+  const std::lock_guard<std::mutex> lock(mutex);
+  auto at = made.find(version);
+  if (at != made.end()) return at->second;
+  sqlite3* memory = nullptr;
+  if (sqlite3_open(":memory:", &memory) != SQLITE_OK) {
+    sqlite3_close(memory);
+    throw DatabaseError("cannot open a database in memory", DatabaseError::Cause::failed);
+  }
+  std::string sql = schema_sql_version_1();
+  for (int v = 1; v < version; ++v) sql += schema_upgrade_sql(v);
+  char* error = nullptr;
+  if (sqlite3_exec(memory, sql.c_str(), nullptr, nullptr, &error) != SQLITE_OK) {
+    const std::string message = error ? error : "unknown error";
+    sqlite3_free(error);
+    sqlite3_close(memory);
+    throw std::logic_error("schema version " + std::to_string(version) + " does not build: " + message);
+  }
+  SchemaObjects objects = *schema_objects(":memory:", memory, true);
+  sqlite3_close(memory);
+  return made.emplace(version, std::move(objects)).first->second;
+}
+
+}  // namespace
+
+void check_schema_objects(const std::string& path, sqlite3* db, int version, bool strict) {
+  const std::optional<SchemaObjects> read = schema_objects(path, db, strict);
+  if (!read) return;
+  const SchemaObjects& held = *read;
+  // A missing table first: its indexes went with it.
+  for (const bool tables : {true, false}) {
+    for (const auto& [type, name] : expected_objects(version)) {
+      if ((type == "table") != tables || std::binary_search(held.begin(), held.end(), std::make_pair(type, name))) {
+        continue;
+      }
+      fail(path, "damaged: the " + type + " " + name + " of schema version " + std::to_string(version) + " is missing");
+    }
+  }
 }
 
 // PRAGMA quick_check: every page of the file read and its b-tree structure
@@ -327,12 +418,18 @@ void check_integrity(const std::string& path, sqlite3* db) {
   const std::string message = sqlite3_errmsg(db);
   sqlite3_finalize(check);
   if (rc != SQLITE_DONE) fail_read(path, rc, "PRAGMA quick_check", message);
-  if (shown == 0) return;
-  for (char& c : problems) {
-    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+  if (shown > 0) {
+    for (char& c : problems) {
+      if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+    }
+    if (shown > 3) problems += "; ...";
+    fail(path, "damaged (PRAGMA quick_check: " + problems + ")");
   }
-  if (shown > 3) problems += "; ...";
-  fail(path, "damaged (PRAGMA quick_check: " + problems + ")");
+  // Sound pages, but every table, index and view of its version there?
+  const std::int64_t version = query_integer(path, db, "PRAGMA user_version");
+  if (version >= kOldestDatabaseSchemaVersion && version <= kDatabaseSchemaVersion) {
+    check_schema_objects(path, db, static_cast<int>(version), true);
+  }
 }
 
 }  // namespace loopfarm::store

@@ -39,10 +39,18 @@ std::string schema_upgrade_sql(int from_version);
 // The schema version of a loopfarm database (kOldestDatabaseSchemaVersion to
 // kDatabaseSchemaVersion), or 0 for an empty database (no schema objects, no
 // application_id: a file this program may initialise when `allow_empty`).
-// Refuses everything else. Reads only.
+// Refuses everything else, a file without a table, index or view of its
+// version included (check_schema_objects, not strict). Reads only.
 int check_identity(const std::string& path, sqlite3* db, bool allow_empty);
 
-// PRAGMA quick_check; damage is refused with a few of its problems on one line.
+// Refuses, as damaged and naming it, a file of schema version `version` that
+// lacks one of that version's tables, indexes or views (objects a user added
+// are allowed). A schema SQLite cannot read is refused as damaged when
+// `strict`, and left to the integrity check otherwise. Reads only.
+void check_schema_objects(const std::string& path, sqlite3* db, int version, bool strict);
+
+// PRAGMA quick_check; damage is refused with a few of its problems on one
+// line. Then check_schema_objects for the file's schema version.
 void check_integrity(const std::string& path, sqlite3* db);
 
 }  // namespace loopfarm::store

@@ -22,6 +22,15 @@ long long twist_quantum(double alpha, double tolerance) {
 // A link the key writes as zero length: its length (at length scale 1) quantised to 0.
 bool zero_length(double a, double tolerance) { return std::llround(a / tolerance) == 0; }
 
+// The loop with the common normals between parallel axes centred
+// (centred_parallel_normals): a link counts as parallel where the key would
+// write its twist as 0 or pi, |sin(alpha)| below half a quantum. Where the
+// search left such a normal is no property of the loop, and the key (and the
+// length scale, which the offsets enter) must not depend on it.
+LoopGeometry centred(const LoopGeometry& geometry, double tolerance) {
+  return centred_parallel_normals(geometry, 0.5 * tolerance);
+}
+
 // Quantised values of a scaled representation, (a, alpha, d).
 std::vector<long long> quantised(const LoopGeometry& g, double tolerance) {
   const int n = g.joints();
@@ -90,9 +99,10 @@ CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance) {
   if (!(tolerance > 0.0 && tolerance < 1.0)) throw std::invalid_argument("canonical_form: tolerance must be in (0, 1)");
   const int n = geometry.joints();
   CanonicalForm best;
-  best.scale = length_scale(geometry);
+  const LoopGeometry loop = centred(geometry, tolerance);
+  best.scale = length_scale(loop);
   const std::vector<long long> best_key = smallest_representation(
-      scaled(geometry, best.scale), tolerance, [tolerance](const LoopGeometry& g) { return quantised(g, tolerance); },
+      scaled(loop, best.scale), tolerance, [tolerance](const LoopGeometry& g) { return quantised(g, tolerance); },
       [tolerance](double twist, double negated) {
         return twist_quantum(negated, tolerance) < twist_quantum(twist, tolerance);
       },
@@ -117,9 +127,21 @@ bool has_zero_length_link(const LoopGeometry& geometry, double tolerance) {
     throw std::invalid_argument("has_zero_length_link: tolerance must be in (0, 1)");
   }
   // As canonical_form reads the lengths: scaled to length scale 1.
-  const LoopGeometry unit = scaled(geometry, length_scale(geometry));
+  const LoopGeometry loop = centred(geometry, tolerance);
+  const LoopGeometry unit = scaled(loop, length_scale(loop));
   for (int k = 0; k < unit.joints(); ++k) {
     if (zero_length(unit.a[k], tolerance)) return true;
+  }
+  return false;
+}
+
+bool has_parallel_link(const LoopGeometry& geometry, double tolerance) {
+  validate_geometry(geometry);
+  if (!(tolerance > 0.0 && tolerance < 1.0)) {
+    throw std::invalid_argument("has_parallel_link: tolerance must be in (0, 1)");
+  }
+  for (int k = 0; k < geometry.joints(); ++k) {
+    if (std::abs(std::sin(geometry.alpha[k])) <= 0.5 * tolerance) return true;
   }
   return false;
 }
@@ -131,7 +153,7 @@ CanonicalForm conventional_form(const LoopGeometry& geometry, double tolerance) 
   // twist a hair above -pi is pi, as the key reads it.
   auto is_negative_twist = [tolerance](double alpha) { return alpha < -tolerance && alpha >= -kPi + tolerance; };
   smallest_representation(
-      scaled(geometry, best.scale), tolerance,
+      scaled(centred(geometry, tolerance), best.scale), tolerance,
       [&](const LoopGeometry& g) {
         long long negative_twists = 0, negative_offsets = 0;
         for (int k = 0; k < n; ++k) {

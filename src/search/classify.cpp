@@ -280,9 +280,14 @@ std::string cubic_detail(const CubicMotionFit& fit) {
 
 }  // namespace
 
-Classification classify(const LoopGeometry& geometry, const JointVector& pose, std::span<const double> joint_travel,
+Classification classify(const LoopGeometry& given, const JointVector& pose, std::span<const double> joint_travel,
                         const ClassifyOptions& options) {
-  validate_geometry(geometry);
+  validate_geometry(given);
+  // Offsets between parallel axes are where the search left the common
+  // normal, not a property of the loop: every condition reads them with the
+  // normal centred (a line-symmetric loop with parallel axes is then seen as
+  // one). The axes, and so the pose, are the same.
+  const LoopGeometry geometry = centred_parallel_normals(given, options.tolerance);
   const int n = geometry.joints();
   if (pose.size() != n || !pose.allFinite()) {
     throw std::invalid_argument("classify: the pose needs " + std::to_string(n) + " finite joint angles");

@@ -38,6 +38,14 @@ constexpr double kPi = 3.14159265358979323846;  // as representation.cpp's twist
 
 inline std::string label(const char* name, int k) { return name + std::to_string(k + 1); }
 
+// max(m, |v|) with NaN kept: a condition that cannot be evaluated (an
+// overflow, a square root of a negative) fails its set instead of being
+// skipped, as std::max would skip it.
+inline double max_abs_step(double m, double v) {
+  const double a = std::abs(v);
+  return std::isnan(m) || a <= m ? m : a;
+}
+
 // Helpers for conditions built from x / L, L the length scale.
 struct Scale {
   double L;
@@ -109,7 +117,7 @@ struct Conditions {
   }
   double max_abs() const {
     double m = 0.0;
-    for (double v : values) m = std::max(m, std::abs(v));
+    for (double v : values) m = max_abs_step(m, v);
     return m;
   }
   double norm() const { return std::sqrt(sum_of_squares(values)); }
@@ -953,12 +961,9 @@ inline Goldberg6RFive goldberg_6r_five(const Goldberg6RParameters& p, double psi
   const Vector3 pp = Vector3(0.0, 0.0, p.d[0]) + p.a[1] * u, up(sp * p.sin[1], -cp * p.sin[1], p.cos[1]);
   // The common normal of axis 6 and axis P: feet p6 + s u6 and pp + t up.
   const Vector3 w0 = p6 - pp;
-  const double b = u6.dot(up), e = up.dot(w0), g = u6.dot(w0), denominator = 1.0 - b * b;
-  double s = 0.0, t = e;  // parallel axes: the foot on axis 6 at link 6's
-  if (denominator > 1e-24) {
-    s = (b * e - g) / denominator;
-    t = (e - b * g) / denominator;
-  }
+  const double b = u6.dot(up);
+  double s = 0.0, t = up.dot(w0);  // parallel axes: the foot on axis 6 at link 6's
+  common_normal_feet(p6, u6, pp, up, 1e-24, s, t);
   const Vector3 gap = (pp + t * up) - (p6 + s * u6), cross = u6.cross(up);
   const double length = gap.norm();
   Vector3 x = length > 1e-12 * p.L ? Vector3(gap / length) : Vector3(cross);

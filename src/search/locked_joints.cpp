@@ -23,12 +23,9 @@ struct LinkBetween {
 LinkBetween link_between(const Eigen::Isometry3d& M) {
   const Vector3 z = Vector3::UnitZ(), zq = M.linear().col(2), o = M.translation();
   // Closest points s z (on P) and o + t zq (on Q).
-  const double b = z.dot(zq), du = -o.z(), dv = -zq.dot(o), den = 1.0 - b * b;
+  const double b = z.dot(zq);
   double s = 0.0, t = -zq.dot(o);
-  if (den > 1e-14) {
-    s = (b * dv - du) / den;
-    t = (dv - b * du) / den;
-  }
+  common_normal_feet(Vector3::Zero(), z, o, zq, 1e-14, s, t);
   const Vector3 foot_p = s * z, foot_q = o + t * zq;
   LinkBetween out;
   Vector3 x = foot_q - foot_p;

@@ -76,7 +76,8 @@ double length_scale_of(const Tables& t, const CompiledRepresentation& w);
 // The classification's search: the running max |value|, given up once it
 // reaches `bound` (the best representation's so far): a representation given
 // up cannot have a strictly smaller max. Conditions::max_abs's max, in the
-// same order (a NaN value is skipped by both).
+// same order (a NaN value makes both NaN: a set that cannot be evaluated
+// never fits, and is given up at once).
 struct MaxAbs {
   double bound = kInf;
   double max = 0.0;
@@ -85,8 +86,8 @@ struct MaxAbs {
   template <class Name, class Value, class Gradient>
   void add(const Name&, const Value& value, const Gradient&) {
     if (abandoned) return;
-    max = std::max(max, std::abs(value()));
-    abandoned = max >= bound;
+    max = max_abs_step(max, value());
+    abandoned = max >= bound || std::isnan(max);
   }
 };
 

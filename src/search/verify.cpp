@@ -205,6 +205,9 @@ VerificationSummary verify(const LoopGeometry& geometry, const JointVector* star
     if (std::abs(r.turns) > 1) {
       out.limit = "the input turns " + std::to_string(std::abs(r.turns)) + " times before the pose returns";
     }
+  } else if (!(r.hi - r.lo >= options.min_input_travel)) {
+    out.limit = "the input joint does not move on this circuit (travel " + degrees(r.hi - r.lo) +
+                " deg), the others do: no cycle of it (relabel the loop so that joint 1 moves)";
   } else if (c.closed()) {
     out.limit = "the input rocks between dead points at " + degrees(r.lo) + " and " + degrees(r.hi) + " deg";
   } else {
@@ -261,7 +264,9 @@ std::optional<MotionWindow> motion_window(const LoopGeometry& geometry, const Ve
       if (image > r.lo && image < r.hi) centre = image;
     }
     w.theta0 = centre;
-    w.range = cycle_window(r, centre);
+    // A closed circuit moves when any joint does: its input may stay where
+    // it is (a frozen joint as input), and then there is no cycle of it.
+    w.range = r.hi - r.lo >= options.min_input_travel ? cycle_window(r, centre) : 0.0;
   }
   // The cycle's angles as people read them: theta0 and the pose in (-180, 180] deg.
   w.theta0 = wrap_angle(w.theta0);

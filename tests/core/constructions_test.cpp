@@ -95,6 +95,60 @@ TEST(Constructions, DhFromAxesReadsAKnownLoopAndItsPoseOffItsAxes) {
   }
 }
 
+TEST(Constructions, CommonNormalFeetAreJoinedByANormalAsLinesTurnParallel) {
+  // Two lines built from their common normal: feet F and F + a x, directions
+  // u and u turned by `angle` about x; each line given by a point slid along
+  // it by a known amount. Well apart, the feet come back to round-off; nearly
+  // parallel, where along the lines they lie is ill-conditioned, but the
+  // segment between them is normal to both lines to round-off and as long as
+  // the lines are apart (to about eps / angle, the distance's conditioning).
+  std::mt19937_64 rng(41);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (const double angle : {0.5, 1e-2, 1e-4, 1e-5, 3e-6, 1.5e-6}) {
+    for (int trial = 0; trial < 20; ++trial) {
+      const Vector3 u = Vector3(unit(rng), unit(rng), unit(rng)).normalized();
+      const Vector3 x = u.cross(Vector3(unit(rng), unit(rng), unit(rng))).normalized();
+      const Vector3 v = Eigen::AngleAxisd(angle, x) * u;
+      const Vector3 foot = 2.0 * Vector3(unit(rng), unit(rng), unit(rng));
+      const double slide_p = 2.0 * unit(rng), slide_q = 2.0 * unit(rng);
+      const Vector3 p = foot + slide_p * u, q = foot + 0.7 * x + slide_q * v;
+      double s = 0.0, t = 0.0;
+      ASSERT_TRUE(common_normal_feet(p, u, q, v, 1e-12, s, t)) << angle;
+      if (angle >= 1e-2) {
+        EXPECT_NEAR(s, -slide_p, 1e-12) << angle << " " << trial;
+        EXPECT_NEAR(t, -slide_q, 1e-12) << angle << " " << trial;
+      }
+      const Vector3 normal = (q + t * v) - (p + s * u);
+      EXPECT_LT(std::abs(normal.dot(u)), 1e-14) << angle << " " << trial;
+      EXPECT_LT(std::abs(normal.dot(v)), 1e-14) << angle << " " << trial;
+      EXPECT_NEAR(normal.norm(), 0.7, 1e-14 / angle) << angle << " " << trial;
+    }
+  }
+  // Parallel within the bound: nothing computed.
+  double s = 5.0, t = 6.0;
+  EXPECT_FALSE(common_normal_feet(Vector3::Zero(), Vector3::UnitZ(), Vector3(1, 0, 0),
+                                  Eigen::AngleAxisd(1e-7, Vector3::UnitX()) * Vector3::UnitZ(), 1e-12, s, t));
+  EXPECT_EQ(s, 5.0);
+  EXPECT_EQ(t, 6.0);
+}
+
+TEST(Constructions, DhFromAxesClosesWithNearlyParallelAxes) {
+  // Any lines are a loop's axes at a pose of it: the DH parameters read off
+  // them close at the angles read with them, also where two axes are within
+  // a few microradians of parallel.
+  for (const double twist : {1e-3, 1e-4, 1e-5, 3e-6, 1.01e-6}) {
+    const LoopGeometry g = random_loop(6, 17);
+    const JointVector theta = random_angles(6, 17);
+    std::vector<Axis> axes = joint_axes(g, theta);
+    // Axis 4 turned towards axis 3 until `twist` apart.
+    const Vector3 normal = axes[2].direction.cross(axes[3].direction).normalized();
+    axes[3].direction = Eigen::AngleAxisd(twist, normal) * axes[2].direction;
+    const PosedLoop read = dh_from_axes(axes);
+    EXPECT_NEAR(std::abs(std::sin(read.geometry.alpha[2])), std::sin(twist), 1e-12) << twist;
+    EXPECT_LT(closure_residual(read.geometry, read.theta).norm(), 1e-11) << twist;
+  }
+}
+
 TEST(Constructions, DhFromAxesRefusesBadAxes) {
   const std::vector<Axis> three(3);
   EXPECT_THROW(dh_from_axes(three), std::invalid_argument);

@@ -3,6 +3,8 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -262,6 +264,125 @@ TEST(Loop, AxisFlipLeavesTheLoopProductUnchanged) {
   EXPECT_LT(closure_residual(axis_flipped(b, 2), axis_flipped_angles(theta, 2)).norm(), 1e-13);
 }
 
+constexpr double kPi = 3.14159265358979323846;
+
+// The lines of the joint axes at a pose: axis k + 1 is the z axis of frame k.
+std::vector<std::pair<Vector3, Vector3>> axis_lines(const LoopGeometry& g, const JointVector& theta) {
+  std::vector<std::pair<Vector3, Vector3>> out;
+  for (int k = 0; k < g.joints(); ++k) {
+    const Eigen::Isometry3d frame = forward_transform(g, theta, k);
+    out.emplace_back(frame.translation(), frame.linear().col(2));
+  }
+  return out;
+}
+
+// Distance and angle of every pair of axes: what two placements of one
+// chain of lines share when the base frame itself moved.
+std::vector<double> pair_invariants(const LoopGeometry& g, const JointVector& theta) {
+  const auto lines = axis_lines(g, theta);
+  std::vector<double> out;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    for (size_t j = i + 1; j < lines.size(); ++j) {
+      const Vector3 u = lines[i].second, v = lines[j].second, w = lines[j].first - lines[i].first;
+      const Vector3 n = u.cross(v);
+      out.push_back(std::atan2(n.norm(), u.dot(v)));
+      out.push_back(n.norm() > 1e-9 ? std::abs(w.dot(n)) / n.norm() : w.cross(u).norm());
+    }
+  }
+  return out;
+}
+
+double max_difference(const LoopGeometry& x, const LoopGeometry& y) {
+  double m = 0.0;
+  for (int k = 0; k < x.joints(); ++k) {
+    m = std::max({m, std::abs(x.a[k] - y.a[k]), std::abs(std::remainder(x.alpha[k] - y.alpha[k], 2 * kPi)),
+                  std::abs(x.d[k] - y.d[k])});
+  }
+  return m;
+}
+
+TEST(Loop, CentredParallelNormalsSplitEachRunsOffsetAndMoveNoAxis) {
+  // Links 0 (parallel) and 3 (antiparallel) of a 6R; the last link is not
+  // parallel, so the base frame stays and every axis line must stay.
+  LoopGeometry g = random_loop(6, 3);
+  g.alpha[0] = 0.0;
+  g.alpha[3] = kPi;
+  const JointVector theta = random_angles(6, 3);
+  LoopGeometry c = centred_parallel_normals(g, 1e-9);
+  EXPECT_NEAR(c.d[0], c.d[1], 1e-15);
+  EXPECT_NEAR(c.d[3], -c.d[4], 1e-15);
+  EXPECT_NEAR(c.d[0] + c.d[1], g.d[0] + g.d[1], 1e-15);
+  EXPECT_NEAR(c.d[3] - c.d[4], g.d[3] - g.d[4], 1e-15);
+  for (int k : {2, 5}) EXPECT_EQ(c.d[k], g.d[k]) << k;
+  EXPECT_TRUE(c.a == g.a && c.alpha == g.alpha);
+  EXPECT_GT(std::abs(g.d[0] - g.d[1]), 1e-2);  // the test moves something
+  auto before = axis_lines(g, theta), after = axis_lines(c, theta);
+  for (size_t k = 0; k < before.size(); ++k) {
+    EXPECT_LT((before[k].second - after[k].second).norm(), 1e-14) << k;
+    EXPECT_LT((after[k].first - before[k].first).cross(before[k].second).norm(), 1e-14) << k;
+  }
+  EXPECT_LT((forward_transform(g, theta).matrix() - forward_transform(c, theta).matrix()).cwiseAbs().maxCoeff(), 1e-14);
+
+  // A run of two links (axes 1, 2, 3; the second link antiparallel) in a 7R:
+  // three offsets, signed along axis 1, share their sum.
+  g = random_loop(7, 4);
+  g.alpha[1] = 0.0;
+  g.alpha[2] = -kPi;
+  c = centred_parallel_normals(g, 1e-9);
+  EXPECT_NEAR(c.d[1], c.d[2], 1e-15);
+  EXPECT_NEAR(c.d[2], -c.d[3], 1e-15);
+  EXPECT_NEAR(c.d[1] + c.d[2] - c.d[3], g.d[1] + g.d[2] - g.d[3], 1e-15);
+  before = axis_lines(g, random_angles(7, 4));
+  after = axis_lines(c, random_angles(7, 4));
+  for (size_t k = 0; k < before.size(); ++k) {
+    EXPECT_LT((after[k].first - before[k].first).cross(before[k].second).norm(), 1e-14) << k;
+  }
+
+  // A run through the base frame (links 4 and 0 of a 5R): the base frame's
+  // normal moves too, so the chain is compared by its pairs of axes.
+  g = random_loop(5, 5);
+  g.alpha[4] = 0.0;
+  g.alpha[0] = 0.0;
+  c = centred_parallel_normals(g, 1e-9);
+  EXPECT_NEAR(c.d[4], c.d[0], 1e-15);
+  EXPECT_NEAR(c.d[0], c.d[1], 1e-15);
+  const std::vector<double> pairs_before = pair_invariants(g, random_angles(5, 5));
+  const std::vector<double> pairs_after = pair_invariants(c, random_angles(5, 5));
+  for (size_t k = 0; k < pairs_before.size(); ++k) EXPECT_NEAR(pairs_before[k], pairs_after[k], 1e-13) << k;
+
+  // Every link parallel (a planar 4R): the signed offsets share their total.
+  g = random_loop(4, 6);
+  g.alpha = JointVector::Constant(4, 0.0);
+  g.alpha[2] = kPi;
+  c = centred_parallel_normals(g, 1e-9);
+  const double total = g.d[0] + g.d[1] + g.d[2] - g.d[3];
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(c.d[k], (k == 3 ? -1.0 : 1.0) * total / 4, 1e-15) << k;
+
+  // Without parallel axes nothing changes.
+  g = random_loop(6, 7);
+  c = centred_parallel_normals(g, 1e-9);
+  EXPECT_TRUE(c.a == g.a && c.alpha == g.alpha && c.d == g.d);
+}
+
+TEST(Loop, CentredParallelNormalsCommuteWithRepresentationsAndRepeat) {
+  LoopGeometry g = random_loop(6, 8);
+  g.alpha[0] = 0.0;
+  g.alpha[5] = kPi;  // a run through the base frame
+  g.alpha[3] = 0.0;
+  const LoopGeometry c = centred_parallel_normals(g, 1e-9);
+  EXPECT_LT(max_difference(centred_parallel_normals(c, 1e-9), c), 1e-15);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_LT(max_difference(centred_parallel_normals(axis_flipped(g, j), 1e-9), axis_flipped(c, j)), 1e-14) << j;
+    EXPECT_LT(max_difference(centred_parallel_normals(relabelled(g, j), 1e-9), relabelled(c, j)), 1e-14) << j;
+  }
+  EXPECT_LT(max_difference(centred_parallel_normals(reversed(g), 1e-9), reversed(c)), 1e-14);
+  // Within the tolerance a link counts as parallel; beyond it, not.
+  LoopGeometry near = g;
+  near.alpha[3] = 1e-10;
+  EXPECT_NEAR(centred_parallel_normals(near, 1e-9).d[3], centred_parallel_normals(near, 1e-9).d[4], 1e-15);
+  EXPECT_EQ(centred_parallel_normals(near, 1e-11).d[3], near.d[3]);
+}
+
 TEST(Loop, SoThreeLogInvertsTheExponentialEverywhere) {
   for (double angle : {0.0, 1e-9, 1e-5, 0.3, 1.5, 3.0, 3.14159, 3.141592653589793}) {
     const Vector3 axis = Vector3(0.3, -0.5, 0.8).normalized();
@@ -325,6 +446,16 @@ TEST(Loop, InvalidGeometriesAreRefusedWithTheParameterNamed) {
   const std::array<double, 9> nine{1, 1, 1, 1, 1, 1, 1, 1, 1};
   EXPECT_THROW(LoopGeometry::from_degrees(nine, nine, nine), std::invalid_argument);
   EXPECT_EQ(message(random_loop(8, 1)), "accepted");
+  // Lengths whose squares overflow: the length scale would be infinite.
+  g = paper_bennett_loop();
+  g.a[0] = 1e200;
+  EXPECT_NE(message(g).find("a1: 1e+200 is too large to compute with"), std::string::npos) << message(g);
+  g = paper_bennett_loop();
+  g.d[1] = -2e150;
+  EXPECT_NE(message(g).find("d2: -2e+150"), std::string::npos) << message(g);
+  g.d[1] = -1e150;
+  EXPECT_EQ(message(g), "accepted");
+  EXPECT_TRUE(std::isfinite(length_scale(g)));
 }
 
 TEST(Loop, WrapAngleMapsIntoTheHalfOpenInterval) {

@@ -307,6 +307,29 @@ TEST_F(ResultsDatabaseTest, ResumeFindsTheRunAndItsCommittedStarts) {
             (std::vector<std::vector<std::string>>{{"500", "elsewhere/test.toml", "5"}}));
 }
 
+TEST_F(ResultsDatabaseTest, AResumeThatWouldDropCommittedStartsIsRefusedAndTheFileUntouched) {
+  const std::string path = file("r.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    db.commit(db.open_run(identity()).run_id, {plain_start(0, 1.0), plain_start(7, 1.0)});
+  }
+  const std::string before = file_bytes(path);
+  RunIdentity fewer = identity();
+  fewer.starts = 7;  // start 7 is committed
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::string text = error_of([&] { db.open_run(fewer); });
+    EXPECT_NE(text.find(path), std::string::npos) << text;
+    EXPECT_NE(text.find("committed starts up to index 7"), std::string::npos) << text;
+    EXPECT_NE(text.find("--starts 8 or more"), std::string::npos) << text;
+  }
+  EXPECT_EQ(file_bytes(path), before);
+  fewer.starts = 8;  // the least that keeps them
+  ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+  EXPECT_EQ(db.open_run(fewer).committed_count(), 2u);
+  EXPECT_EQ(rows(db, "SELECT starts, starts_done FROM runs"), (std::vector<std::vector<std::string>>{{"8", "2"}}));
+}
+
 TEST_F(ResultsDatabaseTest, AnotherJobIsRefusedAndTheFileUntouched) {
   const std::string path = file("r.sqlite");
   {
@@ -522,6 +545,20 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
     std::fstream out(header, std::ios::binary | std::ios::in | std::ios::out);
     for (int i = 0; i < 100; ++i) out.put('x');
   }
+  // A table dropped (by hand, or a tool that went wrong); a row that breaks
+  // a CHECK constraint (written with the constraints off), which only a
+  // read-write connection's quick_check reports.
+  const std::string no_table = file("no-table.sqlite"), broken_check = file("broken-check.sqlite");
+  fs::copy_file(damaged, no_table);
+  fs::copy_file(damaged, broken_check);
+  {
+    RawConnection raw(no_table);
+    exec(raw.db, "DROP TABLE sessions");
+  }
+  {
+    RawConnection raw(broken_check);
+    exec(raw.db, "PRAGMA ignore_check_constraints = 1; UPDATE starts SET zero = 5 WHERE start_index = 3");
+  }
   {
     // Scribble over the middle of the file: the header (page 1) stays intact.
     std::fstream out(damaged, std::ios::binary | std::ios::in | std::ios::out);
@@ -537,7 +574,10 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
                         Case{garbage, "not an SQLite database"},
                         Case{newer, "schema version " + std::to_string(kDatabaseSchemaVersion + 1) + " is newer"},
                         Case{damaged, "damaged (PRAGMA quick_check: "}, Case{truncated, "damaged ("},
-                        Case{header, "not an SQLite database"}}) {
+                        Case{header, "not an SQLite database"},
+                        Case{no_table, "damaged: the table sessions of schema version " +
+                                           std::to_string(kDatabaseSchemaVersion) + " is missing"},
+                        Case{broken_check, "damaged (PRAGMA quick_check: CHECK constraint failed in starts"}}) {
     SCOPED_TRACE(c.path);
     const std::string before = file_bytes(c.path);
     // Both modes: a reader must not list what a damaged file happens to hold.
@@ -550,8 +590,8 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
       // SQLite may leave an empty WAL companion; nothing is written to it.
       EXPECT_FALSE(fs::exists(c.path + "-wal") && fs::file_size(c.path + "-wal") > 0);
       // A file refused for what its first page says gets no companions at
-      // all (only the quick_check of the middle damage needs SQLite's WAL).
-      if (c.path != damaged) {
+      // all (only the checks of the whole file need SQLite's WAL).
+      if (c.path != damaged && c.path != broken_check && c.path != no_table) {
         EXPECT_FALSE(fs::exists(c.path + "-wal") || fs::exists(c.path + "-shm"));
       }
     }

@@ -23,6 +23,8 @@
 #include <iterator>
 #include <limits>
 #include <optional>
+#include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -172,6 +174,67 @@ Rows candidates_content(const std::string& path) {
   }
   for (auto& row : out) row.resize(columns);
   return out;
+}
+
+// The stored canonical geometry of a candidate row read with its table's
+// column names `names`.
+LoopGeometry row_geometry(const Rows& names, const std::vector<std::string>& row) {
+  auto column = [&](const std::string& name) {
+    const auto at = std::find(names.begin(), names.end(), std::vector<std::string>{name});
+    if (at == names.end()) throw std::logic_error("no column " + name);
+    return row.at(static_cast<size_t>(at - names.begin()));
+  };
+  const int n = std::stoi(column("joints"));
+  std::vector<double> a, alpha, d;
+  for (int k = 1; k <= n; ++k) {
+    a.push_back(std::stod(column("a" + std::to_string(k))));
+    alpha.push_back(std::stod(column("alpha" + std::to_string(k) + "_deg")));
+    d.push_back(std::stod(column("d" + std::to_string(k))));
+  }
+  return LoopGeometry::from_degrees(a, alpha, d);
+}
+
+// The candidates of a database an upgrade to schema version 7 keyed again,
+// against `before`, its rows read before (candidates_content): a row whose
+// stored geometry has neither parallel axes nor a zero-length link is kept
+// as it was; every row's key is the key of its stored geometry, one that
+// `before`'s geometries have now; no two rows share a key; the hits add up as
+// before. Returns how many rows were merged away.
+size_t expect_keyed_again(const std::string& path, const Rows& before) {
+  const Rows after = candidates_content(path);
+  const Rows names = rows(path, "SELECT name FROM pragma_table_info('candidates')");
+  const size_t key_column = 5,
+               hits_column = static_cast<size_t>(
+                   std::find(names.begin(), names.end(), std::vector<std::string>{"hits"}) - names.begin());
+  EXPECT_EQ(names[key_column][0], "canonical_key");
+  std::set<std::string> keys_before;
+  long long hits_before = 0, hits_after = 0;
+  for (const auto& row : before) {
+    const LoopGeometry g = row_geometry(names, row);
+    keys_before.insert(canonical_form(g).key);
+    hits_before += std::stoll(row.at(hits_column));
+    if (has_parallel_link(g) || has_zero_length_link(g)) continue;
+    const auto same_id = std::find_if(after.begin(), after.end(), [&](const auto& r) { return r[0] == row[0]; });
+    if (same_id == after.end()) {
+      ADD_FAILURE() << "candidate " << row[0] << " without parallel axes is gone";
+    } else {
+      EXPECT_EQ(*same_id, row) << "candidate " << row[0];
+    }
+  }
+  std::set<std::string> keys_after;
+  for (const auto& row : after) {
+    EXPECT_EQ(row.at(key_column), canonical_form(row_geometry(names, row)).key) << "candidate " << row[0];
+    EXPECT_TRUE(keys_after.insert(row.at(key_column)).second) << "candidate " << row[0];
+    hits_after += std::stoll(row.at(hits_column));
+  }
+  // Rows of two keys within the tolerance of each other merge, as a run's do.
+  EXPECT_TRUE(std::includes(keys_before.begin(), keys_before.end(), keys_after.begin(), keys_after.end()));
+  EXPECT_EQ(hits_after, hits_before);
+  EXPECT_EQ(value(path,
+                  "SELECT COUNT(*) FROM starts WHERE candidate_id IS NOT NULL AND candidate_id NOT IN "
+                  "(SELECT candidate_id FROM candidates)"),
+            "0");
+  return before.size() - after.size();
 }
 
 // --- hand-built starts of one job ---------------------------------------------
@@ -379,7 +442,9 @@ TEST_F(MergeTest, AVersion1DatabaseIsReadAsItIsAndUpgradedByItsNextRun) {
   EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
   EXPECT_EQ(rows(path, "SELECT slice_index, slice_count FROM runs"), (Rows{{"NULL", "NULL"}}));
   expect_schema_of_a_new_database(path);
-  EXPECT_EQ(candidates_content(path), candidates);
+  // Its planar and trivial loops have parallel axes: keyed again (version
+  // 7), none merged.
+  EXPECT_EQ(expect_keyed_again(path, candidates), 0u);
 }
 
 // --- a database written before de-duplication moved into memory: version 2 ----
@@ -571,25 +636,45 @@ TEST_F(MergeTest, AVersion4DatabaseIsUpgradedWhenItsFingerprintsAreStoredAndKeep
   EXPECT_EQ(value(path, "PRAGMA user_version"), "4");
   EXPECT_EQ(file_bytes(path), before);
 
-  // Stored: upgraded in the same transaction, every row kept.
+  // Stored: upgraded in the same transaction, every row of runs, sessions
+  // and starts kept. Its candidates with parallel axes (planar and trivial
+  // loops) are keyed again (version 7) and two of them named one linkage
+  // (the normals between their parallel axes left in other places): merged,
+  // the fingerprint measured on the row merged away skipped.
   {
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::update);
     const FingerprintStoreSummary stored = db.store_bond_fingerprints(fingerprints);
-    EXPECT_EQ(stored.stored, static_cast<std::int64_t>(fingerprints.size()));
-    EXPECT_EQ(stored.skipped, 0);
+    EXPECT_EQ(stored.stored, static_cast<std::int64_t>(fingerprints.size()) - 1);
+    EXPECT_EQ(stored.skipped, 1);
     EXPECT_TRUE(stored.upgraded);
   }
   EXPECT_EQ(value(path, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
   expect_schema_of_a_new_database(path);
-  EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
+  const Rows start_columns = rows(path, "SELECT name FROM pragma_table_info('starts')");
+  ASSERT_EQ(start_columns[11][0], "candidate_id");
+  Rows kept_starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
+  ASSERT_EQ(kept_starts.size(), starts.size());
+  for (size_t i = 0; i < starts.size(); ++i) {
+    std::vector<std::string> a = kept_starts[i], b = starts[i];
+    a.erase(a.begin() + 11);
+    b.erase(b.begin() + 11);
+    EXPECT_EQ(a, b) << i;
+  }
   EXPECT_EQ(rows(path, "SELECT * FROM runs"), runs);
   EXPECT_EQ(rows(path, "SELECT * FROM sessions"), sessions);
-  Rows kept = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
-  for (auto& row : kept) row.pop_back();  // bond_fingerprint, the column version 5 added
-  EXPECT_EQ(kept, candidates);
+  {
+    // Read without the fingerprints, to compare with the version 4 rows.
+    const std::string copy = file("v5-without-fingerprints.sqlite");
+    fs::copy_file(path, copy);
+    exec(copy, "UPDATE candidates SET bond_fingerprint = NULL");
+    EXPECT_EQ(expect_keyed_again(copy, candidates), 1u);
+  }
+  const Rows kept = rows(path, "SELECT candidate_id FROM candidates ORDER BY candidate_id");
   {
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
     for (const BondFingerprint& f : fingerprints) {
+      if (std::find(kept.begin(), kept.end(), std::vector<std::string>{std::to_string(f.candidate_id)}) == kept.end())
+        continue;  // merged away
       EXPECT_EQ(db.candidate(f.candidate_id)->row.bond_fingerprint, std::optional<std::string>(f.fingerprint))
           << f.candidate_id;
     }
@@ -598,7 +683,7 @@ TEST_F(MergeTest, AVersion4DatabaseIsUpgradedWhenItsFingerprintsAreStoredAndKeep
       EXPECT_TRUE(c.fingerprint.has_value());
       grouped += c.candidates;
     }
-    EXPECT_EQ(std::to_string(grouped), std::to_string(candidates.size()));
+    EXPECT_EQ(std::to_string(grouped), std::to_string(kept.size()));
   }
 
   // Merged, a candidate keeps its fingerprint; merged as version 4, none.
@@ -610,7 +695,7 @@ TEST_F(MergeTest, AVersion4DatabaseIsUpgradedWhenItsFingerprintsAreStoredAndKeep
   fs::copy_file(kVersion4Fixture, old_input);
   ResultsDatabase::merge(merged_old, {old_input});
   EXPECT_EQ(value(merged_old, "SELECT COUNT(*) FROM candidates WHERE bond_fingerprint IS NULL"),
-            std::to_string(candidates.size()));
+            std::to_string(kept.size()));
   Rows merged_rows = rows(merged, "SELECT * FROM candidates ORDER BY candidate_id");
   for (auto& row : merged_rows) row.pop_back();
   EXPECT_EQ(candidates_content(merged_old), merged_rows);
@@ -671,11 +756,54 @@ StartRecord verified_start(std::uint64_t index, const LoopGeometry& g) {
   return r;
 }
 
+// A database of an older schema version holding `candidates` rows: a reader
+// leaves it byte for byte, and a run of another job is refused and leaves
+// its version and candidates as they were (nothing of the upgrade written).
+void expect_read_and_a_refused_run_leave_it(const std::string& path, const std::string& version, int candidates) {
+  const std::string before = file_bytes(path);
+  const Rows rows_before = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
+    EXPECT_EQ(db.candidate_count(), candidates);
+  }
+  EXPECT_EQ(file_bytes(path), before);
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    EXPECT_NE(error_of([&] { db.open_run(identity("[search]\nseed = 99\n", 99)); }).find("--new-run"),
+              std::string::npos);
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), version);
+  EXPECT_EQ(rows(path, "SELECT * FROM candidates ORDER BY candidate_id"), rows_before);
+}
+
+// The upgrade of a copy of `fixture` (schema `version`) fails (a trigger
+// refuses the removal of a merged row): the file is left as it was, and the
+// message names it and the cause.
+void expect_a_failing_upgrade_leaves_it(const std::string& fixture, const std::string& path, const std::string& version,
+                                        RunIdentity (*identity_of)(const std::string&, std::uint64_t),
+                                        std::uint64_t starts) {
+  fs::copy_file(fixture, path);
+  const RunIdentity own = identity_of(path, starts);
+  exec(path, "CREATE TRIGGER keep_candidates BEFORE DELETE ON candidates BEGIN SELECT RAISE(ABORT, 'kept'); END");
+  const Rows candidates = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
+  const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
+  const Rows runs = rows(path, "SELECT * FROM runs");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const std::string message = error_of([&] { db.open_run(own); });
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_NE(message.find("kept"), std::string::npos) << message;
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), version);
+  EXPECT_EQ(rows(path, "SELECT * FROM candidates ORDER BY candidate_id"), candidates);
+  EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
+  EXPECT_EQ(rows(path, "SELECT * FROM runs"), runs);
+}
+
 TEST_F(MergeTest, AVersion5DatabaseHasItsZeroLengthLinksKeyedAgainAndTheirDuplicatesMerged) {
   const std::string path = file("v5.sqlite");
   fs::copy_file(kVersion5Fixture, path);
   ASSERT_EQ(value(path, "PRAGMA user_version"), "5");
-  const std::string before = file_bytes(path);
   const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
   const Rows candidates = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
   const std::string run_columns =
@@ -688,20 +816,7 @@ TEST_F(MergeTest, AVersion5DatabaseHasItsZeroLengthLinksKeyedAgainAndTheirDuplic
   EXPECT_EQ(rows(path, "SELECT candidate_id FROM candidates WHERE canonical_key = '" + current_key + "'"),
             (Rows{{"4"}}));
   EXPECT_EQ(value(path, "SELECT COUNT(DISTINCT canonical_key) FROM candidates"), "4");
-  {
-    // Read: as it is, nothing written.
-    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::read);
-    EXPECT_EQ(db.candidate_count(), 4);
-  }
-  EXPECT_EQ(file_bytes(path), before);
-  {
-    // Another job refused: nothing of the upgrade is written.
-    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
-    EXPECT_NE(error_of([&] { db.open_run(identity("[search]\nseed = 99\n", 99)); }).find("--new-run"),
-              std::string::npos);
-  }
-  EXPECT_EQ(value(path, "PRAGMA user_version"), "5");
-  EXPECT_EQ(rows(path, "SELECT * FROM candidates ORDER BY candidate_id"), candidates);
+  expect_read_and_a_refused_run_leave_it(path, "5", 4);
   EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
 
   // Its own job resumes it: upgraded in the same transaction.
@@ -798,22 +913,7 @@ TEST_F(MergeTest, AVersion5DatabaseMergedHasItsZeroLengthLinksKeyedAgain) {
 // An upgrade that fails (here a trigger refuses the removal of a merged row)
 // leaves the file as it was, version 5, and says which file.
 TEST_F(MergeTest, AVersion5UpgradeThatFailsLeavesTheFileAsItWas) {
-  const std::string path = file("v5.sqlite");
-  fs::copy_file(kVersion5Fixture, path);
-  exec(path, "CREATE TRIGGER keep_candidates BEFORE DELETE ON candidates BEGIN SELECT RAISE(ABORT, 'kept'); END");
-  const Rows candidates = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
-  const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
-  const Rows runs = rows(path, "SELECT * FROM runs");
-  {
-    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
-    const std::string message = error_of([&] { db.open_run(version5_identity(path, 12)); });
-    EXPECT_NE(message.find(path), std::string::npos) << message;
-    EXPECT_NE(message.find("kept"), std::string::npos) << message;
-  }
-  EXPECT_EQ(value(path, "PRAGMA user_version"), "5");
-  EXPECT_EQ(rows(path, "SELECT * FROM candidates ORDER BY candidate_id"), candidates);
-  EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), starts);
-  EXPECT_EQ(rows(path, "SELECT * FROM runs"), runs);
+  expect_a_failing_upgrade_leaves_it(kVersion5Fixture, file("v5.sqlite"), "5", version5_identity, 12);
 }
 
 // Loops of 4 to 8 joints without a zero-length link, and O under the current
@@ -879,6 +979,108 @@ TEST_F(MergeTest, AVersion5DatabaseWithoutOldKeysOfZeroLengthLinksIsUpgradedRowF
       stored.alpha[k] = form.geometry.alpha[k] * (180.0 / 3.14159265358979323846) * (3.14159265358979323846 / 180.0);
     EXPECT_EQ(canonical_form(stored).key, form.key) << n;
   }
+}
+
+// --- a database written before the key centred the normals between parallel axes: version 6 ---------
+
+// tests/farm/fixtures/README.md: one run of a 6R job (seed 12, 8 starts), one
+// session, as the build before wrote it: a line-symmetric Bricard loop P with
+// parallel axes (links 1 and 4, twist 0) stored under three keys, its common
+// normals between those axes left in three places: slid one way (start 1,
+// candidate 1, found again by start 4), another (start 3, candidate 3), and
+// as built (start 6, candidate 4); a loop G without parallel axes (start 2,
+// candidate 2).
+const std::string kVersion6Fixture =
+    std::string(LOOPFARM_SOURCE_DIR) + "/tests/farm/fixtures/schema-v6-parallel-axes.sqlite";
+
+RunIdentity version6_identity(const std::string& path, std::uint64_t starts) {
+  RunIdentity own = fixture_identity(path, starts);
+  own.seed = 12;
+  own.joints = 6;
+  return own;
+}
+
+// P of the fixture with the normal between axes 1 and 2 slid by s and the
+// one between axes 4 and 5 by t (the same loop for every s and t).
+LoopGeometry parallel_loop(double s = 0.0, double t = 0.0) {
+  LoopGeometry g =
+      geometry_deg({1.0, 1.3, 0.8, 1.0, 1.3, 0.8}, {0, 70, 110, 0, 70, 110}, {0.2, 0.3, -0.1, 0.2, 0.3, -0.1});
+  g.d[0] += s;
+  g.d[1] -= s;
+  g.d[3] += t;
+  g.d[4] -= t;
+  return g;
+}
+
+TEST_F(MergeTest, AVersion6DatabaseHasItsParallelAxesKeyedAgainAndTheirDuplicatesMerged) {
+  const std::string path = file("v6.sqlite");
+  fs::copy_file(kVersion6Fixture, path);
+  ASSERT_EQ(value(path, "PRAGMA user_version"), "6");
+  const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
+  const Rows candidates = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
+  ASSERT_EQ(starts.size(), 8u);
+  ASSERT_EQ(candidates.size(), 4u);
+  // P under three keys, none of them the current one, which every slide of P shares.
+  const std::string current_key = canonical_form(parallel_loop()).key;
+  EXPECT_EQ(canonical_form(parallel_loop(0.25, -0.4)).key, current_key);
+  EXPECT_EQ(canonical_form(parallel_loop(-0.1, 0.3)).key, current_key);
+  EXPECT_EQ(value(path, "SELECT COUNT(*) FROM candidates WHERE canonical_key = '" + current_key + "'"), "0");
+  EXPECT_EQ(value(path, "SELECT COUNT(DISTINCT canonical_key) FROM candidates"), "4");
+  expect_read_and_a_refused_run_leave_it(path, "6", 4);
+
+  // Its own job resumes it: upgraded in the same transaction. P is one row,
+  // candidate 1 (committed first, its representative start 1 the earliest)
+  // with the hits of the three; G as it was.
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const RunInfo run = db.open_run(version6_identity(path, 8));
+    EXPECT_FALSE(run.created);
+    EXPECT_EQ(run.committed_count(), 8u);
+  }
+  EXPECT_EQ(value(path, "PRAGMA user_version"), std::to_string(kDatabaseSchemaVersion));
+  expect_schema_of_a_new_database(path);
+  EXPECT_EQ(rows(path, "SELECT candidate_id, first_start, hits, canonical_key = '" + current_key +
+                           "' FROM candidates ORDER BY candidate_id"),
+            (Rows{{"1", "1", "4", "1"}, {"2", "2", "1", "0"}}));
+  EXPECT_EQ(rows(path, "SELECT * FROM candidates WHERE candidate_id = 2"), (Rows{candidates[1]}));
+  Rows repointed = starts;
+  for (auto& row : repointed) {
+    if (row[11] == "3" || row[11] == "4") row[11] = "1";
+  }
+  EXPECT_EQ(rows(path, "SELECT * FROM starts ORDER BY start_index"), repointed);
+
+  // P with its normals slid yet another way is a hit, not a new candidate.
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    const RunInfo run = db.open_run(version6_identity(path, 9));
+    const CommitSummary hits = db.commit(run.run_id, {verified_start(8, parallel_loop(0.6, 0.1))});
+    EXPECT_EQ(hits.new_candidates, 0);
+    EXPECT_EQ(hits.repeat_hits, 1);
+  }
+  EXPECT_EQ(rows(path, "SELECT candidate_id, hits FROM candidates ORDER BY candidate_id"),
+            (Rows{{"1", "5"}, {"2", "1"}}));
+}
+
+// A merge of the version 6 file keys its rows again as the upgrade does.
+TEST_F(MergeTest, AVersion6DatabaseMergedHasItsParallelAxesKeyedAgain) {
+  const std::string input = file("v6-input.sqlite"), upgraded = file("v6.sqlite");
+  fs::copy_file(kVersion6Fixture, input);
+  fs::copy_file(kVersion6Fixture, upgraded);
+  {
+    ResultsDatabase db = ResultsDatabase::open(upgraded, DatabaseMode::write);
+    db.open_run(version6_identity(upgraded, 8));
+  }
+  const std::string merged = file("merged.sqlite");
+  EXPECT_EQ(ResultsDatabase::merge(merged, {input}).candidates, 2);
+  const std::string all = "SELECT * FROM candidates ORDER BY candidate_id";
+  EXPECT_EQ(rows(merged, all), rows(upgraded, all));
+  EXPECT_EQ(rows(merged, "SELECT start_index, candidate_id FROM starts ORDER BY start_index"),
+            rows(upgraded, "SELECT start_index, candidate_id FROM starts ORDER BY start_index"));
+}
+
+// An upgrade of the version 6 file that fails leaves it as it was.
+TEST_F(MergeTest, AVersion6UpgradeThatFailsLeavesTheFileAsItWas) {
+  expect_a_failing_upgrade_leaves_it(kVersion6Fixture, file("v6.sqlite"), "6", version6_identity, 8);
 }
 
 // --- merge ---------------------------------------------------------------------
@@ -1088,7 +1290,14 @@ TEST_F(MergeTest, AVersion1DatabaseMergesAsItIs) {
   EXPECT_EQ(summary.starts, 12u);
   EXPECT_TRUE(summary.complete);
   EXPECT_EQ(file_bytes(v1), before);
-  EXPECT_EQ(candidates_content(merged), candidates_content(v1));
+  // Its candidates keyed again as the upgrade keys them (parallel axes).
+  const std::string upgraded = file("v1-upgraded.sqlite");
+  fs::copy_file(kFixture, upgraded);
+  {
+    ResultsDatabase db = ResultsDatabase::open(upgraded, DatabaseMode::write);
+    db.open_run(fixture_identity(upgraded, 12));
+  }
+  EXPECT_EQ(candidates_content(merged), candidates_content(upgraded));
   EXPECT_EQ(starts_content(merged), starts_content(v1));
   EXPECT_EQ(value(merged, "SELECT COUNT(*) FROM sessions WHERE input_id = 1"),
             value(v1, "SELECT COUNT(*) FROM sessions"));

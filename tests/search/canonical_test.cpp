@@ -6,6 +6,8 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -224,6 +226,53 @@ TEST(Canonical, ATwistNegatedAtAZeroLengthLinkKeepsTheKey) {
     for (int k = 0; k < 6; ++k) EXPECT_GT(conventional.geometry.alpha[k], 0.0) << links << " " << k;
     EXPECT_LT(closure_residual(conventional.geometry, canonical_angles(conventional, r.theta)).norm(), 1e-11) << links;
   }
+}
+
+// A line-symmetric 6R with parallel axes (links 1 and 4): the common normal
+// between parallel axes may slide along them (d_k + s, d_{k+1} - s cos
+// alpha_k) and the loop stays the same, every joint axis the same line. Any
+// slide, in any representation, has the loop's key, and the representative
+// closes at the canonical angles.
+TEST(Canonical, ALoopWithParallelAxesHasOneKeyWhereverItsNormalsLie) {
+  // Axis 5 flipped, so that link 4 joins antiparallel axes (twist pi).
+  const LoopGeometry g = axis_flipped(LoopGeometry::from_degrees(std::vector<double>{1.0, 1.3, 0.8, 1.0, 1.3, 0.8},
+                                                                 std::vector<double>{0, 70, 110, 0, 70, 110},
+                                                                 std::vector<double>{0.2, 0.3, -0.1, 0.2, 0.3, -0.1}),
+                                      4);
+  ASSERT_NEAR(std::abs(g.alpha[3]), 3.14159265358979323846, 1e-15);
+  const VerificationSummary motion = verify_motion(g, nullptr);
+  ASSERT_TRUE(motion.verified);
+  const JointVector theta = motion.pose();
+  ASSERT_TRUE(has_parallel_link(g));
+  ASSERT_FALSE(has_parallel_link(paper_bennett_loop()));
+  const std::string key = canonical_form(g).key;
+  std::uint64_t seed = 1;
+  for (const auto& [s, t] : {std::pair{0.3, 0.0}, {0.0, -0.45}, {-0.2, 0.7}, {1.5, 1.5}}) {
+    LoopGeometry slid = g;
+    slid.d[0] += s;
+    slid.d[1] -= s;  // cos(alpha_1) = 1
+    slid.d[3] += t;
+    slid.d[4] += t;  // cos(alpha_4) = -1: antiparallel
+    for (int k = 0; k < 6; ++k) {
+      const Eigen::Isometry3d x = forward_transform(g, theta, k), y = forward_transform(slid, theta, k);
+      EXPECT_LT((x.translation() - y.translation()).cross(x.linear().col(2)).norm(), 1e-12) << s << " " << k;
+      EXPECT_LT((x.linear().col(2) - y.linear().col(2)).norm(), 1e-12) << s << " " << k;
+    }
+    EXPECT_EQ(canonical_form(slid).key, key) << s << " " << t;
+    EXPECT_EQ(conventional_form(slid).key, key) << s << " " << t;
+    const Rewritten r = rewrite(slid, theta, ++seed);
+    const CanonicalForm form = canonical_form(r.g);
+    EXPECT_EQ(form.key, key) << s << " " << t;
+    EXPECT_LT(closure_residual(form.geometry, canonical_angles(form, r.theta)).norm(), 1e-11) << s;
+  }
+  // With the twist of link 1 off parallel the same slide is another loop,
+  // with another key.
+  LoopGeometry skew = g;
+  skew.alpha[0] = 1e-3;
+  LoopGeometry skew_slid = skew;
+  skew_slid.d[0] += 0.3;
+  skew_slid.d[1] -= 0.3;
+  EXPECT_NE(canonical_form(skew).key, canonical_form(skew_slid).key);
 }
 
 // A spherical 4R (every a_i and d_i zero) with any twist negated: the same key.

@@ -1152,6 +1152,54 @@ TEST(Families, ALineSymmetricBricardLoopFoundMovingWithTwoLockedJointsStaysBrica
   EXPECT_EQ(checked, 4);
 }
 
+TEST(Families, SymmetricLoopsWithParallelAxesAreClassifiedWhereverTheirNormalsLie) {
+  // Between parallel axes the common normal slides along them: d_k and
+  // d_{k+1} change, the axes do not. A search leaves it anywhere, so a
+  // line-symmetric loop with parallel axes (links 1 and 4; also antiparallel)
+  // and a plane-symmetric one (links 2 and 5) are written here with their
+  // normals slid by different amounts: the same loops (the axes at the pose
+  // are the same lines), which no longer look symmetric in their offsets and
+  // must still be named.
+  std::mt19937_64 rng(31);
+  struct Case {
+    LoopGeometry (*make)(std::mt19937_64&);
+    Family family;
+    int link;  // the parallel links: link and link + 3
+    double twist;
+  };
+  int checked = 0;
+  for (const Case& k : {Case{bricard_line_geometry, Family::bricard_line_symmetric, 0, 0.0},
+                        Case{bricard_line_geometry, Family::bricard_line_symmetric, 0, kPi},
+                        Case{bricard_plane_geometry, Family::bricard_plane_symmetric, 1, 0.0}}) {
+    for (int i = 0; i < 3; ++i) {
+      LoopGeometry g = k.make(rng);
+      g.alpha[k.link] = k.twist;
+      g.alpha[k.link + 3] = k.family == Family::bricard_plane_symmetric ? -k.twist : k.twist;
+      JointVector theta;
+      if (!closed_pose(g, rng, theta)) continue;
+      LoopGeometry slid = g;
+      const double c = std::cos(k.twist);
+      for (int side : {0, 3}) {
+        const double s = uniform(rng, 0.2, 0.6) * (side == 0 ? 1.0 : -1.0);
+        slid.d[k.link + side] += s;
+        slid.d[k.link + side + 1] -= s * c;
+      }
+      const std::string tag =
+          std::string(to_string(k.family)) + " twist " + std::to_string(k.twist) + " " + std::to_string(i);
+      const std::vector<Axis> axes = joint_axes(g, theta), slid_axes = joint_axes(slid, theta);
+      for (size_t j = 0; j < axes.size(); ++j) {
+        ASSERT_LT((axes[j].direction - slid_axes[j].direction).norm(), 1e-12) << tag;
+        ASSERT_LT((slid_axes[j].point - axes[j].point).cross(axes[j].direction).norm(), 1e-12) << tag;
+      }
+      // The offsets as written are no longer symmetric.
+      EXPECT_GT(std::abs(slid.d[k.link] - g.d[k.link]), 0.1) << tag;
+      expect_movable_member({slid, theta}, k.family, rng, tag);
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 7);
+}
+
 TEST(Families, PlanarAndSpherical5RAnd6RKeepTheirFamilies) {
   // Planar and spherical loops of any n were classified before; a planar 6R
   // with a closed pose, a spherical 5R.

@@ -358,7 +358,10 @@ TEST_F(BondsCli, StoreFillsAVersion4DatabaseAndUpgradesIt) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json j = json::parse(r.out);
   EXPECT_EQ(j["stored"]["upgraded"], true);
-  EXPECT_EQ(j["stored"]["skipped"], 0);
+  // The upgrade keys its candidates with parallel axes again (schema version
+  // 7) and merges two planar rows that name one linkage: the fingerprint
+  // measured on the row merged away is skipped.
+  EXPECT_EQ(j["stored"]["skipped"], 1);
   const std::map<long long, std::string> stored = stored_fingerprints(db);
   EXPECT_EQ(j["stored"]["written"], stored.size());
   ResultsDatabase read = ResultsDatabase::open(db, DatabaseMode::read);

@@ -811,6 +811,23 @@ TEST_F(CliTest, VerifyClassifiesMovableAndRigidLoops) {
   EXPECT_EQ(text.out.find("local dimension"), std::string::npos) << text.out;
 }
 
+// A coaxial trivial loop written so that joint 1 is one of its frozen joints:
+// verified (the other joints turn), trivial, and no cycle of an input that
+// does not move (it once ended with "range: must be in (0, 360]", exit 2).
+TEST_F(CliTest, VerifyOfALoopWhoseInputIsFrozenGivesNoCycle) {
+  const Result r =
+      run({"verify", "--a", "1.5,2.5,2.5,1.5", "--alpha-deg", "40,70,70,40", "--d=0,-0.3,0,0.3", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json_raw(r.out, "verified"), "true");
+  EXPECT_EQ(json_raw(r.out, "family"), "\"trivial\"");
+  EXPECT_EQ(json_raw(r.out, "E_mean"), "null");
+  EXPECT_EQ(json_raw(r.out, "local_dimension"), "null");
+  EXPECT_NE(r.out.find("the input joint does not move on this circuit"), std::string::npos) << r.out;
+  const Result text = run({"verify", "--a", "1.5,2.5,2.5,1.5", "--alpha-deg", "40,70,70,40", "--d=0,-0.3,0,0.3"});
+  EXPECT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_EQ(text.out.find("E_mean"), std::string::npos) << text.out;
+}
+
 // A non-Grashof four-bar whose input cannot reach theta0 = 0: verified from
 // no pose, from theta0 = 0 and from a pose inside its range, with the range
 // of the law of cosines (delta^2 = 20 + 16 cos theta1 <= 30.25).

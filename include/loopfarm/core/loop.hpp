@@ -37,9 +37,14 @@ struct LoopGeometry {
                                    std::span<const double> d);
 };
 
+// The largest |a_i| or |d_i| a geometry may have: its square, summed over the
+// loop, stays far from overflow (the job reader's bound too).
+inline constexpr double kMaxLength = 1e150;
+
 // Throws std::invalid_argument naming the offending parameter when the geometry
 // is not a loop loopfarm can handle: n outside [4, 8], sizes that differ,
-// non-finite values or a negative length.
+// non-finite values, a negative length or a length or offset beyond
+// kMaxLength.
 void validate_geometry(const LoopGeometry& geometry);
 
 // The geometry's length scale L: the root-mean-square of the link lengths and
@@ -73,6 +78,34 @@ JointVector reversed_angles(const JointVector& theta);
 // Rx(pi) when joint is 0). Flipping every axis negates every offset.
 LoopGeometry axis_flipped(const LoopGeometry& geometry, int joint);
 JointVector axis_flipped_angles(const JointVector& theta, int joint);
+
+// The same physical loop with the common normal between parallel axes placed
+// where it splits their offset equally. Between parallel axes (link k with
+// |sin alpha_k| <= `tolerance`) the common normal x_{k+1} is free to slide
+// along them: d_k and d_{k+1} then change by amounts that cancel along the
+// axes' direction, the axes (and the joint angles) do not. Where the search
+// leaves that normal is an accident of its path, so offsets there say nothing
+// about the loop; here each run of consecutive parallel links k..m (axes k ..
+// m+1) gets offsets s_j d_j that are all equal, to the run's length along the
+// axes divided by its m - k + 2 offsets (s_j = +-1: axis j along or against
+// axis k), and with every link parallel (a planar loop) the n offsets share
+// the loop's total. The rule depends on the axes as lines only, so it commutes
+// with relabelling, reversal and axis flips, and conditions written on
+// offsets (d_i = d_{i+3} of a line-symmetric loop) hold for a loop with
+// parallel axes however its normals were left. Other links keep their offsets;
+// a loop without parallel axes is returned as it is.
+LoopGeometry centred_parallel_normals(const LoopGeometry& geometry, double tolerance);
+
+// The common normal of the lines p + s u and q + t v (unit directions): the
+// parameters s and t of its feet. Where the lines are nearly parallel, where
+// along them the normal lies is ill-conditioned (a round-off of the
+// directions moves it by about eps / sin^2(angle)); what a DH reading needs is
+// that the two feet be joined by a segment normal to both lines, which holds
+// to round-off here (t is the foot of p + s u on the second line), so that
+// the parameters read close. False, with s and t untouched, when
+// |u x v|^2 <= min_sin2: parallel within that, every normal common.
+bool common_normal_feet(const Vector3& p, const Vector3& u, const Vector3& q, const Vector3& v, double min_sin2,
+                        double& s, double& t);
 
 // T_i = Rz(theta) Tz(d) Tx(a) Rx(alpha).
 Eigen::Isometry3d joint_transform(double theta, double d, double a, double alpha);

@@ -50,10 +50,10 @@ inline constexpr std::int32_t kDatabaseApplicationId = 0x4C4F4F50;
 // PRAGMA user_version: the schema version this build writes. It reads every
 // version from kOldestDatabaseSchemaVersion on, and upgrades an older file to
 // this one when it opens it for writing (results_schema.cpp says what changed).
-inline constexpr int kDatabaseSchemaVersion = 6;
+inline constexpr int kDatabaseSchemaVersion = 7;
 inline constexpr int kOldestDatabaseSchemaVersion = 1;
 // The de-duplication's numeric tolerance unless a caller gives another
-// (commit, merge); the upgrade to schema version 6 merges with it.
+// (commit, merge); the upgrades to schema versions 6 and 7 merge with it.
 inline constexpr double kDefaultDedupTolerance = 1e-5;
 // busy_timeout: how long a connection waits for another one's lock.
 inline constexpr int kDatabaseBusyTimeoutMs = 10000;

@@ -4,7 +4,10 @@
 // directions (loop.hpp), scale, and the sign of the twist at every link the
 // key writes as zero length (a_k / L quantised to 0, i.e. below half the
 // tolerance): there the common normal's direction is free, and alpha_k and
-// -alpha_k (theta_k and theta_{k+1} turned by pi) are the same loop.
+// -alpha_k (theta_k and theta_{k+1} turned by pi) are the same loop; and,
+// between axes it treats as parallel (|sin alpha_k| below half the
+// tolerance), where the common normal lies along them: the offsets are read
+// with it centred (centred_parallel_normals, loop.hpp) before anything else.
 //
 // Every one of the 2n * 2^n representations is scaled to length_scale 1, its
 // twists wrapped to (-pi, pi], its values quantised to `tolerance` (lengths
@@ -32,7 +35,7 @@ namespace loopfarm {
 
 struct CanonicalForm {
   LoopGeometry geometry;    // the chosen representation, scaled to length scale 1 (unquantised)
-  double scale = 1.0;       // length_scale of the input
+  double scale = 1.0;       // length_scale of the input (its parallel axes' normals centred)
   int shift = 0;            // the transformation applied: relabelled by shift,
   bool reversed = false;    // then reversed,
   std::uint32_t flips = 0;  // then these axes flipped,
@@ -45,6 +48,12 @@ struct CanonicalForm {
 // Throws std::invalid_argument for a geometry validate_geometry rejects or a
 // tolerance that is not in (0, 1).
 CanonicalForm canonical_form(const LoopGeometry& geometry, double tolerance = 1e-6);
+
+// True when some link of `geometry` joins axes the key treats as parallel
+// (|sin alpha_k| at most half of `tolerance`): there canonical_form reads the
+// offsets with the common normal centred (centred_parallel_normals, loop.hpp),
+// wherever the normal was left. Throws as canonical_form does.
+bool has_parallel_link(const LoopGeometry& geometry, double tolerance = 1e-6);
 
 // True when some link of `geometry` is one the key writes as zero length
 // (a_k / L quantised to 0 at `tolerance`): where canonical_form takes the

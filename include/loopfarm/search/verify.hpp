@@ -106,10 +106,13 @@ VerificationSummary verify_motion(const LoopGeometry& geometry, const JointVecto
 // solve at a singular pose can leave the motion, and the cycle is then no zero.
 struct MotionWindow {
   double theta0 = 0.0;  // [rad] the cycle's start
-  double range = 0.0;   // [rad] 2 pi for a full turn
+  double range = 0.0;   // [rad] 2 pi for a full turn; 0: the input does not move
   JointVector pose;     // a closed pose on the motion with the input at theta0
 };
-// Empty when the loop is not verified (or no pose is found at theta0).
+// Empty when the loop is not verified (or no pose is found at theta0). The
+// range is 0 when the input joint does not move on the reported circuit
+// (travel below min_input_travel, the other joints moving): a pose, and no
+// cycle of that input.
 std::optional<MotionWindow> motion_window(const LoopGeometry& geometry, const VerificationSummary& verification,
                                           std::optional<double> theta0, const VerificationOptions& options = {},
                                           int samples = 0);
