@@ -781,9 +781,9 @@ void expect_read_and_a_refused_run_leave_it(const std::string& path, const std::
 // message names it and the cause.
 void expect_a_failing_upgrade_leaves_it(const std::string& fixture, const std::string& path, const std::string& version,
                                         RunIdentity (*identity_of)(const std::string&, std::uint64_t),
-                                        std::uint64_t starts) {
+                                        std::uint64_t start_count) {
   fs::copy_file(fixture, path);
-  const RunIdentity own = identity_of(path, starts);
+  const RunIdentity own = identity_of(path, start_count);
   exec(path, "CREATE TRIGGER keep_candidates BEFORE DELETE ON candidates BEGIN SELECT RAISE(ABORT, 'kept'); END");
   const Rows candidates = rows(path, "SELECT * FROM candidates ORDER BY candidate_id");
   const Rows starts = rows(path, "SELECT * FROM starts ORDER BY start_index");
