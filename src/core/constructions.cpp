@@ -738,6 +738,79 @@ std::optional<PosedLoop> hooke_6r(const Hooke6R& p, double t) {
 }
 
 // ---------------------------------------------------------------------------
+// Angle-symmetric 6R with three pairs of parallel axes
+
+namespace {
+
+// The turn by `angle` about the line through `point` along the unit `direction`.
+Eigen::Isometry3d turn_about(const Vector3& point, const Vector3& direction, double angle) {
+  return Eigen::Translation3d(point) * Eigen::AngleAxisd(angle, direction) * Eigen::Translation3d(-point);
+}
+
+// x's part normal to the unit n.
+Vector3 normal_part(const Vector3& x, const Vector3& n) { return x - x.dot(n) * n; }
+
+Vector3 unit_or_throw(const Vector3& x, const char* what) {
+  const double norm = x.norm();
+  if (!(norm > 1e-9) || !std::isfinite(norm)) bad(std::string("angle_symmetric_parallel_6r: ") + what, norm);
+  return x / norm;
+}
+
+}  // namespace
+
+PosedLoop angle_symmetric_parallel_6r(const AngleSymmetricParallel6R& p, double t) {
+  for (const Vector3* x : {&p.u, &p.e1, &p.v, &p.e4, &p.h, &p.p1, &p.p3, &p.p4}) {
+    if (!x->allFinite()) bad("angle_symmetric_parallel_6r: a vector is not finite", x->norm());
+  }
+  if (!std::isfinite(p.w_turn) || !std::isfinite(p.g_length) || !std::isfinite(t)) {
+    bad("angle_symmetric_parallel_6r: w_turn, g_length and t must be finite", p.w_turn + p.g_length + t);
+  }
+  const Vector3 u = unit_or_throw(p.u, "u");
+  const Vector3 e1 = normal_part(p.e1, u);
+  unit_or_throw(e1, "e1 has no part normal to u");
+  Vector3 v, e4, w, g;
+  if (p.kind == ParallelPairsKind::general) {
+    v = unit_or_throw(p.v, "v");
+    e4 = normal_part(p.e4, v);
+    unit_or_throw(e4, "e4 has no part normal to v");
+    const Vector3 P = u.cross(e1) + v.cross(e4), Q = e1 + e4;
+    w = unit_or_throw(P.cross(Q), "u x e1 + v x e4 is parallel to e1 + e4");
+    const Vector3 along = w.cross(P);
+    const double q = along.dot(Q);
+    if (!(std::abs(q) > 1e-9 * along.norm() * Q.norm())) bad("angle_symmetric_parallel_6r: g is undefined", q);
+    g = ((e4.squaredNorm() - e1.squaredNorm()) / q) * along;
+  } else {
+    const Vector3 h = unit_or_throw(p.h, "h");
+    const Eigen::Matrix3d half_turn = 2.0 * h * h.transpose() - Eigen::Matrix3d::Identity();
+    v = half_turn * u;
+    e4 = half_turn * e1;
+    unit_or_throw(u.cross(h), "u is parallel to h");
+    const Vector3 first = unit_or_throw(h.unitOrthogonal(), "h");
+    w = Eigen::AngleAxisd(p.w_turn, h) * first;
+    g = p.g_length * w.cross(h);
+  }
+  unit_or_throw(u.cross(w), "u is parallel to w");
+  unit_or_throw(v.cross(w), "v is parallel to w");
+  // The lines at t = 0: axis 6 runs along -w, so that joints 3 and 6 turn by
+  // one angle.
+  const std::array<Axis, 6> lines{Axis{p.p1, u}, Axis{p.p1 + e1, u}, Axis{p.p3, w},
+                                  Axis{p.p4, v}, Axis{p.p4 + e4, v}, Axis{p.p3 + g, -w}};
+  const Eigen::AngleAxisd ru(t, u), rv(t, v);
+  const Vector3 from = g + (rv * e4 - e4), to = g - (ru * e1 - e1);
+  const double psi = std::atan2(w.dot(from.cross(to)), normal_part(from, w).dot(normal_part(to, w)));
+  // Each axis carried by the motions of the joints before it (products of
+  // exponentials about the lines at t = 0).
+  const std::array<double, 6> angle{t, -t, psi, t, -t, psi};
+  std::vector<Axis> axes;
+  Eigen::Isometry3d carried = Eigen::Isometry3d::Identity();
+  for (size_t k = 0; k < 6; ++k) {
+    axes.push_back({carried * lines[k].point, carried.linear() * lines[k].direction});
+    carried = carried * turn_about(lines[k].point, lines[k].direction, angle[k]);
+  }
+  return dh_from_axes(axes);
+}
+
+// ---------------------------------------------------------------------------
 // Bricard's plane-symmetric octahedron
 
 PosedLoop bricard_octahedral_plane(const OctahedronPlane& v) {

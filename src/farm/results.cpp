@@ -198,6 +198,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::hooke:
       case Family::bricard_octahedral_collapsible:
       case Family::cubic_321:
+      case Family::angle_symmetric_parallel:
       case Family::degenerate:
       case Family::unclassified:
         break;

@@ -235,6 +235,12 @@ std::string special_detail(Family family, const Best& best, const LoopGeometry& 
         return "right-angle twists, no offsets, a1^2 + a3^2 + a5^2 = a2^2 + a4^2 + a6^2";
       case Family::sarrus:
         return "two chains of three parallel axes (joints 2-4 and 5-1 of the best representation)";
+      case Family::angle_symmetric_parallel:
+        return best.set == 0
+                   ? "three pairs of parallel axes (1-2, 4-5 and 3-6 of the best representation), opposite "
+                     "joints turning by equal angles"
+                   : "three pairs of parallel axes (1-2, 4-5 and 3-6 of the best representation), opposite "
+                     "joints turning by equal angles; axes 4-5 the half-turned 1-2 (|alpha2| + |alpha3| = pi)";
       case Family::bricard_octahedral_plane:
         return "every a_i = 0: an octahedron with a mirror plane through two opposite vertices that maps each "
                "other vertex onto its opposite one";

@@ -52,6 +52,8 @@ const char* to_string(Family family) {
       return "bricard_octahedral_collapsible";
     case Family::cubic_321:
       return "cubic_321";
+    case Family::angle_symmetric_parallel:
+      return "angle_symmetric_parallel";
   }
   return "unknown";
 }
@@ -84,6 +86,7 @@ int family_joints(Family family) {
     case Family::hooke:
     case Family::bricard_octahedral_collapsible:
     case Family::cubic_321:
+    case Family::angle_symmetric_parallel:
       return 6;
     case Family::planar:
     case Family::spherical:
@@ -168,6 +171,12 @@ std::optional<int> family_dimension(Family family, int joints) {
       // and the reparametrisations of the motion (3): 9; local_dimension
       // reads 9 on members (docs/guide/families.md).
       return 9;
+    case Family::angle_symmetric_parallel:
+      // Either kind of its construction (constructions.hpp): three pairs of
+      // parallel lines (18 numbers) less the rigid motions (6), the four
+      // conditions and the motion itself: 7; the construction's Jacobian has
+      // rank 7 (docs/guide/families.md).
+      return 7;
     case Family::trivial:  // a rigid rotation: no dimension of its own
     case Family::degenerate:
     case Family::unclassified:

@@ -1288,6 +1288,120 @@ void sarrus_conditions(const RepresentationView& w, Sink& c) {
         });
 }
 
+// The angle-symmetric 6R with three pairs of parallel axes
+// (constructions.hpp, angle_symmetric_parallel_6r; docs/guide/families.md):
+// axes 1, 2 parallel (alpha1 = 0), axes 4, 5 parallel (alpha4 = 0), axes 3
+// and 6 kept parallel by the twists (|alpha2| + |alpha6| = |alpha3| +
+// |alpha5| = pi); joints 1, 4 and 2, 5 and 3, 6 turn by equal angles. With
+// A_k = a_k sign(sin alpha_k) (the length signed along z_k x z_{k+1}), D1 =
+// d1 + d2 and D4 = d4 + d5 (only the sums are defined between parallel
+// axes): d3 = d6, a1 |sin alpha2| = a4 |sin alpha3|, a1 (A2 + A6) = a4 (A3 +
+// A5), D1 cos alpha2 + D4 cos alpha3 = 0 and, set 0 (the general kind),
+// (A3 + A5)^2 cos^2 alpha2 + D4^2 sin^2 alpha3 = a1^2 cos^2 alpha2, or, set
+// 1 (axes 4, 5 the half-turned axes 1, 2), |alpha2| + |alpha3| = pi. These
+// are the construction's four conditions on the lines written in DH
+// parameters; lengths in units of L, squared ones of L^2.
+template <class RepresentationView, class Sink>
+void angle_symmetric_parallel_conditions(int set, const RepresentationView& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  const auto twist = [&](int k) { return wrap_angle(w.alpha(k)); };
+  const auto sign_of = [](double x) { return x < 0.0 ? -1.0 : 1.0; };
+  const auto sigma = [&](int k) { return sign_of(w.sin_alpha(k)); };
+  const auto signed_length = [&](int k) { return w.a(k) * sigma(k); };
+  // A twist that is zero.
+  const auto zero_twist = [&](const char* text, int k) {
+    c.add([&] { return std::string(text); }, [&] { return twist(k); },
+          [&] {
+            GeometryVector g = GeometryVector::Zero(3 * n);
+            g[n + k] = 1.0;
+            return g;
+          });
+  };
+  // |alpha_i| + |alpha_j| - pi.
+  const auto supplementary = [&](const char* text, int i, int j) {
+    c.add([&] { return std::string(text); }, [&] { return std::abs(twist(i)) + std::abs(twist(j)) - kPi; },
+          [&] {
+            GeometryVector g = GeometryVector::Zero(3 * n);
+            g[n + i] += sign_of(twist(i));
+            g[n + j] += sign_of(twist(j));
+            return g;
+          });
+  };
+  zero_twist("alpha1", 0);
+  zero_twist("alpha4", 3);
+  supplementary("|alpha2| + |alpha6| - pi", 1, 5);
+  supplementary("|alpha3| + |alpha5| - pi", 2, 4);
+  add_offset(w, c, "d3 - d6", 2, 5, -1.0);
+  // (a1 |sin alpha2| - a4 |sin alpha3|) / L.
+  const auto sines = [&] { return w.a(0) * std::abs(w.sin_alpha(1)) - w.a(3) * std::abs(w.sin_alpha(2)); };
+  c.add([] { return "a1 |sin(alpha2)| - a4 |sin(alpha3)|"; }, [&] { return sines() / s.L; },
+        [&] {
+          GeometryVector g = -(sines() / (s.L * s.L)) * s.dL;
+          g[0] += std::abs(w.sin_alpha(1)) / s.L;
+          g[3] -= std::abs(w.sin_alpha(2)) / s.L;
+          g[n + 1] += w.a(0) * sigma(1) * w.cos_alpha(1) / s.L;
+          g[n + 2] -= w.a(3) * sigma(2) * w.cos_alpha(2) / s.L;
+          return g;
+        });
+  // (a1 (A2 + A6) - a4 (A3 + A5)) / L^2.
+  const auto sums = [&] {
+    return w.a(0) * (signed_length(1) + signed_length(5)) - w.a(3) * (signed_length(2) + signed_length(4));
+  };
+  c.add([] { return "a1 (A2 + A6) - a4 (A3 + A5)"; }, [&] { return sums() / (s.L * s.L); },
+        [&] {
+          const double L2 = s.L * s.L;
+          GeometryVector g = -(2.0 * sums() / (L2 * s.L)) * s.dL;
+          g[0] += (signed_length(1) + signed_length(5)) / L2;
+          g[1] += w.a(0) * sigma(1) / L2;
+          g[5] += w.a(0) * sigma(5) / L2;
+          g[3] -= (signed_length(2) + signed_length(4)) / L2;
+          g[2] -= w.a(3) * sigma(2) / L2;
+          g[4] -= w.a(3) * sigma(4) / L2;
+          return g;
+        });
+  // ((d1 + d2) cos alpha2 + (d4 + d5) cos alpha3) / L.
+  const auto D1 = [&] { return w.d(0) + w.d(1); };
+  const auto D4 = [&] { return w.d(3) + w.d(4); };
+  const auto offsets = [&] { return D1() * w.cos_alpha(1) + D4() * w.cos_alpha(2); };
+  c.add([] { return "(d1 + d2) cos(alpha2) + (d4 + d5) cos(alpha3)"; }, [&] { return offsets() / s.L; },
+        [&] {
+          GeometryVector g = -(offsets() / (s.L * s.L)) * s.dL;
+          g[2 * n + 0] += w.cos_alpha(1) / s.L;
+          g[2 * n + 1] += w.cos_alpha(1) / s.L;
+          g[2 * n + 3] += w.cos_alpha(2) / s.L;
+          g[2 * n + 4] += w.cos_alpha(2) / s.L;
+          g[n + 1] -= D1() * w.sin_alpha(1) / s.L;
+          g[n + 2] -= D4() * w.sin_alpha(2) / s.L;
+          return g;
+        });
+  if (set == 1) {
+    supplementary("|alpha2| + |alpha3| - pi", 1, 2);
+    return;
+  }
+  // ((A3 + A5)^2 cos^2 alpha2 + D4^2 sin^2 alpha3 - a1^2 cos^2 alpha2) / L^2.
+  const auto circle = [&] {
+    const double S = signed_length(2) + signed_length(4), c2 = w.cos_alpha(1), s3 = w.sin_alpha(2);
+    return (S * S - w.a(0) * w.a(0)) * c2 * c2 + D4() * D4() * s3 * s3;
+  };
+  c.add([] { return "(A3 + A5)^2 cos^2(alpha2) + (d4 + d5)^2 sin^2(alpha3) - a1^2 cos^2(alpha2)"; },
+        [&] { return circle() / (s.L * s.L); },
+        [&] {
+          const double L2 = s.L * s.L;
+          const double S = signed_length(2) + signed_length(4), c2 = w.cos_alpha(1), s2 = w.sin_alpha(1);
+          const double c3 = w.cos_alpha(2), s3 = w.sin_alpha(2), d = D4();
+          GeometryVector g = -(2.0 * circle() / (L2 * s.L)) * s.dL;
+          g[2] += 2.0 * S * sigma(2) * c2 * c2 / L2;
+          g[4] += 2.0 * S * sigma(4) * c2 * c2 / L2;
+          g[0] -= 2.0 * w.a(0) * c2 * c2 / L2;
+          g[2 * n + 3] += 2.0 * d * s3 * s3 / L2;
+          g[2 * n + 4] += 2.0 * d * s3 * s3 / L2;
+          g[n + 1] -= 2.0 * (S * S - w.a(0) * w.a(0)) * c2 * s2 / L2;
+          g[n + 2] += 2.0 * d * d * s3 * c3 / L2;
+          return g;
+        });
+}
+
 // Bricard's plane-symmetric octahedral 6R (his second type,
 // docs/guide/families.md). Every a_i = 0, so axes u and u + 1 meet, at V_u:
 // the six meeting points are an octahedron's vertices, V_u and V_{u+3}
@@ -1572,7 +1686,9 @@ constexpr bool goldberg_type(Family family) {
 // numbered: for Bennett loops set 0 is the asymmetric setup and set 1 the
 // line-symmetric one; for trivial loops set 0 is axes 1 and 2 coinciding and
 // set 1 (n = 4) axes 1 and 3; planar loops have one set; Goldberg and Myard
-// sets as goldberg_conditions and myard_conditions say; Bricard loops one.
+// sets as goldberg_conditions and myard_conditions say; Bricard loops one;
+// angle_symmetric_parallel two (its general kind, set 0, and its half-turn
+// kind, set 1).
 inline int condition_sets(Family family, int joints) {
   switch (family) {
     case Family::bennett:
@@ -1593,6 +1709,8 @@ inline int condition_sets(Family family, int joints) {
       return 3;
     case Family::goldberg_6r:
       return kGoldberg6RSets;
+    case Family::angle_symmetric_parallel:
+      return 2;
     case Family::hooke:
     case Family::bricard_octahedral_collapsible:
     case Family::bennett_dyads:
@@ -1619,7 +1737,7 @@ constexpr bool reads_cosines(Family family) {
          family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus ||
          family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid ||
          family == Family::goldberg_6r || family == Family::double_goldberg || family == Family::hooke ||
-         family == Family::bricard_octahedral_collapsible;
+         family == Family::bricard_octahedral_collapsible || family == Family::angle_symmetric_parallel;
 }
 
 // Whether a family's score can depend on the sign of a twist (the freedom at
@@ -1680,6 +1798,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     hooke_conditions(w, c);
   } else if constexpr (F == Family::bricard_octahedral_collapsible) {
     bricard_octahedral_collapsible_conditions(w, c);
+  } else if constexpr (F == Family::angle_symmetric_parallel) {
+    angle_symmetric_parallel_conditions(set, w, c);
   } else if (set == 0) {
     adjacent_coaxial_conditions(w, c);
   } else {

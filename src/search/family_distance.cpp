@@ -110,6 +110,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       return distance_over_representations<Family::hooke>(geometry, gradient);
     case Family::bricard_octahedral_collapsible:
       return distance_over_representations<Family::bricard_octahedral_collapsible>(geometry, gradient);
+    case Family::angle_symmetric_parallel:
+      return distance_over_representations<Family::angle_symmetric_parallel>(geometry, gradient);
     case Family::degenerate:
       throw std::invalid_argument("family_distance: degenerate loops have no distance");
     case Family::cubic_321:
@@ -151,6 +153,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::double_goldberg:
     case Family::hooke:
     case Family::bricard_octahedral_collapsible:
+    case Family::angle_symmetric_parallel:
       best = best_for(family, geometry, true, kNoZeroLength);
       break;
     case Family::degenerate:

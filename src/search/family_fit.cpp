@@ -89,6 +89,8 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm, double zero_le
       return best_over_representations<Family::double_goldberg>(g, by_norm, zero_length);
     case Family::hooke:
       return best_over_representations<Family::hooke>(g, by_norm, zero_length);
+    case Family::angle_symmetric_parallel:
+      return best_over_representations<Family::angle_symmetric_parallel>(g, by_norm, zero_length);
     case Family::bricard_octahedral_collapsible:
       return best_over_representations<Family::bricard_octahedral_collapsible>(g, by_norm, zero_length);
     case Family::spherical:
@@ -132,6 +134,7 @@ std::vector<Family> special_families(int n) {
               Family::bennett_dyads,
               Family::waldron_hybrid,
               Family::sarrus,
+              Family::angle_symmetric_parallel,
               Family::bricard_octahedral_plane,
               Family::bricard_octahedral_collapsible,
               Family::hooke};

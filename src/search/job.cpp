@@ -55,6 +55,7 @@ constexpr DeflatableFamily kDeflatable[] = {
     {"double_goldberg", 6, "double-Goldberg loops have 6 joints"},
     {"hooke", 6, "Hooke's loops have 6 joints"},
     {"bricard_octahedral_collapsible", 6, "Bricard loops have 6 joints"},
+    {"angle_symmetric_parallel", 6, "angle-symmetric loops with parallel axes have 6 joints"},
 };
 
 // The settings tables and their keys; anything else is an error.

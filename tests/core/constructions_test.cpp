@@ -900,6 +900,57 @@ TEST(Constructions, HookeClosesAlongItsMotionAboutTheLineOfCentres) {
   EXPECT_THROW(hooke_6r(Hooke6R{}, NAN), std::invalid_argument);
 }
 
+// The angle-symmetric 6R with three pairs of parallel axes, both kinds: the
+// loop built at one t is closed by the poses at the others and reads the
+// same geometry; one degree of freedom; at every t axes 1, 2 and 4, 5 are
+// parallel and axes 3, 6 antiparallel, joints 1 and 4 have turned by t,
+// joints 2 and 5 by -t and joints 3 and 6 by one angle. Degenerate lines and
+// values that are not finite are refused.
+TEST(Constructions, AngleSymmetricParallelClosesAlongItsMotionWithEqualOppositeAngles) {
+  std::vector<AngleSymmetricParallel6R> linkages(4);
+  linkages[1].e4 = {0.5, -0.6, 1.1};
+  linkages[1].p3 = {-0.8, 0.2, 0.5};
+  linkages[2].kind = ParallelPairsKind::half_turn;
+  linkages[3].kind = ParallelPairsKind::half_turn;
+  linkages[3].h = {-0.7, 0.2, 0.9};
+  linkages[3].w_turn = -2.1;
+  linkages[3].g_length = -1.3;
+  const std::vector<double> ts = {-2.5, -0.8, 0.0, 0.3, 1.4, 3.0};
+  for (size_t i = 0; i < linkages.size(); ++i) {
+    const AngleSymmetricParallel6R& p = linkages[i];
+    const std::string tag = "angle_symmetric_parallel " + std::to_string(i);
+    const auto build = [&](double t) { return angle_symmetric_parallel_6r(p, t); };
+    expect_closes_along(build, ts, tag);
+    expect_one_freedom(build(0.7), tag);
+    const PosedLoop rest = build(0.0);
+    for (double t : ts) {
+      const PosedLoop at = build(t);
+      const std::vector<Axis> axes = joint_axes(at.geometry, at.theta);
+      EXPECT_NEAR(axes[0].direction.dot(axes[1].direction), 1.0, 1e-12) << tag << " t " << t;
+      EXPECT_NEAR(axes[3].direction.dot(axes[4].direction), 1.0, 1e-12) << tag << " t " << t;
+      EXPECT_NEAR(axes[2].direction.dot(axes[5].direction), -1.0, 1e-12) << tag << " t " << t;
+      const JointVector turned = at.theta - rest.theta;
+      EXPECT_NEAR(angle_distance(turned[0], t), 0.0, 1e-10) << tag << " t " << t;
+      EXPECT_NEAR(angle_distance(turned[1], -t), 0.0, 1e-10) << tag << " t " << t;
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(angle_distance(turned[k + 3], turned[k]), 0.0, 1e-10) << tag << " t " << t << " joint " << k + 1;
+      }
+    }
+  }
+  AngleSymmetricParallel6R bad;
+  bad.e1 = bad.u;  // no step between axes 1 and 2
+  EXPECT_THROW(angle_symmetric_parallel_6r(bad, 0.0), std::invalid_argument);
+  bad = {};
+  bad.kind = ParallelPairsKind::half_turn;
+  bad.h = bad.u;  // axes 4, 5 on axes 1, 2's direction
+  EXPECT_THROW(angle_symmetric_parallel_6r(bad, 0.0), std::invalid_argument);
+  bad = {};
+  bad.v = bad.u;
+  bad.e4 = -bad.e1;  // e1 + e4 = 0: no w
+  EXPECT_THROW(angle_symmetric_parallel_6r(bad, 0.0), std::invalid_argument);
+  EXPECT_THROW(angle_symmetric_parallel_6r(AngleSymmetricParallel6R{}, NAN), std::invalid_argument);
+}
+
 // Bricard's doubly collapsible octahedron, built flat: in each of the four
 // ways the tangents meet, the loop closes in the pose it is built in, every
 // a_i = 0 and every joint angle 0 or pi; its vertices (the frames' origins,

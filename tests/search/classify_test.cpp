@@ -395,13 +395,14 @@ TEST(FamilyFit, PicksTheRepresentationThatWritingEveryOneOutPicks) {
         expect_same_pick<Family::double_goldberg>(g, where, compared);
         expect_same_pick<Family::hooke>(g, where, compared);
         expect_same_pick<Family::bricard_octahedral_collapsible>(g, where, compared);
+        expect_same_pick<Family::angle_symmetric_parallel>(g, where, compared);
         // The Goldberg 6R fit differentiates itself by central differences
         // in every representation written out: one geometry is enough.
         if (seed == 0) expect_same_pick<Family::goldberg_6r>(g, where, compared);
       }
     }
   }
-  EXPECT_EQ(compared, 2 * (300 * 3 + 60 * 5 + 24 * 12 + 1));
+  EXPECT_EQ(compared, 2 * (300 * 3 + 60 * 5 + 24 * 13 + 1));
 }
 
 // The least max |condition| over every representation and every set of

@@ -244,6 +244,10 @@ std::vector<std::pair<std::string, LoopGeometry>> other_6r_members(Family family
     add(Family::bricard_octahedral_collapsible,
         [&] { return bricard_octahedral_collapsible(random_collapsible(rng)).geometry; });
   }
+  for (int i = 0; i < 4; ++i) {
+    add(Family::angle_symmetric_parallel,
+        [&] { return angle_symmetric_parallel_member(rng, kParallelPairsKinds[static_cast<size_t>(i) % 2]).geometry; });
+  }
   return others;
 }
 
@@ -1228,7 +1232,7 @@ TEST(Families, Generic5RAnd6RAreUnclassifiedWithEveryResidualLarge) {
       const Classification c = classify(g, random_angles(n, seed), std::vector<double>(n, 1.0));
       EXPECT_EQ(c.family, Family::unclassified) << n << " " << seed;
       EXPECT_TRUE(c.fitting.empty()) << n << " " << seed;
-      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 18u);
+      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 19u);
       for (const FamilyCheck& check : c.checks) EXPECT_GT(check.residual, 1e-3) << to_string(check.family);
     }
   }
@@ -1385,6 +1389,143 @@ TEST(Families, OtherOctahedraAndFamiliesAreNotCollapsible) {
 }
 
 // ---------------------------------------------------------------------------
+// The angle-symmetric 6R with three pairs of parallel axes
+
+// Members of both kinds built by angle_symmetric_parallel_6r (lines in
+// space whose pairs' translations close by its four conditions on the
+// lines; nothing of the DH conditions), traced by the rigid closure:
+// opposite joints turn by equal angles over the whole traced motion and the
+// three pairs of axes stay parallel, the construction's defining properties
+// seen by the tracer alone; verified and classified angle_symmetric_parallel
+// in random representations, its nine conditions at round-off (the
+// half-turn kind by its own set, which the detail names); far from the
+// line-symmetric Bricard loops (the same twists in the half-turn kind) and
+// Sarrus' (chains of parallel axes).
+TEST(Families, AngleSymmetricParallelLoopsMoveWithEqualOppositeAnglesAndAreClassified) {
+  std::mt19937_64 rng(101);
+  for (int i = 0; i < 8; ++i) {
+    const ParallelPairsKind kind = kParallelPairsKinds[static_cast<size_t>(i) % 2];
+    const Posed m = angle_symmetric_parallel_member(rng, kind);
+    const std::string tag = "angle_symmetric_parallel " + std::to_string(i);
+    const VerificationSummary v = verify_from(m.geometry, m.theta);
+    ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
+    ASSERT_GT(v.joint_angles.size(), 20u) << tag;
+    const JointVector& first = v.joint_angles.front();
+    for (int k = 0; k < 3; ++k) {
+      double spread = 0.0, travel = 0.0;
+      for (const JointVector& theta : v.joint_angles) {
+        spread = std::max(spread, std::abs(wrap_angle(theta[k + 3] - first[k + 3] - (theta[k] - first[k]))));
+        travel = std::max(travel, std::abs(wrap_angle(theta[k] - first[k])));
+      }
+      EXPECT_LT(spread, 1e-8) << tag << ": joints " << k + 1 << " and " << k + 4;
+      EXPECT_GT(travel, 1e-2) << tag << ": joint " << k + 1 << " hardly turns";
+    }
+    for (size_t j = 0; j < v.joint_angles.size(); j += 7) {
+      const std::vector<Axis> axes = joint_axes(m.geometry, v.joint_angles[j]);
+      for (const auto& [p, q] : {std::pair{0, 1}, std::pair{3, 4}, std::pair{2, 5}}) {
+        EXPECT_NEAR(std::abs(axes[static_cast<size_t>(p)].direction.dot(axes[static_cast<size_t>(q)].direction)), 1.0,
+                    1e-12)
+            << tag << ": axes " << p + 1 << " and " << q + 1 << " at pose " << j;
+      }
+    }
+    expect_constructed_member(
+        m, Family::angle_symmetric_parallel, 9,
+        kind == ParallelPairsKind::general ? "opposite joints turning by equal angles" : "the half-turned 1-2",
+        {Family::bricard_line_symmetric, Family::sarrus}, i < 2, rng, tag);
+  }
+}
+
+// The dimension. The construction's numbers moved by 1e-2 each still give
+// members, and the Jacobian of the 18 DH parameters with respect to them has
+// rank 7 for either kind: a direction's length, a step's part along its
+// axis and a point's along its axis change nothing, the rigid motions (6)
+// and a pose moved along the motion (1) change the lines but not the loop.
+// Each condition set's nine gradients at a member have rank 9, so the loops
+// that satisfy it near the member form a family of 18 - 9 = 9 dimensions:
+// the 7 constructed ones and the two slides of the normals between parallel
+// axes, which change the offsets but not the loop.
+TEST(Families, AngleSymmetricParallelLoopsHaveSevenFreeParameters) {
+  std::mt19937_64 rng(102);
+  for (int i = 0; i < 4; ++i) {
+    const ParallelPairsKind kind = kParallelPairsKinds[static_cast<size_t>(i) % 2];
+    const AngleSymmetricParallel6R p = random_angle_symmetric_parallel(rng, kind);
+    const std::string tag = "angle_symmetric_parallel " + std::to_string(i);
+    const auto field = [kind](AngleSymmetricParallel6R& q, int k) -> double& {
+      Vector3* general[] = {&q.u, &q.e1, &q.v, &q.e4, &q.p1, &q.p3, &q.p4};
+      Vector3* half_turn[] = {&q.u, &q.e1, &q.h, &q.p1, &q.p3, &q.p4};
+      if (kind == ParallelPairsKind::half_turn && k >= 18) return k == 18 ? q.w_turn : q.g_length;
+      return (kind == ParallelPairsKind::general ? general : half_turn)[k / 3]->coeffRef(k % 3);
+    };
+    const double t = uniform(rng, -2.0, 2.0);
+    // The offsets between parallel axes read with the normals centred: where
+    // the construction leaves those normals is no parameter of the loop.
+    const auto build = [t](const AngleSymmetricParallel6R& q) {
+      PosedLoop m = angle_symmetric_parallel_6r(q, t);
+      m.geometry = centred_parallel_normals(m.geometry, 1e-8);
+      return m;
+    };
+    const Eigen::VectorXd sv = constructor_singular_values(p, kind == ParallelPairsKind::general ? 21 : 20, build,
+                                                           field, Family::angle_symmetric_parallel, tag);
+    EXPECT_GT(sv[6], 1e-4 * sv[0]) << tag << ": rank below 7";
+    EXPECT_LT(sv[7], 1e-7 * sv[0]) << tag << ": rank above 7";
+    const detail::WrittenOut member(angle_symmetric_parallel_6r(p, t).geometry);
+    detail::Conditions conditions;
+    detail::angle_symmetric_parallel_conditions(kind == ParallelPairsKind::general ? 0 : 1, member, conditions);
+    ASSERT_EQ(conditions.values.size(), 9u) << tag;
+    Eigen::MatrixXd G(9, 18);
+    for (int r = 0; r < 9; ++r) {
+      EXPECT_LT(std::abs(conditions.values[static_cast<size_t>(r)]), 1e-12) << tag << ": " << conditions.names[r];
+      G.row(r) = conditions.gradients[static_cast<size_t>(r)].transpose();
+    }
+    const Eigen::VectorXd gv = Eigen::JacobiSVD<Eigen::MatrixXd>(G).singularValues();
+    EXPECT_GT(gv[8], 1e-3 * gv[0]) << tag << ": conditions' rank below 9";
+  }
+}
+
+// Near misses: a length, twist or offset of a member of either kind moved by
+// 1e-2, 1e-4, 1e-6 and 1e-8 (x L, rad): the rigid closure cannot follow it
+// from the member's pose, and the family's residual sees the move; alpha1
+// among them, which breaks the parallel pair 1-2. The half-turn kind has a
+// second motion besides the family's, with joints 3 and 6 locked, which a5
+// and a6 moved alone keep (docs/guide/families.md): where
+// the tracer finds that one, the member's pose is not on it.
+TEST(Families, AngleSymmetricParallelNearMissesAreRigidAndNotClassified) {
+  std::mt19937_64 rng(103);
+  // a1, alpha2, d3, a5, alpha3, d4, a6, d1, alpha1
+  const std::array<int, 9> parameters = {0, 6 + 1, 12 + 2, 4, 6 + 2, 12 + 3, 5, 12 + 0, 6 + 0};
+  for (const ParallelPairsKind kind : kParallelPairsKinds) {
+    const Posed m = angle_symmetric_parallel_member(rng, kind);
+    for (int p : parameters) {
+      const std::string tag = std::string(kind == ParallelPairsKind::general ? "general" : "half-turn") +
+                              " near miss, parameter " + std::to_string(p);
+      for (double eps : {1e-2, 1e-4, 1e-6, 1e-8}) {
+        const LoopGeometry g = perturbed(m.geometry, p, eps);
+        const VerificationSummary v = verify_from(g, m.theta);
+        const bool elsewhere = v.limit.find("the given pose is not on this motion") != std::string::npos;
+        EXPECT_TRUE(!v.verified || (kind == ParallelPairsKind::half_turn && (p == 4 || p == 5) && elsewhere))
+            << tag << " + " << eps << ": " << v.limit;
+        const Classification c = classified({g, m.theta}, v);
+        if (eps >= 1e-6) {
+          EXPECT_NE(c.family, Family::angle_symmetric_parallel) << tag << " + " << eps;
+        }
+        for (const FamilyCheck& check : c.checks) {
+          if (check.family == Family::angle_symmetric_parallel) {
+            EXPECT_GT(check.residual, eps / 10) << tag << " + " << eps;
+          }
+        }
+      }
+    }
+  }
+}
+
+// The other families' members and generic 6R loops keep their names and are
+// far from these conditions.
+TEST(Families, OtherFamiliesAreNotAngleSymmetricParallel) {
+  std::mt19937_64 rng(104);
+  expect_far_from(Family::angle_symmetric_parallel, other_6r_members(Family::angle_symmetric_parallel, rng, 110));
+}
+
+// ---------------------------------------------------------------------------
 // Distances (deflation) of the new families
 
 TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
@@ -1414,7 +1555,9 @@ TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
       {Family::hooke, hooke_member(rng).geometry},
       {Family::double_goldberg, double_goldberg_member(rng).geometry},
       {Family::bricard_octahedral_collapsible, bricard_octahedral_collapsible(OctahedronCollapsible{}).geometry},
-      {Family::bricard_octahedral_collapsible, bricard_octahedral_collapsible(random_collapsible(rng)).geometry}};
+      {Family::bricard_octahedral_collapsible, bricard_octahedral_collapsible(random_collapsible(rng)).geometry},
+      {Family::angle_symmetric_parallel, angle_symmetric_parallel_member(rng, ParallelPairsKind::general).geometry},
+      {Family::angle_symmetric_parallel, angle_symmetric_parallel_member(rng, ParallelPairsKind::half_turn).geometry}};
   for (const Case& c : cases) {
     const int n = c.member.joints();
     EXPECT_LT(family_distance(c.family, c.member), 1e-12) << to_string(c.family);
@@ -1462,9 +1605,10 @@ TEST(Families, DistanceNeedsTheRightJointCountAndIsAllocationFree) {
   const long before = testing::allocations();
   double sum = 0.0;
   for (Family f : {Family::goldberg, Family::myard, Family::goldberg_bent}) sum += family_distance(f, g5, &gradient);
-  for (Family f : {Family::bricard_line_symmetric, Family::bricard_plane_symmetric, Family::bricard_trihedral,
-                   Family::bennett_pair, Family::bennett_dyads, Family::waldron_hybrid, Family::goldberg_6r,
-                   Family::hooke, Family::double_goldberg, Family::bricard_octahedral_collapsible}) {
+  for (Family f :
+       {Family::bricard_line_symmetric, Family::bricard_plane_symmetric, Family::bricard_trihedral,
+        Family::bennett_pair, Family::bennett_dyads, Family::waldron_hybrid, Family::goldberg_6r, Family::hooke,
+        Family::double_goldberg, Family::bricard_octahedral_collapsible, Family::angle_symmetric_parallel}) {
     sum += family_distance(f, g6, &gradient);
   }
   EXPECT_EQ(testing::allocations() - before, 0);

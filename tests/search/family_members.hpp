@@ -385,6 +385,61 @@ inline Posed cubic_member(std::mt19937_64& rng) {
   return {m.geometry, m.theta};
 }
 
+// The angle-symmetric 6R with three pairs of parallel axes
+// (angle_symmetric_parallel_6r) of the given kind: random directions, steps
+// between the parallel axes of length 0.5 to 1.5, points in the unit cube
+// about the origin. Drawn again while a twist between the pairs is within 10
+// degrees of 0 or pi, a length or offset exceeds 4 (the general kind's g
+// grows without bound where its last condition nearly divides by zero) or
+// axes 3 and 6 are less than 0.2 apart.
+inline Vector3 random_vector(std::mt19937_64& rng, double lo, double hi) {
+  Vector3 x;
+  do {
+    x = {uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0)};
+  } while (x.norm() < 0.2 || x.norm() > 1.0);
+  return uniform(rng, lo, hi) * x.normalized();
+}
+
+inline AngleSymmetricParallel6R random_angle_symmetric_parallel(std::mt19937_64& rng, ParallelPairsKind kind) {
+  for (;;) {
+    AngleSymmetricParallel6R p;
+    p.kind = kind;
+    p.u = random_vector(rng, 1.0, 1.0);
+    p.v = random_vector(rng, 1.0, 1.0);
+    p.h = random_vector(rng, 1.0, 1.0);
+    p.e1 = random_vector(rng, 0.5, 1.5);
+    p.e4 = random_vector(rng, 0.5, 1.5);
+    p.e1 -= p.e1.dot(p.u) * p.u;
+    p.e4 -= p.e4.dot(p.v) * p.v;
+    if (p.e1.norm() < 0.5 || p.e4.norm() < 0.5) continue;
+    p.w_turn = uniform(rng, -kPi, kPi);
+    p.g_length = (rng() % 2 ? 1.0 : -1.0) * uniform(rng, 0.3, 1.5);
+    p.p1 = random_vector(rng, 0.0, 1.0);
+    p.p3 = random_vector(rng, 0.0, 1.0);
+    p.p4 = random_vector(rng, 0.0, 1.0);
+    if (std::abs(p.u.cross(p.h).norm()) < 0.3) continue;
+    try {
+      const LoopGeometry g = angle_symmetric_parallel_6r(p, 0.0).geometry;
+      bool far = g.a.cwiseAbs().maxCoeff() < 4.0 && g.d.cwiseAbs().maxCoeff() < 4.0 && g.a[2] + g.a[5] > 0.0;
+      for (int k : {1, 2, 4, 5}) far = far && std::abs(std::sin(g.alpha[k])) > std::sin(10.0 * kPi / 180.0);
+      const std::vector<Axis> axes = joint_axes(g, angle_symmetric_parallel_6r(p, 0.0).theta);
+      const Vector3 between = axes[5].point - axes[2].point;
+      far = far && (between - between.dot(axes[2].direction) * axes[2].direction).norm() > 0.2;
+      if (far) return p;
+    } catch (const std::invalid_argument&) {
+    }
+  }
+}
+
+constexpr std::array<ParallelPairsKind, 2> kParallelPairsKinds = {ParallelPairsKind::general,
+                                                                  ParallelPairsKind::half_turn};
+
+// A member at a random t of its motion.
+inline Posed angle_symmetric_parallel_member(std::mt19937_64& rng, ParallelPairsKind kind) {
+  const AngleSymmetricParallel6R p = random_angle_symmetric_parallel(rng, kind);
+  return angle_symmetric_parallel_6r(p, uniform(rng, -kPi, kPi));
+}
+
 // Bricard line-symmetric 6R: a_i = a_{i+3}, alpha_i = alpha_{i+3}, d_i = d_{i+3}.
 inline LoopGeometry bricard_line_geometry(std::mt19937_64& rng) {
   std::array<double, 3> a, t, d;

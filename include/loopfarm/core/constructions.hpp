@@ -12,8 +12,9 @@
 //   a link (a 6R with two degrees of freedom) and a 6R of three Bennett loops,
 //   their DH parameters read off the joint axes (dh_from_axes);
 // - Waldron's hybrid 6R (two Bennett loops sharing a joint axis), the
-//   Sarrus 6R (two chains of parallel axes) and Hooke's double-spherical 6R
-//   (two chains of concurrent axes), also read off their axes;
+//   Sarrus 6R (two chains of parallel axes), Hooke's double-spherical 6R
+//   (two chains of concurrent axes) and the angle-symmetric 6R with three
+//   pairs of parallel axes, also read off their axes;
 // - Bricard's plane-symmetric octahedron from its vertices, and his doubly
 //   collapsible one from a flat pose: two circles and tangents to them.
 //
@@ -324,6 +325,46 @@ struct Hooke6R {
 // Nothing where a chain cannot reach at t (the middle axis has no direction
 // at its two angles).
 std::optional<PosedLoop> hooke_6r(const Hooke6R& parameters, double t);
+
+// ---------------------------------------------------------------------------
+// Angle-symmetric 6R with three pairs of parallel axes
+//
+// Axes 1 and 2 parallel (direction u, axis 2 reached from axis 1 by e1, its
+// part normal to u), axes 4 and 5 parallel (v, e4 likewise), axes 3 and 6
+// parallel (axis 3 along w, axis 6 along -w, reached from axis 3 by g normal
+// to w). Joints 1 and 2 turn by t and -t, so link 2 does not turn against
+// link 6 but translates by (R_u(t) - I) e1; joints 4 and 5 likewise by t and
+// -t; joints 3 and 6 by one angle psi(t) (axis 6's direction is -w), which
+// cancels the turn of links 3-5 against links 2 and 6. The translations
+// close for every t, psi(t) the angle that turns g + (R_v(t) - I) e4 into
+// g - (R_u(t) - I) e1 about w, when those two vectors have the same part
+// along w and the same length at every t: the four conditions
+//   w . (e1 + e4) = 0,   w . (u x e1 + v x e4) = 0,
+//   g . (u x e1 + v x e4) = 0,   |e1|^2 - |e4|^2 + g . (e1 + e4) = 0
+// (docs/guide/families.md). Opposite joints turn by equal angles. Two kinds
+// meet them:
+// - general: u, e1, v, e4 free; w along (u x e1 + v x e4) x (e1 + e4), g
+//   normal to w and to u x e1 + v x e4 with the length the last condition
+//   asks;
+// - half_turn: axes 4, 5 the half-turn about the direction h of axes 1, 2
+//   (v = H u, e4 = H e1, then translated to p4), w normal to h (turned by
+//   w_turn about h from h's first normal) and g = g_length w x h, any
+//   length: u x e1 + v x e4 and e1 + e4 both lie along h.
+// Points p1, p3, p4 on axes 1, 3 and 4 place the pairs; they enter no
+// condition.
+enum class ParallelPairsKind { general, half_turn };
+struct AngleSymmetricParallel6R {
+  ParallelPairsKind kind = ParallelPairsKind::general;
+  Vector3 u{0.2, -0.3, 1.0}, e1{1.0, 0.4, 0.1};   // axes 1, 2
+  Vector3 v{0.9, 0.5, -0.2}, e4{-0.3, 0.8, 0.6};  // axes 4, 5 (general)
+  Vector3 h{0.3, 1.0, 0.4};                       // the half-turn's direction (half_turn)
+  double w_turn = 0.7, g_length = 0.8;            // w and g (half_turn)
+  Vector3 p1{0.0, 0.0, 0.0}, p3{0.6, -0.9, 0.3}, p4{-0.4, 1.1, 0.8};
+};
+// The loop at t = 0 is the lines as given; at t, every joint moved as above.
+// Throws where the kind's lines are degenerate (e1 or e4 along its axis, u
+// parallel to h, u or v parallel to w, the general kind's w or g undefined).
+PosedLoop angle_symmetric_parallel_6r(const AngleSymmetricParallel6R& parameters, double t);
 
 // ---------------------------------------------------------------------------
 // Bricard's plane-symmetric octahedron (his second type) as a 6R loop

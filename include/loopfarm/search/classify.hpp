@@ -55,6 +55,15 @@
 //              opposite face angles are equal or supplementary, and the four
 //              edges of each of the three four-edge cycles through two
 //              opposite pairs add up to zero with signs
+//   angle_symmetric_parallel (n = 6) three pairs of parallel axes, 1-2 and
+//              4-5 of a representation (alpha1 = alpha4 = 0) and 3-6 (|alpha2|
+//              + |alpha6| = |alpha3| + |alpha5| = pi), opposite joints turning
+//              by equal angles: d3 = d6, a1 |sin alpha2| = a4 |sin alpha3|,
+//              a1 (A2 + A6) = a4 (A3 + A5) (A_k = a_k sign(sin alpha_k)),
+//              (d1 + d2) cos alpha2 + (d4 + d5) cos alpha3 = 0, and either
+//              (A3 + A5)^2 cos^2 alpha2 + (d4 + d5)^2 sin^2 alpha3 = a1^2
+//              cos^2 alpha2 (set 0) or |alpha2| + |alpha3| = pi (set 1, axes
+//              4-5 the half-turned 1-2)
 //   cubic_321  (n = 6) the two factorisations (t - h1)(t - h2)(t - h3) =
 //              (t - k1)(t - k2)(t - k3) of a cubic motion polynomial, the
 //              k's norms those of h3, h2, h1, closed into the loop h1 h2 h3
@@ -133,6 +142,9 @@ enum class Family {
   // order "321" (opposite joints share a norm factor and turn by equal
   // angles); decided at a pose of the motion
   cubic_321,
+  // 6R: three pairs of parallel axes (1-2, 4-5 and 3-6 of a representation)
+  // whose opposite joints turn by equal angles
+  angle_symmetric_parallel,
 };
 const char* to_string(Family family);
 
@@ -162,6 +174,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::hooke,
     Family::bricard_octahedral_collapsible,
     Family::cubic_321,
+    Family::angle_symmetric_parallel,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -218,8 +231,8 @@ struct Classification {
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, goldberg_6r,
   // double_goldberg, bennett_dyads, waldron_hybrid, sarrus,
-  // bricard_octahedral_plane, bricard_octahedral_collapsible, cubic_321, hooke
-  // (the order they are tried).
+  // angle_symmetric_parallel, bricard_octahedral_plane,
+  // bricard_octahedral_collapsible, cubic_321, hooke (the order they are tried).
   std::vector<FamilyCheck> checks;
 };
 
