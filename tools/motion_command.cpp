@@ -9,6 +9,7 @@
 #include "candidate_output.hpp"
 #include "cli_support.hpp"
 #include "geometry_options.hpp"
+#include "loopfarm/search/start.hpp"
 #include "loopfarm/search/verify.hpp"
 #include "motion_output.hpp"
 #include "output_format.hpp"
@@ -57,11 +58,15 @@ int run_motion(const MotionArguments& args) {
   if (given(args.plot_option)) png.emplace(args.plot, "--plot");
 
   const LoopGeometry& geometry = request.geometry;
-  VerificationOptions options;
+  StartOptions start;
+  VerificationOptions& options = start.verification;
   options.steps_per_turn = static_cast<int>(steps);
   if (theta0_deg) options.theta0 = *theta0_deg / kDegreesPerRadian;
   const JointVector* pose = request.theta ? &*request.theta : nullptr;
-  const VerificationSummary v = verify_motion(geometry, pose, options);
+  VerificationSummary v = verify_motion(geometry, pose, options);
+  // Verified as `loopfarm verify` verifies: the geometry as given, at
+  // round-off (the note says how far a polish moved it).
+  check_round_off(geometry, v, start);
   const int status = v.verified ? kExitSuccess : kExitNotVerified;
 
   // Files first, each written whole before it replaces its target.

@@ -33,6 +33,61 @@ std::string readable(double value) {
   return buffer;
 }
 
+// The polish of a geometry whose circuit closes within the tolerance only
+// (check_round_off): the same keys whether or not one was run, null if not.
+void add_polish_json(nlohmann::ordered_json& record, const RoundOffCheck& r) {
+  const GeometryPolishSummary& p = r.candidate.polish;
+  const auto when = [&](const nlohmann::ordered_json& value) { return r.polished ? value : nlohmann::ordered_json(); };
+  const bool converged = r.polished && p.converged;
+  const VerificationSummary& v = r.candidate.verification;
+  nlohmann::ordered_json polish;
+  polish["converged"] = when(p.converged);
+  polish["iterations"] = when(p.iterations);
+  polish["poses"] = when(p.poses_used);
+  polish["initial_residual"] = when(p.initial_residual);
+  polish["final_residual"] = when(p.final_residual);
+  polish["displacement"] = when(p.displacement);
+  polish["message"] = when(p.message);
+  polish["verified"] = converged ? nlohmann::ordered_json(v.verified) : nlohmann::ordered_json();
+  polish["rigid_residual"] = converged ? nlohmann::ordered_json(v.worst_residual) : nlohmann::ordered_json();
+  // A family is named only for a polished geometry that moves.
+  polish["family"] = converged && v.verified ? nlohmann::ordered_json(to_string(r.candidate.classification.family))
+                                             : nlohmann::ordered_json();
+  record["polish"] = polish;
+  nlohmann::ordered_json polished = geometry_json(r.candidate.geometry);
+  for (auto& value : polished) {
+    if (!converged) value = nullptr;
+  }
+  record["polished_geometry"] = polished;
+}
+
+void print_polish(const RoundOffCheck& r) {
+  const GeometryPolishSummary& p = r.candidate.polish;
+  std::printf("polish onto the motion  %s: closure %s -> %s at %d poses in %d iterations, moved %s of L\n",
+              p.converged ? "converged" : "failed", readable(p.initial_residual).c_str(),
+              readable(p.final_residual).c_str(), p.poses_used, p.iterations, readable(p.displacement).c_str());
+  if (!p.converged) {
+    std::printf("  note                  %s\n", p.message.c_str());
+    return;
+  }
+  const LoopGeometry& g = r.candidate.geometry;
+  const VerificationSummary& v = r.candidate.verification;
+  std::printf("polished geometry\n");
+  std::printf("  a                     %s\n", lengths_text(g.a).c_str());
+  std::printf("  alpha_deg             %s\n", degrees_text(g.alpha).c_str());
+  std::printf("  d                     %s\n", lengths_text(g.d).c_str());
+  std::printf("  verified              %s (worst residual %s over %d poses)\n", v.verified ? "yes" : "no",
+              readable(v.worst_residual).c_str(), v.poses);
+  if (v.verified) {
+    const Classification& k = r.candidate.classification;
+    std::printf("  family                %s", to_string(k.family));
+    if (k.family == Family::bennett) std::printf(" (%s setup)", to_string(k.setup));
+    std::printf("\n");
+  } else if (!v.limit.empty()) {
+    std::printf("  note                  %s\n", v.limit.c_str());
+  }
+}
+
 int run_verify(const VerifyArguments& args) {
   const GeometryRequest request = read_geometry(args.geometry);
   std::optional<double> theta0_deg = request.theta0_deg;
@@ -55,6 +110,10 @@ int run_verify(const VerifyArguments& args) {
   if (theta0_deg) options.verification.theta0 = *theta0_deg / kDegreesPerRadian;
   const JointVector* pose = request.theta ? &*request.theta : nullptr;
   VerificationSummary verification = verify_motion(geometry, pose, options.verification);
+  // A circuit closing within the tracer's tolerance only is no motion of
+  // the geometry as given: it is polished onto the motion it approximates,
+  // and verified as given only when that moves it by round-off.
+  const RoundOffCheck round_off = check_round_off(geometry, verification, options);
 
   // The cycle energy, only where it means something: driven along the
   // verified motion, from a pose on it (motion_window says where and over
@@ -105,6 +164,7 @@ int run_verify(const VerifyArguments& args) {
       record["theta_deg"] = degrees_json(window->pose);
     }
     add_candidate_json(record, candidate, true);
+    add_polish_json(record, round_off);
     write_record(stdout, record, args.format.format);
     return status;
   }
@@ -113,6 +173,7 @@ int run_verify(const VerifyArguments& args) {
   std::printf("  alpha_deg             %s\n", degrees_text(geometry.alpha).c_str());
   std::printf("  d                     %s\n", lengths_text(geometry.d).c_str());
   print_candidate(candidate);
+  if (round_off.polished) print_polish(round_off);
   if (cycled) {
     std::printf("cycle energy along the motion (%d samples, %s from theta0 = %s deg)\n", static_cast<int>(samples),
                 window->range >= 2.0 * 3.14159265358979323846

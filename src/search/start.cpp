@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <span>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "loopfarm/search/sampler.hpp"
@@ -18,6 +20,12 @@ namespace {
 // energy of a cycle may differ from the searched one by the solves'
 // tolerance, which matters only next to the threshold.
 constexpr double kZeroRecheckFactor = 1e6;
+
+std::string scientific(double v) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.3g", v);
+  return buffer;
+}
 
 Family family_from_name(const std::string& name) {
   // Every family family_distance measures (the job parser has checked the
@@ -227,6 +235,55 @@ CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& 
   }
   CandidateAnalysis out = analyse_candidate(polish.geometry, polished_pose, std::move(verification), jacobian, options);
   out.polish = polish;
+  return out;
+}
+
+RoundOffCheck check_round_off(const LoopGeometry& geometry, VerificationSummary& verification,
+                              const StartOptions& options) {
+  RoundOffCheck out;
+  if (!verification.verified || verification.circuit < 0 || verification.worst_residual <= options.round_off_residual) {
+    return out;
+  }
+  out.polished = true;
+  const Circuit& circuit = verification.motion.circuits[static_cast<size_t>(verification.circuit)];
+  const GeometryPolishSummary polish =
+      polish_along(geometry, circuit, PolishDirections::every_parameter(geometry), options);
+  std::string limit = "the circuit closes to " + scientific(verification.worst_residual) + ", not to round-off (" +
+                      scientific(options.round_off_residual) + "): ";
+  if (!polish.converged) {
+    out.candidate.geometry = geometry;
+    out.candidate.polish = polish;
+    verification.verified = false;
+    verification.on_motion = false;
+    verification.limit = limit + "a near miss, not polished onto a motion (" + polish.message + ")";
+    return out;
+  }
+  // The polished geometry's motion, through the polished poses (closed on
+  // it), else from every circuit as the given geometry's was found.
+  VerificationOptions through = options.verification;
+  through.all_circuits = false;
+  const JointVector& start = polish.poses.front();
+  const std::span<const JointVector> more(polish.poses.data() + 1, polish.poses.size() - 1);
+  VerificationSummary polished = verify_motion(polish.geometry, start, more, through);
+  if (!polished.verified) polished = verify_motion(polish.geometry, start, options.verification);
+  out.candidate = analyse_candidate(polish.geometry, start, std::move(polished), Eigen::MatrixXd(), options);
+  out.candidate.polish = polish;
+  const bool moves = out.candidate.verification.verified;
+  if (moves && polish.displacement <= options.round_off_displacement) {
+    // A movable loop within round-off of the geometry (poses near a
+    // singular one close less well than the rest).
+    verification.limit += std::string(verification.limit.empty() ? "" : "; ") + limit +
+                          "the polish onto its motion moves the geometry by " + scientific(polish.displacement) +
+                          " only (round-off)";
+    return out;
+  }
+  verification.verified = false;
+  verification.on_motion = false;
+  verification.limit = limit + "the geometry as given does not move; " +
+                       (moves ? "polished onto the motion it approximates (moved by " +
+                                    scientific(polish.displacement) + ", lengths / L and angles in radians) it does"
+                              : "polished (moved by " + scientific(polish.displacement) +
+                                    ") it does not move either: " + out.candidate.verification.limit);
   return out;
 }
 

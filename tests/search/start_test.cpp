@@ -1,5 +1,6 @@
 // analyse_candidate: verification, then classification, strict first and
 // loosened to the rigid residual only when no family fits strictly.
+#include <algorithm>
 #include <cmath>
 #include <span>
 #include <string>
@@ -286,6 +287,109 @@ TEST(AnalyseZero, ANearMissIsNotVerifiedAndItsCurveIsNotTracedAgainFromEverySeed
 // the polished geometry is what `loopfarm verify` verifies. Start 1569 runs
 // away from its geometry when polished: refused, as `loopfarm verify`
 // refuses it.
+// Bennett's conditions, independent of the tracer and the polish: opposite
+// links equal, no offsets, sin(alpha1) / a1 = sin(alpha2) / a2 (twists in
+// (0, pi)). The largest violation, lengths / L.
+double bennett_violation(const LoopGeometry& g) {
+  const double L = length_scale(g);
+  double worst = std::abs(g.a[0] * std::sin(g.alpha[1]) - g.a[1] * std::sin(g.alpha[0])) / L;
+  worst = std::max({worst, std::abs(g.a[0] - g.a[2]) / L, std::abs(g.a[1] - g.a[3]) / L,
+                    std::abs(g.alpha[0] - g.alpha[2]), std::abs(g.alpha[1] - g.alpha[3])});
+  for (int k = 0; k < 4; ++k) worst = std::max(worst, std::abs(g.d[k]) / L);
+  return worst;
+}
+
+// `loopfarm verify` judges the geometry as given at round-off. A Bennett loop
+// moved off its family by 1e-9 to 3e-9 of a length, or by 1e-9 rad of a twist, is rigid, but
+// its circuit closes within the tracer's tolerance of 1e-9 all the way round
+// (a circuit that moves by the tolerance): it is not verified as given, and
+// polished onto its motion it is a Bennett loop again by the closed-form
+// conditions, moved by about the perturbation. One 1e-6 off does not close
+// within the tolerance and is refused with no polish.
+TEST(CheckRoundOff, ABennettNearMissWithinTheToleranceIsNotVerifiedAsGiven) {
+  const LoopGeometry exact = paper_bennett_loop();
+  ASSERT_LT(bennett_violation(exact), 1e-15);
+  const double L = length_scale(exact);
+  struct Case {
+    const char* what;
+    LoopGeometry g;
+    double offset;  // from the exact loop: lengths / L, twists [rad]
+  };
+  std::vector<Case> cases;
+  for (const double eps : {1e-9, 3e-9}) {
+    LoopGeometry g = exact;
+    g.a[0] += eps;
+    cases.push_back({"a1", g, eps / L});
+  }
+  LoopGeometry twisted = exact;
+  twisted.alpha[0] += 1e-9;
+  cases.push_back({"alpha1", twisted, 1e-9});
+  for (const Case& c : cases) {
+    SCOPED_TRACE(::testing::Message() << c.what << " off by " << bennett_violation(c.g));
+    // Rigid by the closed-form conditions, yet closing within the tolerance.
+    EXPECT_GT(bennett_violation(c.g), 1e-10);
+    VerificationSummary v = verify_motion(c.g, nullptr);
+    ASSERT_TRUE(v.verified) << v.limit;
+    EXPECT_GT(v.worst_residual, 1e-10);
+    const RoundOffCheck r = check_round_off(c.g, v, StartOptions{});
+    EXPECT_TRUE(r.polished);
+    EXPECT_FALSE(v.verified);
+    EXPECT_NE(v.limit.find("the geometry as given does not move"), std::string::npos) << v.limit;
+    // The polished geometry moves, a Bennett loop to round-off, about as far
+    // from the given one as the given one is from Bennett's conditions.
+    const GeometryPolishSummary& p = r.candidate.polish;
+    ASSERT_TRUE(p.converged) << p.message;
+    EXPECT_TRUE(r.candidate.verification.verified) << r.candidate.verification.limit;
+    EXPECT_LT(r.candidate.verification.worst_residual, 1e-13);
+    EXPECT_EQ(r.candidate.classification.family, Family::bennett);
+    EXPECT_LT(bennett_violation(r.candidate.geometry), 1e-14);
+    EXPECT_GT(p.displacement, 0.1 * bennett_violation(c.g));
+    // The least change (minimum norm) is no larger than the way back to
+    // the exact loop.
+    EXPECT_LT(p.displacement, c.offset * (1.0 + 1e-3));
+  }
+  LoopGeometry far = exact;
+  far.a[0] += 1e-6;
+  VerificationSummary v = verify_motion(far, nullptr);
+  EXPECT_FALSE(check_round_off(far, v, StartOptions{}).polished);
+  EXPECT_FALSE(v.verified);
+}
+
+// Movable loops close to round-off along their circuits and stay verified
+// as given: Bennett, Goldberg's 5R and a trihedral Bricard 6R (alternating
+// twists), each exactly as constructed.
+TEST(CheckRoundOff, ExactLoopsOfTheFamiliesAreVerifiedAsGiven) {
+  const Goldberg5R goldberg{{2.0, kPi / 2, kPi / 6, kPi / 3}, kPi};
+  TrihedralBricard bricard;
+  bricard.a = {2.636, 1.143, 0.558, 1.408, 2.969};
+  bricard.sign_pattern = 0b101010;
+  LoopGeometry trihedral{JointVector::Zero(6), JointVector::Zero(6), JointVector::Zero(6)};
+  for (int k = 0; k < 5; ++k) trihedral.a[k] = bricard.a[static_cast<size_t>(k)];
+  trihedral.a[5] = trihedral_bricard_a6(bricard);
+  for (int k = 0; k < 6; ++k) trihedral.alpha[k] = (bricard.sign_pattern >> k & 1u) ? -kPi / 2 : kPi / 2;
+  const struct {
+    const char* what;
+    LoopGeometry g;
+    Family family;
+  } cases[] = {{"bennett", paper_bennett_loop(), Family::bennett},
+               {"goldberg", goldberg_5r(goldberg, 1.0).geometry, Family::goldberg},
+               {"bricard", trihedral, Family::bricard_trihedral}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    VerificationSummary v = verify_motion(c.g, nullptr);
+    ASSERT_TRUE(v.verified) << v.limit;
+    const RoundOffCheck r = check_round_off(c.g, v, StartOptions{});
+    EXPECT_TRUE(v.verified) << v.limit;
+    if (r.polished) {
+      EXPECT_LE(r.candidate.polish.displacement, 1e-12);
+    } else {
+      EXPECT_LE(v.worst_residual, 1e-12);
+    }
+    const CandidateAnalysis a = analyse_candidate(c.g, v.pose(), std::move(v), Eigen::MatrixXd(), StartOptions{});
+    EXPECT_EQ(a.classification.family, c.family);
+  }
+}
+
 TEST(RunStart, AZeroFoundTo1e7IsPolishedOntoItsMotionAndVerifiedAsLoopfarmVerifyDoes) {
   const Job job = read_job_file(std::string(LOOPFARM_SOURCE_DIR) + "/jobs/generic-6r.toml");
   const StartSummary s = run_start(job, 567);
@@ -303,6 +407,12 @@ TEST(RunStart, AZeroFoundTo1e7IsPolishedOntoItsMotionAndVerifiedAsLoopfarmVerify
   const VerificationSummary polished = verify_motion(s.candidate.geometry, nullptr);
   EXPECT_TRUE(polished.verified);
   EXPECT_LT(polished.worst_residual, 1e-11);
+  // The geometry the farm stores moves as given, at round-off, as `loopfarm
+  // verify` judges it.
+  VerificationSummary as_given = polished;
+  const RoundOffCheck round_off = check_round_off(s.candidate.geometry, as_given, StartOptions{});
+  EXPECT_TRUE(as_given.verified) << as_given.limit;
+  if (round_off.polished) EXPECT_LE(round_off.candidate.polish.displacement, 1e-12);
 
   const StartSummary refused = run_start(job, 1569);
   ASSERT_TRUE(refused.zero);

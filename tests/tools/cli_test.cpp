@@ -854,6 +854,67 @@ TEST_F(CliTest, VerifyFindsARockerWhateverTheta0) {
   }
 }
 
+// A Bennett loop with a1 moved by 3e-9 is rigid, yet its circuit closes
+// within the tracer's tolerance (1e-9) all the way round: verify judges the
+// geometry as given at round-off, refuses it (exit 4, no family, no cycle)
+// and gives the movable loop its polish finds next to it, a Bennett loop by
+// the closed-form conditions. One moved by 1e-6 does not close within the
+// tolerance: refused, nothing polished. `motion` agrees. The exact loop
+// verifies as given, with no polish.
+TEST_F(CliTest, VerifyRefusesANearMissThatClosesOnlyWithinTheTolerance) {
+  for (const char* a : {"2.000000003,4,2,4", "2.000001,4,2,4"}) {
+    SCOPED_TRACE(a);
+    const Result r = run({"verify", "--a", a, "--alpha-deg", "30,90,30,90", "--json"});
+    ASSERT_EQ(r.exit_code, 4) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["verified"], false);
+    EXPECT_NE(j["family"], "bennett");
+    EXPECT_TRUE(j["E_mean"].is_null());
+    EXPECT_GT(j["rigid_residual"].get<double>(), 1e-10);
+    const Result m = run({"motion", "--a", a, "--alpha-deg", "30,90,30,90", "--json"});
+    EXPECT_EQ(m.exit_code, 4) << m.out;
+  }
+  const Result near = run({"verify", "--a", "2.000000003,4,2,4", "--alpha-deg", "30,90,30,90", "--json"});
+  const nlohmann::json j = nlohmann::json::parse(near.out);
+  EXPECT_EQ(j["family_conditions_hold"], "bennett");
+  const nlohmann::json& polish = j["polish"];
+  ASSERT_EQ(polish["converged"], true) << near.out;
+  EXPECT_EQ(polish["verified"], true);
+  EXPECT_EQ(polish["family"], "bennett");
+  EXPECT_LT(polish["rigid_residual"].get<double>(), 1e-13);
+  const double moved = polish["displacement"].get<double>();
+  EXPECT_GT(moved, 1e-10);
+  EXPECT_LT(moved, 3e-9);
+  // Independent of the tracer: Bennett's conditions on the polished
+  // geometry (opposite links equal, sin(alpha1) / a1 = sin(alpha2) / a2).
+  const nlohmann::json& g = j["polished_geometry"];
+  const auto a = g["a"].get<std::vector<double>>();
+  const auto alpha = g["alpha_deg"].get<std::vector<double>>();
+  const double to_rad = 3.14159265358979323846 / 180.0;
+  EXPECT_GT(a[0], 2.0);
+  EXPECT_LT(a[0], 2.000000003);
+  EXPECT_NEAR(a[0], a[2], 1e-14);
+  EXPECT_NEAR(a[1], a[3], 1e-14);
+  EXPECT_NEAR(alpha[0], alpha[2], 1e-12);
+  EXPECT_NEAR(alpha[1], alpha[3], 1e-12);
+  EXPECT_NEAR(a[0] * std::sin(alpha[1] * to_rad), a[1] * std::sin(alpha[0] * to_rad), 1e-14);
+  for (const double d : g["d"].get<std::vector<double>>()) EXPECT_NEAR(d, 0.0, 1e-14);
+  const Result text = run({"verify", "--a", "2.000000003,4,2,4", "--alpha-deg", "30,90,30,90"});
+  EXPECT_NE(text.out.find("the geometry as given does not move"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("polished geometry"), std::string::npos) << text.out;
+  const Result m = run({"motion", "--a", "2.000000003,4,2,4", "--alpha-deg", "30,90,30,90"});
+  EXPECT_NE(m.out.find("the geometry as given does not move"), std::string::npos) << m.out;
+  const Result far = run({"verify", "--a", "2.000001,4,2,4", "--alpha-deg", "30,90,30,90", "--json"});
+  EXPECT_TRUE(nlohmann::json::parse(far.out)["polish"]["converged"].is_null()) << far.out;
+
+  const Result exact = run({"verify", "--a", "2,4,2,4", "--alpha-deg", "30,90,30,90", "--json"});
+  ASSERT_EQ(exact.exit_code, 0) << exact.err;
+  const nlohmann::json e = nlohmann::json::parse(exact.out);
+  EXPECT_EQ(e["family"], "bennett");
+  EXPECT_TRUE(e["polish"]["converged"].is_null());
+  EXPECT_TRUE(e["polished_geometry"]["a"].is_null());
+}
+
 // A trihedral Bricard 6R with every twist +90 deg and lengths for which that
 // loop cannot be assembled: the family's conditions hold, no motion exists,
 // and no family is claimed.

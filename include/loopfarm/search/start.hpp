@@ -51,6 +51,13 @@ struct StartOptions {
   // round-off is a near miss, not verified.
   int polish_poses = 128;
   GeometryPolishOptions polish;
+  // A geometry judged as given (check_round_off: `loopfarm verify`,
+  // `loopfarm motion`) moves when its reported circuit closes to this
+  // residual (dimensionless) at every traced pose, round-off as for an open
+  // circuit (Circuit::moves), or when the polish onto its motion moves it by
+  // at most round_off_displacement (of L, or radians).
+  double round_off_residual = 1e-12;
+  double round_off_displacement = 1e-12;
   std::function<void(const SearchTraceRow&)> trace;
 };
 
@@ -121,6 +128,29 @@ struct StartSummary {
 CandidateAnalysis analyse_zero(const LoopGeometry& geometry, const JointVector& pose, const Eigen::MatrixXd& jacobian,
                                double theta0, const StartOptions& options, const PolishDirections* directions = nullptr,
                                std::span<const JointVector> cycle_poses = {});
+
+// A geometry judged as given, at round-off (`loopfarm verify`, `loopfarm
+// motion`). A circuit moves (Circuit::moves) when it closes on itself within
+// the tracer's tolerance (1e-9), and so does the circuit of a near miss about
+// 1e-9 of L from a movable loop: the geometry as given moves only if its
+// reported circuit closes to round-off (StartOptions::round_off_residual) at
+// every traced pose. When it moves by the tolerance only, it is polished
+// onto the motion it approximates as a zero of the farm is (analyse_zero:
+// every parameter free, lengths kept >= 0, at poses spread along the
+// circuit), and the polished geometry is traced again and classified. The
+// given geometry stays verified when that polish converges moving it by at
+// most round_off_displacement; otherwise `verification` is marked not
+// verified (its limit says how far the polish moved the geometry, or why no
+// movable loop is near).
+struct RoundOffCheck {
+  bool polished = false;  // the reported circuit does not close to round-off: a polish was run
+  // When polished: the polished geometry, the polish, and the polished
+  // geometry's verification, family and canonical form (its geometry is the
+  // given one and its verification empty when the polish did not converge).
+  CandidateAnalysis candidate;
+};
+RoundOffCheck check_round_off(const LoopGeometry& geometry, VerificationSummary& verification,
+                              const StartOptions& options);
 
 // The steering of a job as objective options (deflation terms from the
 // families' distance functions).
