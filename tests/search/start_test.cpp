@@ -412,7 +412,9 @@ TEST(RunStart, AZeroFoundTo1e7IsPolishedOntoItsMotionAndVerifiedAsLoopfarmVerify
   VerificationSummary as_given = polished;
   const RoundOffCheck round_off = check_round_off(s.candidate.geometry, as_given, StartOptions{});
   EXPECT_TRUE(as_given.verified) << as_given.limit;
-  if (round_off.polished) EXPECT_LE(round_off.candidate.polish.displacement, 1e-12);
+  if (round_off.polished) {
+    EXPECT_LE(round_off.candidate.polish.displacement, 1e-12);
+  }
 
   const StartSummary refused = run_start(job, 1569);
   ASSERT_TRUE(refused.zero);
