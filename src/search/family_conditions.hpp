@@ -1296,11 +1296,13 @@ void sarrus_conditions(const RepresentationView& w, Sink& c) {
 // A_k = a_k sign(sin alpha_k) (the length signed along z_k x z_{k+1}), D1 =
 // d1 + d2 and D4 = d4 + d5 (only the sums are defined between parallel
 // axes): d3 = d6, a1 |sin alpha2| = a4 |sin alpha3|, a1 (A2 + A6) = a4 (A3 +
-// A5), D1 cos alpha2 + D4 cos alpha3 = 0 and, set 0 (the general kind),
-// (A3 + A5)^2 cos^2 alpha2 + D4^2 sin^2 alpha3 = a1^2 cos^2 alpha2, or, set
-// 1 (axes 4, 5 the half-turned axes 1, 2), |alpha2| + |alpha3| = pi. These
-// are the construction's four conditions on the lines written in DH
-// parameters; lengths in units of L, squared ones of L^2.
+// A5), and, set 0 (the general kind), D1 cos alpha2 + D4 cos alpha3 = 0,
+// (A3 + A5)^2 cos^2 alpha2 + D4^2 sin^2 alpha3 = a1^2 cos^2 alpha2 and the
+// same read from the other pair of links, (A2 + A6)^2 cos^2 alpha3 + D1^2
+// sin^2 alpha2 = a4^2 cos^2 alpha3; or, set 1 (axes 4, 5 the half-turned
+// axes 1, 2), |alpha2| + |alpha3| = pi and D1 = D4. These are the
+// construction's four conditions on the lines written in DH parameters;
+// lengths in units of L, squared ones of L^2.
 template <class RepresentationView, class Sink>
 void angle_symmetric_parallel_conditions(int set, const RepresentationView& w, Sink& c) {
   const int n = 6;
@@ -1360,9 +1362,25 @@ void angle_symmetric_parallel_conditions(int set, const RepresentationView& w, S
           g[4] -= w.a(3) * sigma(4) / L2;
           return g;
         });
-  // ((d1 + d2) cos alpha2 + (d4 + d5) cos alpha3) / L.
   const auto D1 = [&] { return w.d(0) + w.d(1); };
   const auto D4 = [&] { return w.d(3) + w.d(4); };
+  if (set == 1) {
+    supplementary("|alpha2| + |alpha3| - pi", 1, 2);
+    // (D1 - D4) / L: the general kind's offsets condition, cos(alpha2) (D1
+    // - D4) here, written without the factor, which vanishes at alpha2 =
+    // +-pi/2 where rigid loops with unequal sums would pass it.
+    c.add([] { return "(d1 + d2) - (d4 + d5)"; }, [&] { return (D1() - D4()) / s.L; },
+          [&] {
+            GeometryVector g = -((D1() - D4()) / (s.L * s.L)) * s.dL;
+            g[2 * n + 0] += 1.0 / s.L;
+            g[2 * n + 1] += 1.0 / s.L;
+            g[2 * n + 3] -= 1.0 / s.L;
+            g[2 * n + 4] -= 1.0 / s.L;
+            return g;
+          });
+    return;
+  }
+  // ((d1 + d2) cos alpha2 + (d4 + d5) cos alpha3) / L.
   const auto offsets = [&] { return D1() * w.cos_alpha(1) + D4() * w.cos_alpha(2); };
   c.add([] { return "(d1 + d2) cos(alpha2) + (d4 + d5) cos(alpha3)"; }, [&] { return offsets() / s.L; },
         [&] {
@@ -1375,31 +1393,34 @@ void angle_symmetric_parallel_conditions(int set, const RepresentationView& w, S
           g[n + 2] -= D4() * w.sin_alpha(2) / s.L;
           return g;
         });
-  if (set == 1) {
-    supplementary("|alpha2| + |alpha3| - pi", 1, 2);
-    return;
-  }
-  // ((A3 + A5)^2 cos^2 alpha2 + D4^2 sin^2 alpha3 - a1^2 cos^2 alpha2) / L^2.
-  const auto circle = [&] {
-    const double S = signed_length(2) + signed_length(4), c2 = w.cos_alpha(1), s3 = w.sin_alpha(2);
-    return (S * S - w.a(0) * w.a(0)) * c2 * c2 + D4() * D4() * s3 * s3;
+  // ((A_i + A_j)^2 - a_k^2) cos^2 alpha_p + (d_m + d_{m+1})^2 sin^2 alpha_q,
+  // over L^2, read from either pair of links. Each implies the other where
+  // neither cosine is zero; at alpha2 = +-pi/2 the first leaves d1 + d2 free
+  // and only the second fixes it (and at alpha3 = +-pi/2 the reverse).
+  const auto circle_terms = [&](int i, int j, int k, int p, int m, int q) {
+    const double S = signed_length(i) + signed_length(j), cp = w.cos_alpha(p), sq = w.sin_alpha(q);
+    const double D = w.d(m) + w.d(m + 1);
+    return (S * S - w.a(k) * w.a(k)) * cp * cp + D * D * sq * sq;
   };
-  c.add([] { return "(A3 + A5)^2 cos^2(alpha2) + (d4 + d5)^2 sin^2(alpha3) - a1^2 cos^2(alpha2)"; },
-        [&] { return circle() / (s.L * s.L); },
-        [&] {
-          const double L2 = s.L * s.L;
-          const double S = signed_length(2) + signed_length(4), c2 = w.cos_alpha(1), s2 = w.sin_alpha(1);
-          const double c3 = w.cos_alpha(2), s3 = w.sin_alpha(2), d = D4();
-          GeometryVector g = -(2.0 * circle() / (L2 * s.L)) * s.dL;
-          g[2] += 2.0 * S * sigma(2) * c2 * c2 / L2;
-          g[4] += 2.0 * S * sigma(4) * c2 * c2 / L2;
-          g[0] -= 2.0 * w.a(0) * c2 * c2 / L2;
-          g[2 * n + 3] += 2.0 * d * s3 * s3 / L2;
-          g[2 * n + 4] += 2.0 * d * s3 * s3 / L2;
-          g[n + 1] -= 2.0 * (S * S - w.a(0) * w.a(0)) * c2 * s2 / L2;
-          g[n + 2] += 2.0 * d * d * s3 * c3 / L2;
-          return g;
-        });
+  const auto circle = [&](const char* text, int i, int j, int k, int p, int m, int q) {
+    c.add([&] { return std::string(text); }, [&] { return circle_terms(i, j, k, p, m, q) / (s.L * s.L); },
+          [&] {
+            const double L2 = s.L * s.L;
+            const double S = signed_length(i) + signed_length(j), cp = w.cos_alpha(p), sp = w.sin_alpha(p);
+            const double cq = w.cos_alpha(q), sq = w.sin_alpha(q), D = w.d(m) + w.d(m + 1);
+            GeometryVector g = -(2.0 * circle_terms(i, j, k, p, m, q) / (L2 * s.L)) * s.dL;
+            g[i] += 2.0 * S * sigma(i) * cp * cp / L2;
+            g[j] += 2.0 * S * sigma(j) * cp * cp / L2;
+            g[k] -= 2.0 * w.a(k) * cp * cp / L2;
+            g[2 * n + m] += 2.0 * D * sq * sq / L2;
+            g[2 * n + m + 1] += 2.0 * D * sq * sq / L2;
+            g[n + p] -= 2.0 * (S * S - w.a(k) * w.a(k)) * cp * sp / L2;
+            g[n + q] += 2.0 * D * D * sq * cq / L2;
+            return g;
+          });
+  };
+  circle("(A3 + A5)^2 cos^2(alpha2) + (d4 + d5)^2 sin^2(alpha3) - a1^2 cos^2(alpha2)", 2, 4, 0, 1, 3, 2);
+  circle("(A2 + A6)^2 cos^2(alpha3) + (d1 + d2)^2 sin^2(alpha2) - a4^2 cos^2(alpha3)", 1, 5, 3, 2, 0, 1);
 }
 
 // Bricard's plane-symmetric octahedral 6R (his second type,

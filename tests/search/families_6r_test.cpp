@@ -1397,7 +1397,7 @@ TEST(Families, OtherOctahedraAndFamiliesAreNotCollapsible) {
 // opposite joints turn by equal angles over the whole traced motion and the
 // three pairs of axes stay parallel, the construction's defining properties
 // seen by the tracer alone; verified and classified angle_symmetric_parallel
-// in random representations, its nine conditions at round-off (the
+// in random representations, its conditions at round-off (the
 // half-turn kind by its own set, which the detail names); far from the
 // line-symmetric Bricard loops (the same twists in the half-turn kind) and
 // Sarrus' (chains of parallel axes).
@@ -1429,7 +1429,7 @@ TEST(Families, AngleSymmetricParallelLoopsMoveWithEqualOppositeAnglesAndAreClass
       }
     }
     expect_constructed_member(
-        m, Family::angle_symmetric_parallel, 9,
+        m, Family::angle_symmetric_parallel, kind == ParallelPairsKind::general ? 10u : 9u,
         kind == ParallelPairsKind::general ? "opposite joints turning by equal angles" : "the half-turned 1-2",
         {Family::bricard_line_symmetric, Family::sarrus}, i < 2, rng, tag);
   }
@@ -1440,10 +1440,12 @@ TEST(Families, AngleSymmetricParallelLoopsMoveWithEqualOppositeAnglesAndAreClass
 // rank 7 for either kind: a direction's length, a step's part along its
 // axis and a point's along its axis change nothing, the rigid motions (6)
 // and a pose moved along the motion (1) change the lines but not the loop.
-// Each condition set's nine gradients at a member have rank 9, so the loops
-// that satisfy it near the member form a family of 18 - 9 = 9 dimensions:
-// the 7 constructed ones and the two slides of the normals between parallel
-// axes, which change the offsets but not the loop.
+// Each condition set's gradients at a member (ten for the general kind, one
+// of them implied by the others away from right twists; nine for the
+// half-turn kind) have rank 9, so the loops that satisfy it near the member
+// form a family of 18 - 9 = 9 dimensions: the 7 constructed ones and the two
+// slides of the normals between parallel axes, which change the offsets but
+// not the loop.
 TEST(Families, AngleSymmetricParallelLoopsHaveSevenFreeParameters) {
   std::mt19937_64 rng(102);
   for (int i = 0; i < 4; ++i) {
@@ -1471,14 +1473,91 @@ TEST(Families, AngleSymmetricParallelLoopsHaveSevenFreeParameters) {
     const detail::WrittenOut member(angle_symmetric_parallel_6r(p, t).geometry);
     detail::Conditions conditions;
     detail::angle_symmetric_parallel_conditions(kind == ParallelPairsKind::general ? 0 : 1, member, conditions);
-    ASSERT_EQ(conditions.values.size(), 9u) << tag;
-    Eigen::MatrixXd G(9, 18);
-    for (int r = 0; r < 9; ++r) {
+    const int rows = kind == ParallelPairsKind::general ? 10 : 9;
+    ASSERT_EQ(conditions.values.size(), static_cast<size_t>(rows)) << tag;
+    Eigen::MatrixXd G(rows, 18);
+    for (int r = 0; r < rows; ++r) {
       EXPECT_LT(std::abs(conditions.values[static_cast<size_t>(r)]), 1e-12) << tag << ": " << conditions.names[r];
       G.row(r) = conditions.gradients[static_cast<size_t>(r)].transpose();
     }
     const Eigen::VectorXd gv = Eigen::JacobiSVD<Eigen::MatrixXd>(G).singularValues();
     EXPECT_GT(gv[8], 1e-3 * gv[0]) << tag << ": conditions' rank below 9";
+    if (rows > 9) {
+      EXPECT_LT(gv[9], 1e-9 * gv[0]) << tag << ": conditions' rank above 9";
+    }
+  }
+}
+
+// At alpha2 = +-90 degrees the general kind's first quadratic condition
+// leaves d1 + d2 free and its offsets condition holds whatever the offsets;
+// so would the half-turn kind's written as the general one's (cos(alpha2)
+// (D1 - D4)). Members of both kinds built with axis 3 normal to axes 1 and 2
+// move and are classified; the same loops with d1 moved by 0.1 L are rigid
+// (the tracer) and far from the family: the second quadratic condition and
+// D1 = D4 see the move.
+TEST(Families, AngleSymmetricParallelAtARightTwistFixesTheOffsets) {
+  std::mt19937_64 rng(105);
+  for (int i = 0; i < 6; ++i) {
+    const ParallelPairsKind kind = kParallelPairsKinds[static_cast<size_t>(i) % 2];
+    const std::string tag = "right twist " + std::to_string(i);
+    AngleSymmetricParallel6R p = random_angle_symmetric_parallel(rng, kind);
+    const Vector3 u = p.u.normalized();
+    if (kind == ParallelPairsKind::half_turn) {
+      // w along h x u, normal to h as the kind needs and to u.
+      const Vector3 h = p.h.normalized(), first = h.unitOrthogonal(), target = h.cross(u).normalized();
+      p.w_turn = std::atan2(h.dot(first.cross(target)), first.dot(target));
+    } else {
+      // e4 moved along a direction normal to v until w, along (u x e1 + v x
+      // e4) x (e1 + e4), is normal to u: a root of u . (P x Q) in the move,
+      // along the first of two directions where one is bracketed.
+      const Vector3 v = p.v.normalized(), e1 = p.e1 - p.e1.dot(u) * u;
+      Vector3 k = v.unitOrthogonal();
+      const auto f = [&](double s) {
+        const Vector3 e4 = p.e4 + s * k;
+        return u.dot((u.cross(e1) + v.cross(e4)).cross(e1 + e4));
+      };
+      double lo = 0.0, hi = 0.0;
+      bool bracketed = false;
+      for (int turn = 0; turn < 2 && !bracketed; ++turn, k = v.cross(k)) {
+        for (double s = 0.0; s < 3.0 && !bracketed; s += 0.01) {
+          if (f(s) * f(s + 0.01) <= 0.0) {
+            lo = s;
+            hi = s + 0.01;
+          } else if (f(-s - 0.01) * f(-s) <= 0.0) {
+            lo = -s - 0.01;
+            hi = -s;
+          }
+        }
+        if (hi != 0.0) break;
+      }
+      ASSERT_NE(hi - lo, 0.0) << tag << ": no root";
+      for (int it = 0; it < 200 && hi - lo > 1e-16; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        if (f(lo) * f(mid) <= 0.0) {
+          hi = mid;
+        } else {
+          lo = mid;
+        }
+      }
+      p.e4 += 0.5 * (lo + hi) * k;
+    }
+    const Posed m = angle_symmetric_parallel_6r(p, uniform(rng, -kPi, kPi));
+    ASSERT_LT(std::abs(std::cos(m.geometry.alpha[1])), 1e-10) << tag;
+    const VerificationSummary v = verify_from(m.geometry, m.theta);
+    ASSERT_TRUE(v.verified) << tag << ": " << v.limit;
+    const Classification c = classified(m, v);
+    EXPECT_EQ(c.family, Family::angle_symmetric_parallel) << tag << ": " << c.detail;
+    EXPECT_LT(c.residual, 1e-10) << tag;
+    const LoopGeometry moved = perturbed(m.geometry, 12 + 0, 0.1);  // d1 by 0.1 L
+    const VerificationSummary rigid = verify_from(moved, m.theta);
+    EXPECT_FALSE(rigid.verified) << tag << ": " << rigid.limit;
+    const Classification far = classified({moved, m.theta}, rigid);
+    EXPECT_NE(far.family, Family::angle_symmetric_parallel) << tag;
+    for (const FamilyCheck& check : far.checks) {
+      if (check.family == Family::angle_symmetric_parallel) {
+        EXPECT_GT(check.residual, 1e-3) << tag;
+      }
+    }
   }
 }
 

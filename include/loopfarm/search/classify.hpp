@@ -60,10 +60,11 @@
 //              + |alpha6| = |alpha3| + |alpha5| = pi), opposite joints turning
 //              by equal angles: d3 = d6, a1 |sin alpha2| = a4 |sin alpha3|,
 //              a1 (A2 + A6) = a4 (A3 + A5) (A_k = a_k sign(sin alpha_k)),
-//              (d1 + d2) cos alpha2 + (d4 + d5) cos alpha3 = 0, and either
-//              (A3 + A5)^2 cos^2 alpha2 + (d4 + d5)^2 sin^2 alpha3 = a1^2
-//              cos^2 alpha2 (set 0) or |alpha2| + |alpha3| = pi (set 1, axes
-//              4-5 the half-turned 1-2)
+//              and either (set 0) (d1 + d2) cos alpha2 + (d4 + d5) cos alpha3
+//              = 0 and (A3 + A5)^2 cos^2 alpha2 + (d4 + d5)^2 sin^2 alpha3 =
+//              a1^2 cos^2 alpha2, with the same read from the other pair of
+//              links, or (set 1, axes 4-5 the half-turned 1-2) |alpha2| +
+//              |alpha3| = pi and d1 + d2 = d4 + d5
 //   cubic_321  (n = 6) the two factorisations (t - h1)(t - h2)(t - h3) =
 //              (t - k1)(t - k2)(t - k3) of a cubic motion polynomial, the
 //              k's norms those of h3, h2, h1, closed into the loop h1 h2 h3
