@@ -60,6 +60,19 @@ nlohmann::ordered_json geometry_json(const LoopGeometry& g) {
   return geometry;
 }
 
+nlohmann::ordered_json polish_json(const GeometryPolishSummary& p, bool ran) {
+  const auto when = [&](const nlohmann::ordered_json& value) { return ran ? value : nlohmann::ordered_json(); };
+  nlohmann::ordered_json polish;
+  polish["converged"] = when(p.converged);
+  polish["iterations"] = when(p.iterations);
+  polish["poses"] = when(p.poses_used);
+  polish["initial_residual"] = when(p.initial_residual);
+  polish["final_residual"] = when(p.final_residual);
+  polish["displacement"] = when(p.displacement);
+  polish["message"] = when(p.message);
+  return polish;
+}
+
 nlohmann::ordered_json degrees_json(const JointVector& radians) { return json_array(radians, kDegreesPerRadian); }
 
 void print_candidate(const CandidateAnalysis& c) {

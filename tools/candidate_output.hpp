@@ -35,4 +35,9 @@ nlohmann::ordered_json degrees_json(const JointVector& radians);
 // {"a":[...],"alpha_deg":[...],"d":[...]}
 nlohmann::ordered_json geometry_json(const LoopGeometry& geometry);
 
+// A polish onto the motion as JSON (converged, iterations, poses, the
+// residuals before and after, displacement, message): the same keys whether
+// or not one was run, every value null when `ran` is false.
+nlohmann::ordered_json polish_json(const GeometryPolishSummary& polish, bool ran);
+
 }  // namespace loopfarm::cli

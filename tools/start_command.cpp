@@ -89,17 +89,7 @@ nlohmann::ordered_json start_record(const StartSummary& s) {
   record["initial_geometry"] = geometry_json(s.initial_geometry);
   record["final_geometry"] = geometry_json(s.final_geometry);
   // The same keys for every start (they are CSV columns): null but for a zero.
-  const GeometryPolishSummary& p = s.candidate.polish;
-  const auto when_zero = [&](const nlohmann::ordered_json& value) { return s.zero ? value : nlohmann::ordered_json(); };
-  nlohmann::ordered_json polish;
-  polish["converged"] = when_zero(p.converged);
-  polish["iterations"] = when_zero(p.iterations);
-  polish["poses"] = when_zero(p.poses_used);
-  polish["initial_residual"] = when_zero(p.initial_residual);
-  polish["final_residual"] = when_zero(p.final_residual);
-  polish["displacement"] = when_zero(p.displacement);
-  polish["message"] = when_zero(p.message);
-  record["polish"] = polish;
+  record["polish"] = polish_json(s.candidate.polish, s.zero);
   nlohmann::ordered_json polished = geometry_json(s.candidate.geometry);
   if (!s.zero) {
     for (auto& value : polished) value = nullptr;

@@ -36,18 +36,9 @@ std::string readable(double value) {
 // The polish of a geometry whose circuit closes within the tolerance only
 // (check_round_off): the same keys whether or not one was run, null if not.
 void add_polish_json(nlohmann::ordered_json& record, const RoundOffCheck& r) {
-  const GeometryPolishSummary& p = r.candidate.polish;
-  const auto when = [&](const nlohmann::ordered_json& value) { return r.polished ? value : nlohmann::ordered_json(); };
-  const bool converged = r.polished && p.converged;
+  const bool converged = r.polished && r.candidate.polish.converged;
   const VerificationSummary& v = r.candidate.verification;
-  nlohmann::ordered_json polish;
-  polish["converged"] = when(p.converged);
-  polish["iterations"] = when(p.iterations);
-  polish["poses"] = when(p.poses_used);
-  polish["initial_residual"] = when(p.initial_residual);
-  polish["final_residual"] = when(p.final_residual);
-  polish["displacement"] = when(p.displacement);
-  polish["message"] = when(p.message);
+  nlohmann::ordered_json polish = polish_json(r.candidate.polish, r.polished);
   polish["verified"] = converged ? nlohmann::ordered_json(v.verified) : nlohmann::ordered_json();
   polish["rigid_residual"] = converged ? nlohmann::ordered_json(v.worst_residual) : nlohmann::ordered_json();
   // A family is named only for a polished geometry that moves.
