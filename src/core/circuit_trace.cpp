@@ -28,6 +28,10 @@ constexpr int kProbes = 48;
 constexpr double kSingularTolerance = 1e-5;
 // A tangent component or singular value below this is round-off.
 constexpr double kNoise = 1e-10;
+// Two probe rays, or the tangents of two branches, closer than this cosine
+// are one direction: the resolution at which branches crossing at a singular
+// point are told apart (about 5.7 degrees).
+constexpr double kSameDirection = 0.995;
 // Extremes located per joint and walk, at most: a joint the motion barely
 // turns (by 1e-6 deg, say) can have a tangent component just above round-off
 // whose sign flips at nearly every step, and each flip would cost a root
@@ -78,8 +82,12 @@ void orient(PointInfo& info, const JointVector& tangent, const JointVector& v) {
   }
 }
 
+// The angle between two unit vectors.
+double angle_between(const JointVector& a, const JointVector& b) { return std::acos(std::clamp(a.dot(b), -1.0, 1.0)); }
+
 // Brent's method for a root of f on [a, b] with f(a) f(b) <= 0, to an
-// interval of `tolerance`.
+// interval of `tolerance`. NaN if f is NaN anywhere it is evaluated (the
+// corrector failed there): no root is then claimed.
 template <class F>
 double brent_root(F&& f, double a, double b, double fa, double fb, double tolerance) {
   if (fa == 0.0) return a;
@@ -131,6 +139,7 @@ double brent_root(F&& f, double a, double b, double fa, double fb, double tolera
     fa = fb;
     b += std::abs(d) > tol ? d : (m > 0.0 ? tol : -tol);
     fb = f(b);
+    if (std::isnan(fb)) return std::numeric_limits<double>::quiet_NaN();
   }
   return b;
 }
@@ -192,7 +201,7 @@ std::vector<Probe> probe_rays(const ClosureSystem& system, const JointVector& xb
     system.evaluate(y, Fy, Ay);
     if (n - numerical_rank(decompose(Ay), o.rank_tolerance) >= 2) ++surface;
     const bool known =
-        std::any_of(rays.begin(), rays.end(), [&](const Probe& r) { return r.direction.dot(e) > 0.995; });
+        std::any_of(rays.begin(), rays.end(), [&](const Probe& r) { return r.direction.dot(e) > kSameDirection; });
     if (!known) rays.push_back({e, y});
   }
   spread = converged > 0 && 2 * surface > converged;
@@ -270,8 +279,7 @@ void locate_extreme(const ClosureSystem& system, const JointVector& x0, const Po
     return p.tangent[j];
   };
   const double s = brent_root(f, 0.0, length, i0.tangent[j], i1.tangent[j], 1e-15);
-  if (!curve_point(system, x0, i0.tangent, x1, i1.tangent, s, o, y)) return;
-  if (std::isnan(y[j])) return;
+  if (std::isnan(s) || !curve_point(system, x0, i0.tangent, x1, i1.tangent, s, o, y)) return;
   SystemVector F;
   SystemMatrix A;
   walk.worst = std::max(walk.worst, system.evaluate(y, F, A));
@@ -292,7 +300,7 @@ void locate_bifurcation(const ClosureSystem& system, const JointVector& x0, cons
     return p.w.dot(e);
   };
   const double s = brent_root(f, 0.0, length, i0.w.dot(e), i1.w.dot(e), 1e-15);
-  if (!curve_point(system, x0, i0.tangent, x1, i1.tangent, s, o, y)) return;
+  if (std::isnan(s) || !curve_point(system, x0, i0.tangent, x1, i1.tangent, s, o, y)) return;
   const PointInfo at = point_info(system, y);
   if (!(at.sigma <= kSingularTolerance * at.sigma_max)) return;  // singular vectors swapped: no bifurcation
   int nullity = 0;
@@ -304,8 +312,26 @@ void locate_bifurcation(const ClosureSystem& system, const JointVector& x0, cons
   b.branches = static_cast<int>(rays.size());
   b.smallest_singular_value = at.sigma;
   walk.bifurcations.push_back(b);
-  for (const Probe& r : rays) {
-    if (std::abs(r.direction.dot(i0.tangent)) < 0.9) walk.branch_seeds.push_back(r.point);
+  // This branch leaves y both ways along the chord x0 -> x1 (which passes
+  // through y): the ray best aligned with each way is this branch, if it is
+  // within 26 degrees of it; every other ray, however close to this branch,
+  // is another branch and becomes a seed.
+  const JointVector chord = (x1 - x0) / length;
+  size_t ahead = rays.size(), behind = rays.size();
+  double best_ahead = 0.9, best_behind = 0.9;
+  for (size_t r = 0; r < rays.size(); ++r) {
+    const double c = rays[r].direction.dot(chord);
+    if (c > best_ahead) {
+      best_ahead = c;
+      ahead = r;
+    }
+    if (-c > best_behind) {
+      best_behind = -c;
+      behind = r;
+    }
+  }
+  for (size_t r = 0; r < rays.size(); ++r) {
+    if (r != ahead && r != behind) walk.branch_seeds.push_back(rays[r].point);
   }
 }
 
@@ -323,6 +349,8 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
   double h = o.max_step;
   int halvings = 0;
   std::array<int, kMaxJoints> located{};  // extremes located per joint
+  JointVector first_tangent;              // at the walk's first point after x0
+  double first_turn = 0.0;                // of the tangent over the walk's second step
   while (true) {
     if (static_cast<int>(walk.points.size()) + 1 >= max_points) {
       walk.end = CircuitEnd::too_long;
@@ -360,13 +388,23 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
 
     // Back at the first point (some image of it, 2 pi apart per joint): the
     // segment x -> next passes through it in the direction the walk left it.
+    // That direction is the tangent at the walk's first point after x0,
+    // which must be no further from the tangent at x than this step and the
+    // walk's first steps turn (its second step's turn standing for its
+    // first's), give or take the branches' resolution: so a walk that comes
+    // back through a first point next to a singular pose along another
+    // branch crossing there does not close, but goes on along that branch.
+    // (x0's own tangent is ill-determined next to a singular pose, where the
+    // closure Jacobian has two small singular values.)
     bool closes = false;
     if (closable && walk.points.size() >= 2) {
       const JointVector d = wrapped_difference(x0, x);
       const JointVector segment = next - x;
       const double tau = std::clamp(d.dot(segment) / segment.squaredNorm(), 0.0, 1.0);
       const double gap = (d - tau * segment).norm();
-      if (gap <= 0.05 * step + 1e-12 && info.tangent.dot(t0) > 0.5) {
+      const double turn = angle_between(info.tangent, next_info.tangent);
+      if (gap <= 0.05 * step + 1e-12 &&
+          angle_between(info.tangent, first_tangent) <= turn + first_turn + std::acos(kSameDirection)) {
         closes = true;
         next = x + d;  // exactly the first point's image
         next_info = start;
@@ -396,6 +434,8 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
     }
 
     s += step;
+    if (walk.points.empty()) first_tangent = next_info.tangent;
+    if (walk.points.size() == 1) first_turn = angle_between(first_tangent, next_info.tangent);
     walk.points.push_back(next);
     walk.arclength.push_back(s);
     if (closes) {

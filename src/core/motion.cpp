@@ -192,6 +192,7 @@ MotionAnalysis analyse_motion(const LoopGeometry& geometry, const JointVector* p
     }
     if (given) out.given_circuit = static_cast<int>(out.circuits.size());
     out.circuits.push_back(std::move(t.circuit));
+    out.branch_seeds += static_cast<int>(t.branch_seeds.size());
     for (JointVector& b : t.branch_seeds) seeds.push_back({std::move(b), true});
   };
 

@@ -304,6 +304,51 @@ TEST(Motion, ParallelogramTracedFromItsChangePointFindsBothBranches) {
   EXPECT_EQ(m.circuits.size(), 2u);
 }
 
+// A planar four-bar with a1 + a2 = a3 + a4 and a short third link folds flat
+// at theta = (pi, 0, pi, 0), where its one circuit crosses itself: its two
+// passages cross there at about 19 degrees in joint space (the quadratic
+// form of the closure on the null space there, computed apart from this
+// code). The circuit turns joint 3 twice and the input rocks between the
+// dead points where links 2 and 3 stretch out, cos theta1 = ((a2 + a3)^2 -
+// a1^2 - a4^2) / (2 a1 a4). A walk that comes back through a first point next
+// to the crossing along the other passage goes on (it does not close there
+// on half the circuit), and the other passage's rays become branch seeds
+// although they are within 26 degrees of the walk's own.
+TEST(Motion, FourBarThatCrossesItselfAtAFlatPoseIsOneCircuit) {
+  const double a1 = 1.0, a2 = 1.0, a3 = 0.02, a4 = 1.98;
+  const LoopGeometry g = planar_four_bar(a1, a2, a3, a4);
+  const double dead = std::acos(((a2 + a3) * (a2 + a3) - a1 * a1 - a4 * a4) / (2.0 * a1 * a4));
+  const auto expect_the_whole_circuit = [&](const MotionAnalysis& m, const std::string& what) {
+    ASSERT_EQ(m.circuits.size(), 1u) << what;
+    const Circuit& c = m.circuits[0];
+    EXPECT_TRUE(c.closed()) << what;
+    EXPECT_LT(max_residual(g, c), 1e-12) << what;
+    EXPECT_EQ(std::abs(c.ranges[2].turns), 2) << what;
+    const JointRange& input = c.input_range(0);
+    EXPECT_EQ(input.turns, 0) << what;
+    EXPECT_NEAR(std::remainder(input.lo - dead, (2.0 * kPi)), 0.0, 1e-6) << what;
+    EXPECT_NEAR(std::remainder(input.hi - ((2.0 * kPi) - dead), (2.0 * kPi)), 0.0, 1e-6) << what;
+    EXPECT_FALSE(c.bifurcations.empty()) << what;
+  };
+  expect_the_whole_circuit(analyse_motion(g, nullptr), "every seed");
+
+  MotionOptions o;
+  o.scan_inputs = 0;
+  o.free_guesses = 0;
+  for (const double off : {1e-4, -1e-4, 1e-2}) {
+    const std::vector<JointVector> poses = find_assemblies(g, kPi + off);
+    ASSERT_EQ(poses.size(), 2u) << off;
+    for (const JointVector& p : poses) {
+      const MotionAnalysis m = analyse_motion(g, &p, o);
+      const std::string what = "from " + std::to_string(p[0]) + ", " + std::to_string(p[1]) + ", " +
+                               std::to_string(p[2]) + ", " + std::to_string(p[3]);
+      EXPECT_TRUE(m.given_pose_closes) << what;
+      expect_the_whole_circuit(m, what);
+      EXPECT_GE(m.branch_seeds, 2) << what;
+    }
+  }
+}
+
 // The least ratio of the closure Jacobian's smallest retained singular value
 // to its largest over a circuit's points, computed independently: central
 // differences of closure_residual and a full SVD at every point.

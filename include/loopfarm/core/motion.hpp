@@ -208,6 +208,7 @@ struct MotionAnalysis {
   std::vector<JointVector> isolated_poses;  // closed poses that do not move (rigid assemblies)
   double least_residual = 0.0;              // the smallest residual any assembly reached (when none closes)
   int seeds = 0;                            // closed poses found by the assembly search
+  int branch_seeds = 0;                     // points on other branches met at singular poses, each traced
 };
 
 // Every circuit found from `pose` (may be null), from assemblies at
