@@ -260,6 +260,34 @@ TEST(Verify, RigidLoopsAreNotVerified) {
   EXPECT_GT(v.worst_residual, 1e-4);
 }
 
+// Generic 6R loops close at isolated poses (as many as 16) and move
+// nowhere: neither the search for every circuit nor the farm's walks
+// through each isolated pose (in coarse steps that give up near a singular
+// pose, then in 1 deg steps, with no assembly search) may verify one.
+TEST(Verify, GenericSixRLoopsThatCloseAtIsolatedPosesAreNotVerified) {
+  int poses = 0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    const LoopGeometry g = random_loop(6, seed);
+    const VerificationSummary all = verify_motion(g, nullptr);
+    EXPECT_FALSE(all.verified) << seed << ": " << all.limit;
+    for (const JointVector& pose : all.motion.isolated_poses) {
+      ++poses;
+      VerificationOptions farm;
+      farm.all_circuits = false;
+      farm.steps_per_turn = 64;
+      farm.stop_below_singular_ratio = 1e-2;
+      EXPECT_FALSE(verify_motion(g, pose, farm).verified) << seed;
+      farm.steps_per_turn = 360;
+      farm.all_extremes = false;
+      farm.stop_below_singular_ratio = 0.0;
+      const VerificationSummary fine = verify_motion(g, pose, farm);
+      EXPECT_FALSE(fine.verified) << seed;
+      EXPECT_TRUE(fine.assembled) << seed;
+    }
+  }
+  EXPECT_GE(poses, 12);  // the loops do close somewhere: the walks ran
+}
+
 TEST(Verify, AStructureThatClosesButCannotMoveIsNotVerified) {
   // A planar 4R with a1 + a2 + a3 = a4 closes only stretched flat: a shaky
   // structure, infinitesimally mobile (the residual grows as the square of
