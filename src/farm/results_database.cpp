@@ -7,8 +7,6 @@
 #include "loopfarm/farm/results_database.hpp"
 
 #include <sqlite3.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -43,32 +41,6 @@ std::string json_array(const std::vector<double>& values) {
     out += std::isfinite(values[i]) ? format_double(values[i]) : "null";
   }
   return out + "]";
-}
-
-// NAME-wal or NAME-shm exists.
-bool has_companions(const std::string& path) {
-  std::error_code error;
-  return std::filesystem::exists(path + "-wal", error) || std::filesystem::exists(path + "-shm", error);
-}
-
-// An existing file that update mode may write to: write permission, some
-// write bit in its mode (a file made read-only on purpose is not written to
-// even by root, whom permissions do not stop), and a directory in which the
-// journal (NAME-wal, NAME-shm) can be created.
-void check_writable(const std::string& path) {
-  struct stat status {};
-  if (::stat(path.c_str(), &status) != 0) fail(path, "cannot read its status");
-  char mode[8];
-  std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(status.st_mode & 07777));
-  if ((status.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || ::access(path.c_str(), W_OK) != 0) {
-    fail(path, std::string("a read-only file (mode ") + mode + "): nothing is written to it (make it writable first)");
-  }
-  std::filesystem::path directory = std::filesystem::path(path).parent_path();
-  if (directory.empty()) directory = ".";
-  if (::access(directory.c_str(), W_OK | X_OK) != 0) {
-    fail(path, "its directory " + directory.string() +
-                   " is not writable: the journal beside the file cannot be created, so nothing is written to it");
-  }
 }
 
 void check_geometry(const std::string& path, const LoopGeometry& g, const char* what, std::uint64_t index) {
@@ -386,7 +358,10 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
     open_connection(peek, path, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, immutable_uri(path));
     check_identity(path, peek.db, mode == DatabaseMode::write);
   }
-  if (mode == DatabaseMode::update) check_writable(path);
+  const FileAccess access = file_access(path);
+  // A writer that could not write is refused before anything is created:
+  // the file (update mode), its directory.
+  if (mode != DatabaseMode::read) check_writer_access(path, access, mode == DatabaseMode::update);
 
   if (mode == DatabaseMode::read) {
     if (!exists) fail(path, "no such file");
@@ -395,10 +370,22 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
     // read-only connection to a WAL file creates both and cannot remove them
     // (that takes a write lock), so such a reader opens the file read-write
     // with query_only on: its close, the last, removes what it created, and
-    // copies nothing into the file (the WAL is empty). With companions there
-    // (a run writing, or one that crashed) it reads read-only and leaves them.
-    const bool alone = !has_companions(path) && ::access(path.c_str(), W_OK) == 0;
-    open_connection(impl->connection, path, alone ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY);
+    // copies nothing into the file (the WAL is empty). When it may not write
+    // the file or its directory, it reads it as immutable, which creates
+    // neither (nor could it in a directory it cannot write). With companions
+    // there (a run writing, or one that crashed) it reads read-only and
+    // leaves them.
+    switch (reader_connection(access)) {
+      case ReaderConnection::read_write:
+        open_connection(impl->connection, path, SQLITE_OPEN_READWRITE);
+        break;
+      case ReaderConnection::read_only:
+        open_connection(impl->connection, path, SQLITE_OPEN_READONLY);
+        break;
+      case ReaderConnection::immutable:
+        open_connection(impl->connection, path, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, immutable_uri(path));
+        break;
+    }
     exec(path, impl->db(), "PRAGMA query_only = ON", "cannot set query_only");
     impl->schema_version = check_identity(path, impl->db(), false);
     // A reader checks the whole file too, so that a report never lists what

@@ -1,6 +1,9 @@
 // SQLite at the store's edge (sqlite_support.hpp).
 #include "sqlite_support.hpp"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <charconv>
 #include <cstdio>
 #include <cstring>
@@ -102,6 +105,52 @@ bool has_commits_in_wal(const std::string& path) {
   std::error_code error;
   const std::uintmax_t size = std::filesystem::file_size(path + "-wal", error);
   return !error && size > 0;
+}
+
+std::string directory_of(const std::string& path) {
+  const std::filesystem::path directory = std::filesystem::path(path).parent_path();
+  return directory.empty() ? std::string(".") : directory.string();
+}
+
+FileAccess file_access(const std::string& path) {
+  FileAccess access;
+  struct stat status {};
+  if (::stat(path.c_str(), &status) == 0) {
+    access.exists = true;
+    access.mode = static_cast<unsigned>(status.st_mode & 07777);
+    // A write bit as well as permission: a file made read-only on purpose
+    // (chmod a-w) counts as read-only for root too, whom permissions do not stop.
+    access.file_writable = (status.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) != 0 && ::access(path.c_str(), W_OK) == 0;
+  }
+  const std::string directory = directory_of(path);
+  struct stat directory_status {};
+  access.directory_exists = ::stat(directory.c_str(), &directory_status) == 0 && S_ISDIR(directory_status.st_mode);
+  access.directory_writable = access.directory_exists && ::access(directory.c_str(), W_OK | X_OK) == 0;
+  for (const char* suffix : {"-wal", "-shm"}) {
+    const std::string companion = path + suffix;
+    if (::lstat(companion.c_str(), &status) != 0) continue;
+    access.companions.push_back(companion);
+  }
+  return access;
+}
+
+ReaderConnection reader_connection(const FileAccess& access) {
+  if (!access.companions.empty()) return ReaderConnection::read_only;
+  return access.file_writable && access.directory_writable ? ReaderConnection::read_write : ReaderConnection::immutable;
+}
+
+void check_writer_access(const std::string& path, const FileAccess& access, bool file_too) {
+  if (file_too && access.exists && !access.file_writable) {
+    char mode[8];
+    std::snprintf(mode, sizeof mode, "%04o", access.mode);
+    fail(path, std::string("a read-only file (mode ") + mode + "): nothing is written to it (make it writable first)");
+  }
+  const std::string directory = directory_of(path);
+  if (!access.directory_exists) fail(path, "its directory " + directory + " does not exist");
+  if (!access.directory_writable) {
+    fail(path, "its directory " + directory +
+                   " is not writable: the journal beside the file cannot be created, so nothing is written to it");
+  }
 }
 
 void exec(const std::string& path, sqlite3* db, const std::string& sql, const char* what) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "loopfarm/farm/results_database.hpp"
 
@@ -55,6 +56,46 @@ std::string immutable_uri(const std::string& path);
 
 // NAME-wal exists and is not empty: commits may be there and not yet in the file.
 bool has_commits_in_wal(const std::string& path);
+
+// What this process may do to a database file and beside it: the facts
+// the choice of a connection rests on, apart from the system that gives
+// them (file_access), so that the choice can be tested for any answer.
+struct FileAccess {
+  bool exists = false;
+  unsigned mode = 0;           // the file's permission bits (07777), 0 when missing
+  bool file_writable = false;  // write permission and a write bit in its mode
+  bool directory_exists = false;
+  bool directory_writable = false;      // NAME-wal and NAME-shm can be created there
+  std::vector<std::string> companions;  // NAME-wal, NAME-shm: those that exist
+};
+
+// The directory of `path` ("." for a bare name).
+std::string directory_of(const std::string& path);
+
+// What the system says for `path`, for this process.
+FileAccess file_access(const std::string& path);
+
+// How a reader connects to an existing database file.
+enum class ReaderConnection {
+  // Nothing has it open (no companions) and this process may write the
+  // file and its directory: read-write with query_only on, whose close,
+  // the last, removes the companions it created.
+  read_write,
+  // Companions there (a writer has it open, or one crashed): read-only,
+  // leaving them as they are.
+  read_only,
+  // Nothing has it open, but the file or its directory is not writable, so
+  // that a connection's companions could not be removed (or not created):
+  // immutable, which creates none.
+  immutable,
+};
+ReaderConnection reader_connection(const FileAccess& access);
+
+// Refuses (DatabaseError naming `path`) a writer that could not write:
+// when `file_too`, an existing file without write permission or write bit;
+// a directory missing or not writable (the journal beside the file cannot
+// be created).
+void check_writer_access(const std::string& path, const FileAccess& access, bool file_too);
 
 // Runs `sql` (any number of statements); on error fails naming `what`.
 void exec(const std::string& path, sqlite3* db, const std::string& sql, const char* what);

@@ -599,9 +599,10 @@ TEST_F(ResultsDatabaseTest, ForeignAndDamagedFilesAreRefusedUntouched) {
   EXPECT_NE(error_of([&] { ResultsDatabase::open(file("missing.sqlite"), DatabaseMode::read); }).find("no such file"),
             std::string::npos);
   EXPECT_FALSE(fs::exists(file("missing.sqlite")));
-  EXPECT_NE(
-      error_of([&] { ResultsDatabase::open(file("no/such/dir/r.sqlite"), DatabaseMode::write); }).find("cannot open"),
-      std::string::npos);
+  EXPECT_NE(error_of([&] {
+              ResultsDatabase::open(file("no/such/dir/r.sqlite"), DatabaseMode::write);
+            }).find("its directory " + file("no/such/dir") + " does not exist"),
+            std::string::npos);
   fs::create_directories(file("dir.sqlite"));
   for (const DatabaseMode mode : {DatabaseMode::write, DatabaseMode::read}) {
     const std::string text = error_of([&] { ResultsDatabase::open(file("dir.sqlite"), mode); });
@@ -1148,6 +1149,32 @@ TEST_F(ResultsDatabaseTest, ASnapshotSeesOneState) {
     EXPECT_EQ(reader.start_counts().starts, 1);
   }
   EXPECT_EQ(reader.start_counts().starts, 2);
+}
+
+// A reader of a file it may not write (chmod a-w: root included) reads it as
+// immutable and creates no companions, not even while it is open: a
+// read-only connection would create NAME-wal and NAME-shm and could not
+// remove them, and a read-write one is not for a file made read-only.
+TEST_F(ResultsDatabaseTest, AReaderOfAReadOnlyFileCreatesNoCompanions) {
+  const std::string path = file("r.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    write_four_candidates(db);
+  }
+  ASSERT_FALSE(fs::exists(path + "-wal") || fs::exists(path + "-shm"));
+  const std::string before = file_bytes(path);
+  fs::permissions(path, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  {
+    const ResultsDatabase reader = ResultsDatabase::open(path, DatabaseMode::read);
+    EXPECT_EQ(reader.candidate_count(), 4);
+    EXPECT_TRUE(reader.connection_settings().query_only);
+    EXPECT_FALSE(fs::exists(path + "-wal"));
+    EXPECT_FALSE(fs::exists(path + "-shm"));
+  }
+  EXPECT_FALSE(fs::exists(path + "-wal"));
+  EXPECT_FALSE(fs::exists(path + "-shm"));
+  EXPECT_EQ(file_bytes(path), before);
+  EXPECT_EQ(fs::status(path).permissions(), fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
 }
 
 // A finished database is one file, and reading it keeps it one file.

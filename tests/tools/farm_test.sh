@@ -5,7 +5,7 @@
 #
 #   tests/tools/farm_test.sh LOOPFARM SOURCE_DIR CASE [MPIEXEC]
 #
-# CASE: ranks | resume | signal | refuse | report | paths | script. Each case makes its own
+# CASE: ranks | resume | signal | refuse | report | paths | script | slurm | unwritable. Each case makes its own
 # temporary directory and removes it. Exit 0 on success; on failure one line
 # saying what differed, and exit 1.
 set -euo pipefail
@@ -436,6 +436,84 @@ slurm)
   ls -A "$tmp" | grep -q '^\.loopfarm-exit' && fail "the script left its exit file behind"
   # That a stopped run resumes to the same database as an uninterrupted one,
   # farm_signal and farm_script show; here only that the script requeued it.
+  ;;
+unwritable)
+  # A database its user may read but not write: in a directory it cannot
+  # write (a shared results directory, an archive), or made read-only in its
+  # own. The readers (report, bonds, merge's inputs) read it and leave
+  # nothing beside it; the writers (run, bonds --store) are refused with
+  # exit 2 and a line naming what they cannot write. Root is not stopped by
+  # permissions, so as root the commands run as nobody (setpriv, util-linux);
+  # as anyone else, as themselves.
+  if [[ "$(id -u)" -eq 0 ]]; then
+    command -v setpriv >/dev/null || fail "running as root, and no setpriv (util-linux) to run as nobody"
+    as_user() { setpriv --reuid=65534 --regid=65534 --clear-groups -- "$@"; }
+    own() { chown 65534:65534 "$@"; }
+  else
+    as_user() { "$@"; }
+    own() { :; }
+  fi
+  # Everything the user needs to reach: the binary (copied, in case the
+  # build directory is closed to it), the job, the directories.
+  chmod 755 "$tmp"
+  cp "$loopfarm" "$tmp/loopfarm"
+  chmod 755 "$tmp/loopfarm"
+  chmod 644 "$job"
+  run1 --db "$tmp/r.sqlite"
+  # The summary but for its first line, the database's path.
+  "$loopfarm" report "$tmp/r.sqlite" --summary | sed 1d >"$tmp/expected.txt"
+  companions() { find "$1" -maxdepth 1 -name '*.sqlite-*' -printf '%f ' | sed 's/ $//'; }
+  # Exit code ($2), one line on stderr containing $3; stdout to $tmp/out.txt.
+  expect_exit() {  # WHAT CODE TEXT COMMAND...
+    local what="$1" want="$2" text="$3" code
+    shift 3
+    set +e
+    as_user "$@" >"$tmp/out.txt" 2>"$tmp/err"
+    code=$?
+    set -e
+    [[ $code -eq $want ]] || fail "$what exited with $code, not $want: $(head -c 300 "$tmp/err")"
+    if [[ -n "$text" ]]; then
+      [[ "$(wc -l <"$tmp/err")" -eq 1 ]] || fail "$what printed not one line: $(head -c 300 "$tmp/err")"
+      grep -qF -- "$text" "$tmp/err" || fail "$what: the message lacks '$text': $(cat "$tmp/err")"
+    fi
+  }
+
+  # In a directory the user cannot write.
+  mkdir "$tmp/shelf" "$tmp/out"
+  cp "$tmp/r.sqlite" "$tmp/shelf/in.sqlite"
+  own "$tmp/shelf" "$tmp/shelf/in.sqlite" "$tmp/out"
+  chmod 555 "$tmp/shelf"
+  as_user test -w "$tmp/shelf" && fail "the shelf directory is writable by the user"
+  before="$(sha256sum <"$tmp/shelf/in.sqlite")"
+  expect_exit "report in an unwritable directory" 0 "" "$tmp/loopfarm" report "$tmp/shelf/in.sqlite" --summary
+  sed -i 1d "$tmp/out.txt"
+  same "$tmp/out.txt" "$tmp/expected.txt" "report in an unwritable directory printed another summary"
+  expect_exit "bonds in an unwritable directory" 0 "" "$tmp/loopfarm" bonds "$tmp/shelf/in.sqlite" --family all \
+    --limit 1
+  expect_exit "merge of an input in an unwritable directory" 0 "" "$tmp/loopfarm" merge "$tmp/out/m.sqlite" \
+    "$tmp/shelf/in.sqlite"
+  [[ "$(sqlite3 "$tmp/out/m.sqlite" 'SELECT COUNT(*) FROM candidates')" == \
+    "$(sqlite3 "$tmp/r.sqlite" 'SELECT COUNT(*) FROM candidates')" ]] || fail "the merge holds other candidates"
+  expect_exit "run in an unwritable directory" 2 "its directory $tmp/shelf is not writable" \
+    "$tmp/loopfarm" run "$job" --progress none --starts 50 --db "$tmp/shelf/in.sqlite"
+  expect_exit "run of a new database in an unwritable directory" 2 "its directory $tmp/shelf is not writable" \
+    "$tmp/loopfarm" run "$job" --progress none --db "$tmp/shelf/new.sqlite"
+  expect_exit "bonds --store in an unwritable directory" 2 "its directory $tmp/shelf is not writable" \
+    "$tmp/loopfarm" bonds "$tmp/shelf/in.sqlite" --store
+  [[ "$(sha256sum <"$tmp/shelf/in.sqlite")" == "$before" ]] || fail "the database in the shelf changed"
+  [[ "$(ls -A "$tmp/shelf")" == in.sqlite ]] || fail "the shelf holds more than in.sqlite: $(ls -A "$tmp/shelf")"
+
+  # Made read-only in a directory the user can write.
+  mkdir "$tmp/own"
+  cp "$tmp/r.sqlite" "$tmp/own/r.sqlite"
+  own "$tmp/own" "$tmp/own/r.sqlite"
+  chmod 444 "$tmp/own/r.sqlite"
+  expect_exit "report of a read-only file" 0 "" "$tmp/loopfarm" report "$tmp/own/r.sqlite" --summary
+  sed -i 1d "$tmp/out.txt"
+  same "$tmp/out.txt" "$tmp/expected.txt" "report of a read-only file printed another summary"
+  [[ -z "$(companions "$tmp/own")" ]] || fail "report of a read-only file left $(companions "$tmp/own")"
+  expect_exit "bonds of a read-only file" 0 "" "$tmp/loopfarm" bonds "$tmp/own/r.sqlite" --family all --limit 1
+  [[ -z "$(companions "$tmp/own")" ]] || fail "bonds of a read-only file left $(companions "$tmp/own")"
   ;;
 *)
   fail "unknown case"
