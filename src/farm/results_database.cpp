@@ -360,7 +360,7 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
   }
   const FileAccess access = file_access(path);
   // A writer that could not write is refused before anything is created:
-  // the file (update mode), its directory.
+  // the file (update mode), its directory, companions it may not write.
   if (mode != DatabaseMode::read) check_writer_access(path, access, mode == DatabaseMode::update);
 
   if (mode == DatabaseMode::read) {

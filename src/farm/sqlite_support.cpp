@@ -130,6 +130,7 @@ FileAccess file_access(const std::string& path) {
     const std::string companion = path + suffix;
     if (::lstat(companion.c_str(), &status) != 0) continue;
     access.companions.push_back(companion);
+    if (::access(companion.c_str(), R_OK | W_OK) != 0) access.locked_companions.push_back(companion);
   }
   return access;
 }
@@ -150,6 +151,20 @@ void check_writer_access(const std::string& path, const FileAccess& access, bool
   if (!access.directory_writable) {
     fail(path, "its directory " + directory +
                    " is not writable: the journal beside the file cannot be created, so nothing is written to it");
+  }
+  if (!access.locked_companions.empty()) {
+    std::string names;
+    for (size_t i = 0; i < access.locked_companions.size(); ++i) {
+      names += (i == 0 ? "" : " and ") + access.locked_companions[i];
+    }
+    const bool one = access.locked_companions.size() == 1;
+    // An empty WAL is what a read-only connection that could not remove
+    // it leaves; one holding commits is a writer's, not to be removed.
+    const std::string advice = has_commits_in_wal(path)
+                                   ? path + "-wal holds commits not yet in the file: open it as their owner first"
+                                   : std::string("if nothing has the database open, remove ") + (one ? "it" : "them");
+    fail(path, names + (one ? " beside it is" : " beside it are") + " not writable, so nothing is written to it (" +
+                   advice + ")");
   }
 }
 

@@ -65,8 +65,9 @@ struct FileAccess {
   unsigned mode = 0;           // the file's permission bits (07777), 0 when missing
   bool file_writable = false;  // write permission and a write bit in its mode
   bool directory_exists = false;
-  bool directory_writable = false;      // NAME-wal and NAME-shm can be created there
-  std::vector<std::string> companions;  // NAME-wal, NAME-shm: those that exist
+  bool directory_writable = false;             // NAME-wal and NAME-shm can be created there
+  std::vector<std::string> companions;         // NAME-wal, NAME-shm: those that exist
+  std::vector<std::string> locked_companions;  // of those, the ones this process may not write
 };
 
 // The directory of `path` ("." for a bare name).
@@ -94,7 +95,10 @@ ReaderConnection reader_connection(const FileAccess& access);
 // Refuses (DatabaseError naming `path`) a writer that could not write:
 // when `file_too`, an existing file without write permission or write bit;
 // a directory missing or not writable (the journal beside the file cannot
-// be created).
+// be created); a companion this process may not write (a read-only reader
+// leaves NAME-wal and NAME-shm with the file's mode when it cannot remove
+// them, and SQLite then refuses every write with "attempt to write a
+// readonly database").
 void check_writer_access(const std::string& path, const FileAccess& access, bool file_too);
 
 // Runs `sql` (any number of statements); on error fails naming `what`.

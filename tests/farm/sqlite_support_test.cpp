@@ -116,6 +116,21 @@ TEST(WriterAccess, AnUnwritableDirectoryIsNamed) {
             std::string::npos);
 }
 
+TEST(WriterAccess, CompanionsThatMayNotBeWrittenAreNamed) {
+  FileAccess access = alone();
+  access.companions = {"d/r.sqlite-wal", "d/r.sqlite-shm"};
+  access.locked_companions = access.companions;
+  const std::string both = refusal([&] { store::check_writer_access("d/r.sqlite", access, true); });
+  EXPECT_NE(both.find("results database d/r.sqlite: d/r.sqlite-wal and d/r.sqlite-shm beside it are not writable"),
+            std::string::npos)
+      << both;
+  EXPECT_NE(both.find("remove them"), std::string::npos) << both;
+  access.locked_companions = {"d/r.sqlite-shm"};
+  const std::string one = refusal([&] { store::check_writer_access("d/r.sqlite", access, false); });
+  EXPECT_NE(one.find("d/r.sqlite-shm beside it is not writable"), std::string::npos) << one;
+  EXPECT_EQ(one.find("d/r.sqlite-wal"), std::string::npos) << one;
+}
+
 TEST(WriterAccess, OnlyUpdateModeRefusesAReadOnlyFile) {
   FileAccess access = alone();
   access.mode = 0444;

@@ -514,6 +514,22 @@ unwritable)
   [[ -z "$(companions "$tmp/own")" ]] || fail "report of a read-only file left $(companions "$tmp/own")"
   expect_exit "bonds of a read-only file" 0 "" "$tmp/loopfarm" bonds "$tmp/own/r.sqlite" --family all --limit 1
   [[ -z "$(companions "$tmp/own")" ]] || fail "bonds of a read-only file left $(companions "$tmp/own")"
+  # A plain read-only connection leaves both companions, read-only like the
+  # file; made writable again, the file is refused naming them.
+  as_user sqlite3 -readonly "$tmp/own/r.sqlite" 'SELECT COUNT(*) FROM starts' >/dev/null
+  [[ "$(companions "$tmp/own")" == *r.sqlite-wal* ]] || fail "sqlite3 -readonly left no companions to test with"
+  as_user chmod u+w "$tmp/own/r.sqlite"
+  before="$(sha256sum <"$tmp/own/r.sqlite")"
+  expect_exit "run beside read-only companions" 2 "$tmp/own/r.sqlite-wal and $tmp/own/r.sqlite-shm beside it are not writable" \
+    "$tmp/loopfarm" run "$job" --progress none --starts 50 --db "$tmp/own/r.sqlite"
+  expect_exit "bonds --store beside read-only companions" 2 "$tmp/own/r.sqlite-wal and $tmp/own/r.sqlite-shm beside it are not writable" \
+    "$tmp/loopfarm" bonds "$tmp/own/r.sqlite" --store
+  [[ "$(sha256sum <"$tmp/own/r.sqlite")" == "$before" ]] || fail "the refused file changed"
+  # Removed as the message says, the run goes on.
+  rm "$tmp/own/r.sqlite-wal" "$tmp/own/r.sqlite-shm"
+  expect_exit "run once the companions are gone" 0 "" "$tmp/loopfarm" run "$job" --progress none --starts 50 \
+    --db "$tmp/own/r.sqlite"
+  [[ "$(sqlite3 "$tmp/own/r.sqlite" 'SELECT starts_done FROM runs')" == 50 ]] || fail "the resumed run did not reach 50 starts"
   ;;
 *)
   fail "unknown case"
