@@ -166,10 +166,49 @@ std::string gnuplot_terminal(PlotFormat format, int width, int height, const std
          std::string(size) + " enhanced\n}\n";
 }
 
+void require_plot_terminal(const std::filesystem::path& gnuplot, PlotFormat format, const std::string& flag) {
+  if (format != PlotFormat::pdf) return;
+  ScratchFile script(".gp");
+  std::fputs("print GPVAL_TERMINALS\n", script.stream());
+  script.close();
+  ScratchFile log(".log");
+  log.close();
+  const int status = run_program(gnuplot, script.path(), log.path());
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    throw EnvironmentError(flag + ": gnuplot (" + gnuplot.string() +
+                           ") cannot list its terminals: " + first_line(log.path()));
+  }
+  std::ifstream in(log.path());
+  std::string word;
+  while (in >> word) {
+    if (word == "pdfcairo") return;
+  }
+  throw UsageError(flag, "this gnuplot (" + gnuplot.string() +
+                             ") has no pdfcairo terminal, so it cannot write a PDF; write a .png or .svg instead");
+}
+
 std::string chart_number(double value) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.3g", value);
   return buffer;
+}
+
+std::string panel_x_axis_gnuplot(const std::vector<double>& values, const std::string& note) {
+  // The note's label tag: one no chart here uses for another label.
+  const std::string tag = "90";
+  bool drawn = false;
+  bool positive = true;
+  for (const double value : values) {
+    if (!std::isfinite(value)) continue;
+    drawn = true;
+    positive = positive && value > 0.0;
+  }
+  if (!drawn) {
+    return "unset logscale x\nset xrange [0:1]\nset format x ''\nset label " + tag + " " + gnuplot_string(note) +
+           " at graph 0.5, 0.5 center noenhanced\n";
+  }
+  return "unset label " + tag + "\nset format x '% h'\nset autoscale x\n" +
+         (positive ? "set logscale x\n" : "unset logscale x\nset xrange [0:*]\n");
 }
 
 namespace {

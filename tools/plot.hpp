@@ -43,8 +43,24 @@ PlotFormat plot_format(const std::filesystem::path& target, const std::string& f
 // e.g. ",10". A PDF whose gnuplot lacks pdfcairo stops with a message.
 std::string gnuplot_terminal(PlotFormat format, int width, int height, const std::string& font = "");
 
+// Refuses (UsageError naming `flag`) a format `gnuplot` cannot write: a PDF
+// without its pdfcairo terminal (PNG falls back to libgd's png, and SVG is
+// in every gnuplot). For a command whose work comes before its chart, so
+// that it refuses before the work rather than fail after it. Throws
+// EnvironmentError when gnuplot cannot be asked.
+void require_plot_terminal(const std::filesystem::path& gnuplot, PlotFormat format, const std::string& flag);
+
 // A number as a chart quotes it: 3 significant digits, "1e-12" not "1.00e-12".
 std::string chart_number(double value);
+
+// The gnuplot lines that set the x axis of one panel of a multiplot for the
+// values drawn along it (one that is not finite is not drawn): logarithmic
+// when every value is positive; linear from 0 when one is 0 or less, which
+// a logarithmic axis would leave out (and fail on, with "logscaled axis
+// must have positive range", when none is left); and when no value is
+// drawn at all, an empty axis from 0 to 1 without numbers and `note` in the
+// panel's middle. Each panel's lines undo what the last one's set.
+std::string panel_x_axis_gnuplot(const std::vector<double>& values, const std::string& note);
 
 struct EnergyPlotStyle {
   std::string title;       // plain text, one line

@@ -273,6 +273,8 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
   ScratchFile data(".dat");
   ScratchFile front(".dat");
   std::vector<const TradeoffRow*> on_front;
+  // The panels' x values, for their axes: times per start, costs per zero.
+  std::vector<double> median_ms, per_zero_s;
   auto drawn_error = [](const TradeoffRow& r) { return std::max(100.0 * r.error_rate(), kErrorFloor); };
   for (const TradeoffRow& r : rows) {
     // A configuration without a verified zero has no cost per zero: NaN,
@@ -283,8 +285,15 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
                                                             : residual_floor;
     std::fprintf(data.stream(), "%.17g %.17g %s %.17g\n", 1e3 * r.median_seconds, drawn_error(r),
                  std::isfinite(per_zero) ? format_double(per_zero).c_str() : "NaN", residual);
+    median_ms.push_back(1e3 * r.median_seconds);
+    per_zero_s.push_back(per_zero);
     if (r.pareto) on_front.push_back(&r);
   }
+  // A time axis is logarithmic unless a value on it is 0; the second panel
+  // is empty, and says why, when no configuration found a verified zero.
+  const std::string time_axis = panel_x_axis_gnuplot(median_ms, "no time per start measured");
+  const std::string cost_axis =
+      panel_x_axis_gnuplot(per_zero_s, "no configuration found a verified zero: no cost per zero to draw");
   std::sort(on_front.begin(), on_front.end(),
             [](const TradeoffRow* a, const TradeoffRow* b) { return a->median_seconds < b->median_seconds; });
   for (const TradeoffRow* r : on_front)
@@ -326,14 +335,17 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
                gnuplot_string("Speed against accuracy: " + job_name + ", one marker per configuration").c_str());
   std::fprintf(gp,
                "set ylabel 'error rate [%%]: wrong answers / judged (0 drawn at %g)' noenhanced\n"
-               "set logscale xy\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\nset key off\n"
+               "set logscale y\nset grid\nset yrange [%g:100]\nset ytics add ('0' %g)\nset key off\n"
                "set offsets graph 0.05, graph 0.05, 0, 0\n"
                "set xlabel 'median time of local minimisation per start [ms]' noenhanced\n",
                kErrorFloor, kErrorFloor / 2.0, kErrorFloor);
+  std::fputs(time_axis.c_str(), gp);
   std::fprintf(gp, "plot %s using 1:2 with lines lw 2 lc rgb '#444444' notitle%s\n",
                gnuplot_string(front.path().string()).c_str(), markers(1, 2).c_str());
   std::fputs("set xlabel 'core-seconds of search and analysis per verified zero [s]' noenhanced\n", gp);
+  std::fputs(cost_axis.c_str(), gp);
   std::fprintf(gp, "plot 1/0 notitle%s\n", markers(3, 2).c_str());
+  std::fputs(time_axis.c_str(), gp);
   std::fprintf(gp,
                "set xlabel 'median time of local minimisation per start [ms]' noenhanced\n"
                "set ylabel 'worst family residual of the verified zeros (none: no verified zero)' noenhanced\n"
@@ -344,7 +356,8 @@ void plot_tradeoff(const std::vector<TradeoffRow>& rows, const std::string& job_
   // The key: an empty frame across the bottom holding one entry per
   // configuration (gnuplot needs one real element: a line outside the range).
   std::fputs(
-      "set origin 0, 0\nset size 1, 0.25\nunset border\nunset tics\nunset xlabel\nunset ylabel\nunset grid\n"
+      "set origin 0, 0\nset size 1, 0.25\nunset border\nunset tics\nunset xlabel\nunset ylabel\nunset grid\nunset "
+      "label\n"
       "unset logscale\nset offsets 0, 0, 0, 0\nset margins 0, 0, 0, 0\nset xrange [0:1]\nset yrange [0:1]\n"
       "set key center center horizontal maxcols 6 font ',10' samplen 1 width 2\n",
       gp);
@@ -376,7 +389,7 @@ int run_tradeoff_command(const TradeoffArguments& args) {
   PlotFormat plot_format_wanted = PlotFormat::png;
   if (!args.plot.empty()) {
     plot_format_wanted = plot_format(args.plot, "--plot");
-    require_gnuplot("--plot");
+    require_plot_terminal(require_gnuplot("--plot"), plot_format_wanted, "--plot");
     plot.emplace(args.plot, "--plot");
   }
   if (!args.quiet) {

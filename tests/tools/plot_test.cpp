@@ -166,6 +166,59 @@ TEST(MinimaHistogram, LabelsWithUnderscoresAreNotEnhancedText) {
   EXPECT_EQ(lines_with(input.script, "set xlabel 'log10(E_mean), E / (k_a L^2)' noenhanced").size(), 1u);
 }
 
+// A panel's x axis: logarithmic while every value on it is positive, linear
+// from 0 with a value of 0, and empty with a note when nothing is drawn.
+TEST(PanelAxis, LogarithmicOnlyWhileEveryDrawnValueIsPositive) {
+  const double nan = std::nan("");
+  const std::string positive = panel_x_axis_gnuplot({0.5, 42.0, nan}, "empty");
+  EXPECT_EQ(lines_with(positive, "set logscale x").size(), 1u) << positive;
+  EXPECT_EQ(lines_with(positive, "unset logscale x").size(), 0u) << positive;
+  EXPECT_EQ(lines_with(positive, "unset label 90").size(), 1u) << positive;
+  for (const std::vector<double>& values : {std::vector<double>{0.0, 42.0}, std::vector<double>{-1.0, nan}}) {
+    const std::string linear = panel_x_axis_gnuplot(values, "empty");
+    EXPECT_EQ(lines_with(linear, "unset logscale x").size(), 1u) << linear;
+    EXPECT_EQ(lines_with(linear, "set xrange [0:*]").size(), 1u) << linear;
+    EXPECT_EQ(lines_with(linear, "set label 90 '").size(), 0u) << linear;
+  }
+  for (const std::vector<double>& values :
+       {std::vector<double>{}, std::vector<double>{nan, nan}, std::vector<double>{INFINITY}}) {
+    const std::string empty = panel_x_axis_gnuplot(values, "nothing to draw: it's so");
+    EXPECT_EQ(lines_with(empty, "unset logscale x").size(), 1u) << empty;
+    EXPECT_EQ(lines_with(empty, "set xrange [0:1]").size(), 1u) << empty;
+    EXPECT_EQ(lines_with(empty, "set label 90 'nothing to draw: it''s so' at graph 0.5, 0.5 center noenhanced").size(),
+              1u)
+        << empty;
+  }
+}
+
+// Three panels with a logarithmic y axis, one per kind of x axis, drawn by
+// gnuplot: none fails, the empty one carries its note.
+TEST(PanelAxis, GnuplotDrawsEveryKindOfPanel) {
+  const std::filesystem::path gnuplot = require_gnuplot("--plot");
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("plot_test_panels_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path data = dir / "d.dat";
+  std::ofstream(data) << "0.5 1 NaN 0\n42 10 NaN 3\n";
+  const std::filesystem::path output = dir / "panels.svg";
+  std::string script = gnuplot_terminal(PlotFormat::svg, 900, 300) + "set output " + gnuplot_string(output.string()) +
+                       "\nset multiplot layout 1,3\nset logscale y\nset yrange [0.1:100]\n";
+  const std::vector<std::pair<int, std::vector<double>>> panels = {
+      {1, {0.5, 42.0}}, {4, {0.0, 3.0}}, {3, {std::nan(""), std::nan("")}}};
+  for (const auto& [column, values] : panels) {
+    script += panel_x_axis_gnuplot(values, "no value in column " + std::to_string(column)) + "plot 1/0 notitle, " +
+              gnuplot_string(data.string()) + " using " + std::to_string(column) + ":2 with points notitle\n";
+  }
+  script += "unset multiplot\nunset output\n";
+  const std::filesystem::path script_path = dir / "panels.gp";
+  std::ofstream(script_path) << script;
+  EXPECT_NO_THROW(render_gnuplot_script(gnuplot, script_path, output, "--plot")) << script;
+  const std::string svg = read_bytes(output);
+  EXPECT_NE(svg.find("no value in column 3"), std::string::npos);
+  EXPECT_EQ(svg.find("no value in column 1"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
 // What gnuplot writes, by its first bytes, for each extension.
 TEST(PlotFiles, GnuplotWritesTheFormatTheExtensionNames) {
   const std::filesystem::path gnuplot = find_program("gnuplot");

@@ -3,7 +3,10 @@
 // only when the whole run succeeded, and bad options refused with exit code 2
 // and one line naming the flag, leaving existing files untouched.
 // LOOPFARM_EXECUTABLE is the path of the built binary.
+#include <stdlib.h>
+
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -147,6 +150,86 @@ TEST_F(TradeoffCli, BadOptionsExitWithCode2NamingTheFlagAndLeaveFilesAlone) {
     EXPECT_NE(r.err.find(flag), std::string::npos) << r.err;
     EXPECT_EQ(read_file(dir_ / "keep.csv"), "precious\n") << flag;
   }
+}
+
+// One start under the base configuration and the few rows that one value
+// per axis leaves: the smallest sweep, without ground truth.
+const std::vector<std::string> kOneStart = {"{dir}/job.toml",
+                                            "--starts",
+                                            "1",
+                                            "--per-family",
+                                            "0",
+                                            "--generic",
+                                            "0",
+                                            "--perturbations",
+                                            "none",
+                                            "--samples",
+                                            "8",
+                                            "--ranges-deg",
+                                            "360",
+                                            "--closure-tolerances",
+                                            "1e-10",
+                                            "--compliances",
+                                            "full",
+                                            "--objectives",
+                                            "mean",
+                                            "--algorithms",
+                                            "gauss-newton",
+                                            "--zero-thresholds",
+                                            "1e-20",
+                                            "--ftol-rels",
+                                            "0",
+                                            "--reuse-nearby-cycles",
+                                            "true",
+                                            "--analysis-steps",
+                                            "64"};
+
+// No configuration finds a verified zero, so that none has a cost per zero:
+// the chart is drawn all the same, that panel empty and saying why, rather
+// than failing after the work (a logarithmic axis with nothing on it).
+TEST_F(TradeoffCli, AChartWithoutAVerifiedZeroIsDrawnWithThatPanelSayingSo) {
+  std::vector<std::string> args = kOneStart;
+  for (const char* extra : {"--quiet", "--csv", "{dir}/t.csv", "--plot", "{dir}/t.svg"}) args.emplace_back(extra);
+  const testing::CommandResult r = run(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  // What the test is about: not one configuration with a verified zero.
+  const std::vector<std::string> rows = split(read_file(dir_ / "t.csv"), '\n');
+  ASSERT_GE(rows.size(), 3u);
+  const std::vector<std::string> header = split(rows[0], ',');
+  const size_t verified_column =
+      static_cast<size_t>(std::find(header.begin(), header.end(), "verified") - header.begin());
+  ASSERT_LT(verified_column, header.size());
+  for (size_t i = 1; i + 1 < rows.size(); ++i) ASSERT_EQ(split(rows[i], ',')[verified_column], "0") << rows[i];
+  const std::string chart = read_file(dir_ / "t.svg");
+  EXPECT_NE(chart.find("<svg"), std::string::npos);
+  EXPECT_NE(chart.find("no configuration found a verified zero"), std::string::npos);
+  // The other panels are drawn as ever: their axis labels are there.
+  EXPECT_NE(chart.find("median time of local minimisation per start [ms]"), std::string::npos);
+  EXPECT_NE(chart.find("worst family residual of the verified zeros"), std::string::npos);
+}
+
+// A PDF that this gnuplot cannot write (no pdfcairo terminal: a gnuplot on
+// PATH that lists none) is refused before the work, not after it.
+TEST_F(TradeoffCli, APdfThisGnuplotCannotWriteIsRefusedBeforeTheWork) {
+  fs::create_directories(dir_ / "bin");
+  const fs::path fake = dir_ / "bin" / "gnuplot";
+  std::ofstream(fake) << "#!/bin/sh\necho 'dumb png svg'\n";
+  fs::permissions(fake, fs::perms::owner_all);
+  const char* old_path = std::getenv("PATH");
+  const std::string saved = old_path ? old_path : "";
+  ::setenv("PATH", ((dir_ / "bin").string() + ":" + saved).c_str(), 1);
+  std::vector<std::string> args = kOneStart;
+  for (const char* extra : {"--plot", "{dir}/t.pdf"}) args.emplace_back(extra);
+  const testing::CommandResult r = run(args);
+  ::setenv("PATH", saved.c_str(), 1);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(split(r.err, '\n').size(), 2u) << "not one line: " << r.err;
+  EXPECT_NE(r.err.find("--plot: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no pdfcairo terminal"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("configurations measured"), std::string::npos) << r.err;  // nothing measured
+  EXPECT_EQ(r.out, "");
+  EXPECT_FALSE(fs::exists(dir_ / "t.pdf"));
 }
 
 }  // namespace
