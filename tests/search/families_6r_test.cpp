@@ -1607,6 +1607,139 @@ TEST(Families, OtherFamiliesAreNotAngleSymmetricParallel) {
 // ---------------------------------------------------------------------------
 // Distances (deflation) of the new families
 
+// ---------------------------------------------------------------------------
+// The class T7 of the generic 6R search (docs/guide/families.md, "Unnamed
+// classes"): not a family of the classifier yet; its conditions, found from
+// its members, checked here with the motion tracer. Links 1-3 share one
+// Bennett ratio k1 = |sin alpha|/a and links 4-6 another, k2; no offsets but
+// d1 and d4; and on the branch d4 = -d1
+//   (1 + cos alpha1 + cos alpha2 + cos alpha3) / k1 = (1 + cos alpha4 + cos alpha5 + cos alpha6) / k2,
+//   cos(alpha1/2) cos(alpha2/2) cos(alpha3/2) / k1 = cos(alpha4/2) cos(alpha5/2) cos(alpha6/2) / k2,
+// on the branch d4 = d1 the same with 1 - the sum of cosines and sin(alpha/2).
+
+// The two conditions' residuals (left side minus right) of a geometry in
+// this labelling, on the branch `plus` (d4 = d1) or not.
+std::array<double, 2> t7_residuals(const LoopGeometry& g, bool plus) {
+  const auto k = [&](int i) { return std::abs(std::sin(g.alpha[i])) / g.a[i]; };
+  const double sign = plus ? -1.0 : 1.0;
+  const auto half = [&](int i) { return plus ? std::sin(0.5 * g.alpha[i]) : std::cos(0.5 * g.alpha[i]); };
+  const auto triad = [&](int first) {
+    double sum = 1.0, product = 1.0;
+    for (int i = first; i < first + 3; ++i) {
+      sum += sign * std::cos(g.alpha[i]);
+      product *= half(i);
+    }
+    return std::array<double, 2>{sum / k(first), product / k(first)};
+  };
+  const std::array<double, 2> one = triad(0), two = triad(3);
+  return {one[0] - two[0], one[1] - two[1]};
+}
+
+// A T7 geometry from k1, alpha1..alpha5 (twists in (-pi, 0)) and the offset
+// d1: alpha6 and k2 solved from the two conditions (a quadratic in
+// cos(alpha6/2) or sin(alpha6/2); `root` picks one), or none where that
+// has no root in range.
+std::optional<LoopGeometry> t7_geometry(bool plus, double k1, const std::array<double, 5>& alpha, double d1, int root) {
+  const double sign = plus ? -1.0 : 1.0;
+  const auto half = [&](double x) { return plus ? std::sin(0.5 * x) : std::cos(0.5 * x); };
+  const double lambda = (1.0 + sign * (std::cos(alpha[0]) + std::cos(alpha[1]) + std::cos(alpha[2]))) / k1;
+  const double mu = half(alpha[0]) * half(alpha[1]) * half(alpha[2]) / k1;
+  const double c45 = std::cos(alpha[3]) + std::cos(alpha[4]), h45 = half(alpha[3]) * half(alpha[4]);
+  // With x = half(alpha6), 1 +- sum of cosines of links 4-6 is sign c45 +
+  // 2 x^2, so k2 = (sign c45 + 2 x^2) / lambda, and mu k2 = h45 x:
+  // 2 mu x^2 - lambda h45 x + sign mu c45 = 0.
+  const double qa = 2.0 * mu, qb = -lambda * h45, qc = sign * mu * c45;
+  const double discriminant = qb * qb - 4.0 * qa * qc;
+  if (!(discriminant >= 0.0) || qa == 0.0) return std::nullopt;
+  const double x = (-qb + (root == 0 ? 1.0 : -1.0) * std::sqrt(discriminant)) / (2.0 * qa);
+  // alpha6 in (-pi, 0): cos(alpha6/2) in (0, 1), sin(alpha6/2) in (-1, 0).
+  if (plus ? !(x > -1.0 && x < 0.0) : !(x > 0.0 && x < 1.0)) return std::nullopt;
+  const double alpha6 = plus ? 2.0 * std::asin(x) : -2.0 * std::acos(x);
+  const double k2 = (sign * c45 + 2.0 * x * x) / lambda;
+  if (!(k2 > 0.0) || !(k2 < 20.0 * k1) || !(k2 > k1 / 20.0)) return std::nullopt;
+  LoopGeometry g;
+  g.alpha = JointVector(6);
+  g.alpha << alpha[0], alpha[1], alpha[2], alpha[3], alpha[4], alpha6;
+  g.a = JointVector(6);
+  for (int i = 0; i < 6; ++i) g.a[i] = std::abs(std::sin(g.alpha[i])) / (i < 3 ? k1 : k2);
+  g.d = JointVector::Zero(6);
+  g.d[0] = d1;
+  g.d[3] = plus ? d1 : -d1;
+  return g;
+}
+
+// The class's loops of the generic 6R search (in this labelling, offsets to
+// 1e-15 set to 0) meet the conditions of their branch.
+TEST(Families, TheT7LoopsOfTheGenericSearchMeetTheirConditions) {
+  // Starts 5 (d4 = d1) and 864 (d4 = -d1) of jobs/generic-6r.toml.
+  const LoopGeometry plus =
+      LoopGeometry::from_degrees(std::vector<double>{1.0079702612795016, 1.1446335082314096, 0.6482949350461149,
+                                                     1.240793584096262, 1.1202202087502942, 0.636125942134677},
+                                 std::vector<double>{-50.751268926402275, -118.4296001713174, -29.872667185553468,
+                                                     -119.2737180304487, -51.95519308590798, -26.564476500103257},
+                                 std::vector<double>{-0.1649325812564212, 0, 0, -0.16493258125642063, 0, 0});
+  const LoopGeometry minus =
+      LoopGeometry::from_degrees(std::vector<double>{1.165752711796717, 0.8040533354316156, 1.3379730979393316,
+                                                     0.9319483958859982, 0.6430208449406091, 0.9274364786873017},
+                                 std::vector<double>{-129.8846740568725, -31.955084790648083, -118.27334450966706,
+                                                     -107.36344649060115, -41.18810320360831, -108.22967594575732},
+                                 std::vector<double>{-0.17635872006793546, 0, 0, 0.17635872006793538, 0, 0});
+  for (const auto& [g, on_plus] : {std::pair{plus, true}, std::pair{minus, false}}) {
+    for (double r : t7_residuals(g, on_plus)) EXPECT_LT(std::abs(r), 1e-13);
+    for (double r : t7_residuals(g, !on_plus)) EXPECT_GT(std::abs(r), 1e-2);  // the other branch's do not hold
+    EXPECT_TRUE(verify_motion(g, nullptr).verified);
+  }
+}
+
+// Loops built from the conditions move, on either branch and with any d1,
+// wherever they close at all (the conditions are necessary; real assembly
+// is an inequality besides them); with the other branch's offsets, or one
+// twist moved by 1e-3 rad and k2 keeping the first condition, they do not.
+TEST(Families, T7LoopsBuiltFromTheirConditionsMoveAndTheirNearMissesDoNot) {
+  std::mt19937_64 rng(61);
+  std::uniform_real_distribution<double> twist(-0.95 * kPi, -0.05 * kPi), ratio(0.4, 1.5), offset(-0.2, 0.2);
+  for (const bool plus : {false, true}) {
+    int verified = 0, built = 0;
+    for (int i = 0; i < 16; ++i) {
+      const double k1 = ratio(rng), d1 = offset(rng);
+      const std::array<double, 5> alpha{twist(rng), twist(rng), twist(rng), twist(rng), twist(rng)};
+      std::optional<LoopGeometry> g = t7_geometry(plus, k1, alpha, d1, 0);
+      if (!g) g = t7_geometry(plus, k1, alpha, d1, 1);
+      if (!g) continue;
+      ++built;
+      const std::string tag = std::string(plus ? "d4 = d1 " : "d4 = -d1 ") + std::to_string(i);
+      for (double r : t7_residuals(*g, plus)) ASSERT_LT(std::abs(r), 1e-12) << tag;
+      const VerificationSummary v = verify_motion(*g, nullptr);
+      if (!v.verified) {
+        // Closes nowhere: no circuit and no isolated pose.
+        EXPECT_TRUE(v.motion.circuits.empty() && v.motion.isolated_poses.empty()) << tag << ": " << v.limit;
+        continue;
+      }
+      ++verified;
+      LoopGeometry other = *g;
+      other.d[3] = -other.d[3];
+      if (std::abs(d1) > 0.02) {
+        EXPECT_FALSE(verify_motion(other, nullptr).verified) << tag << ": the other branch's offsets";
+      }
+      LoopGeometry off = *g;
+      off.alpha[5] += 1e-3;
+      // k2 from the first condition again: links 4-6 rescaled so that only the second misses.
+      const std::array<double, 2> before = t7_residuals(off, plus);
+      const double k2 = std::abs(std::sin(off.alpha[3])) / off.a[3];
+      const double sum2 =
+          1.0 + (plus ? -1.0 : 1.0) * (std::cos(off.alpha[3]) + std::cos(off.alpha[4]) + std::cos(off.alpha[5]));
+      const double k2_new = sum2 / (sum2 / k2 + before[0]);
+      for (int j = 3; j < 6; ++j) off.a[j] = std::abs(std::sin(off.alpha[j])) / k2_new;
+      const std::array<double, 2> after = t7_residuals(off, plus);
+      EXPECT_LT(std::abs(after[0]), 1e-12) << tag;
+      EXPECT_GT(std::abs(after[1]), 1e-5) << tag;
+      EXPECT_FALSE(verify_motion(off, nullptr).verified) << tag << ": alpha6 + 1e-3";
+    }
+    EXPECT_GE(built, 8) << plus;
+    EXPECT_GE(verified, 8) << plus;
+  }
+}
+
 TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
   std::mt19937_64 rng(31);
   struct Case {
