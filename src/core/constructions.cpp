@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <Eigen/LU>
 
@@ -750,47 +751,66 @@ Eigen::Isometry3d turn_about(const Vector3& point, const Vector3& direction, dou
 // x's part normal to the unit n.
 Vector3 normal_part(const Vector3& x, const Vector3& n) { return x - x.dot(n) * n; }
 
-Vector3 unit_or_throw(const Vector3& x, const char* what) {
-  const double norm = x.norm();
-  if (!(norm > 1e-9) || !std::isfinite(norm)) bad(std::string("angle_symmetric_parallel_6r: ") + what, norm);
+// x made unit; refused, the message saying what is degenerate, unless
+// |x| > 1e-9 scale: x is built from vectors of length about `scale`, so
+// anything shorter is round-off or degenerate input, whatever the unit of
+// length. A direction the caller gives has scale 0: any length but zero will
+// do (stableNorm, so that neither a tiny nor a huge one under- or overflows).
+Vector3 unit_or_throw(const Vector3& x, double scale, const std::string& what) {
+  const double norm = x.stableNorm();
+  if (!(norm > 1e-9 * scale) || !(norm > 0.0) || !std::isfinite(norm)) {
+    bad("angle_symmetric_parallel_6r: " + what, norm);
+  }
   return x / norm;
 }
 
 }  // namespace
 
 PosedLoop angle_symmetric_parallel_6r(const AngleSymmetricParallel6R& p, double t) {
-  for (const Vector3* x : {&p.u, &p.e1, &p.v, &p.e4, &p.h, &p.p1, &p.p3, &p.p4}) {
-    if (!x->allFinite()) bad("angle_symmetric_parallel_6r: a vector is not finite", x->norm());
+  const std::array<std::pair<const char*, const Vector3*>, 8> vectors{{{"u", &p.u},
+                                                                       {"e1", &p.e1},
+                                                                       {"v", &p.v},
+                                                                       {"e4", &p.e4},
+                                                                       {"h", &p.h},
+                                                                       {"p1", &p.p1},
+                                                                       {"p3", &p.p3},
+                                                                       {"p4", &p.p4}}};
+  for (const auto& [name, x] : vectors) {
+    if (!x->allFinite())
+      bad(std::string("angle_symmetric_parallel_6r: ") + name + " is not finite, |" + name + "|", x->norm());
   }
-  if (!std::isfinite(p.w_turn) || !std::isfinite(p.g_length) || !std::isfinite(t)) {
-    bad("angle_symmetric_parallel_6r: w_turn, g_length and t must be finite", p.w_turn + p.g_length + t);
+  for (const auto& [name, x] : {std::pair{"w_turn", p.w_turn}, std::pair{"g_length", p.g_length}, std::pair{"t", t}}) {
+    if (!std::isfinite(x)) bad(std::string("angle_symmetric_parallel_6r: ") + name + " is not finite", x);
   }
-  const Vector3 u = unit_or_throw(p.u, "u");
+  const Vector3 u = unit_or_throw(p.u, 0.0, "u has no length, |u|");
   const Vector3 e1 = normal_part(p.e1, u);
-  unit_or_throw(e1, "e1 has no part normal to u");
+  unit_or_throw(e1, p.e1.norm(), "e1 has no part normal to u, its length");
   Vector3 v, e4, w, g;
   if (p.kind == ParallelPairsKind::general) {
-    v = unit_or_throw(p.v, "v");
+    v = unit_or_throw(p.v, 0.0, "v has no length, |v|");
     e4 = normal_part(p.e4, v);
-    unit_or_throw(e4, "e4 has no part normal to v");
+    unit_or_throw(e4, p.e4.norm(), "e4 has no part normal to v, its length");
+    // P and Q have the length of the steps e1, e4 at most; their cross
+    // product is compared with the square of that scale.
     const Vector3 P = u.cross(e1) + v.cross(e4), Q = e1 + e4;
-    w = unit_or_throw(P.cross(Q), "u x e1 + v x e4 is parallel to e1 + e4");
+    const double step = e1.norm() + e4.norm();
+    w = unit_or_throw(P.cross(Q), step * step,
+                      "u x e1 + v x e4 is parallel to e1 + e4, |(u x e1 + v x e4) x (e1 + e4)|");
     const Vector3 along = w.cross(P);
     const double q = along.dot(Q);
     if (!(std::abs(q) > 1e-9 * along.norm() * Q.norm())) bad("angle_symmetric_parallel_6r: g is undefined", q);
     g = ((e4.squaredNorm() - e1.squaredNorm()) / q) * along;
   } else {
-    const Vector3 h = unit_or_throw(p.h, "h");
+    const Vector3 h = unit_or_throw(p.h, 0.0, "h has no length, |h|");
     const Eigen::Matrix3d half_turn = 2.0 * h * h.transpose() - Eigen::Matrix3d::Identity();
     v = half_turn * u;
     e4 = half_turn * e1;
-    unit_or_throw(u.cross(h), "u is parallel to h");
-    const Vector3 first = unit_or_throw(h.unitOrthogonal(), "h");
-    w = Eigen::AngleAxisd(p.w_turn, h) * first;
+    unit_or_throw(u.cross(h), 1.0, "u is parallel to h, |u x h|");
+    w = Eigen::AngleAxisd(p.w_turn, h) * h.unitOrthogonal();
     g = p.g_length * w.cross(h);
   }
-  unit_or_throw(u.cross(w), "u is parallel to w");
-  unit_or_throw(v.cross(w), "v is parallel to w");
+  unit_or_throw(u.cross(w), 1.0, "u is parallel to w, |u x w|");
+  unit_or_throw(v.cross(w), 1.0, "v is parallel to w, |v x w|");
   // The lines at t = 0: axis 6 runs along -w, so that joints 3 and 6 turn by
   // one angle.
   const std::array<Axis, 6> lines{Axis{p.p1, u}, Axis{p.p1 + e1, u}, Axis{p.p3, w},

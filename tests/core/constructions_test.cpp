@@ -10,6 +10,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -949,6 +950,78 @@ TEST(Constructions, AngleSymmetricParallelClosesAlongItsMotionWithEqualOppositeA
   bad.e4 = -bad.e1;  // e1 + e4 = 0: no w
   EXPECT_THROW(angle_symmetric_parallel_6r(bad, 0.0), std::invalid_argument);
   EXPECT_THROW(angle_symmetric_parallel_6r(AngleSymmetricParallel6R{}, NAN), std::invalid_argument);
+}
+
+// The construction has no unit of length: every length of a member (e1, e4,
+// g_length, p1, p3, p4) and every direction multiplied by 1e-6 or 1e6 gives
+// the same loop, its lengths and offsets multiplied too, its twists and
+// angles the same, closed to round-off. Near degeneracy is judged against the
+// member's own lengths: at length 1e6, a step e1 whose part normal to u is
+// 1e-10 of it is refused, and one of 1e-6 of it is not.
+TEST(Constructions, AngleSymmetricParallelIsTheSameLoopAtEveryScale) {
+  std::vector<AngleSymmetricParallel6R> linkages(2);
+  linkages[1].kind = ParallelPairsKind::half_turn;
+  const auto scaled = [](AngleSymmetricParallel6R p, double s) {
+    for (Vector3* x : {&p.u, &p.e1, &p.v, &p.e4, &p.h, &p.p1, &p.p3, &p.p4}) *x *= s;
+    p.g_length *= s;
+    return p;
+  };
+  for (size_t i = 0; i < linkages.size(); ++i) {
+    for (double t : {-2.2, 0.0, 0.9}) {
+      const PosedLoop one = angle_symmetric_parallel_6r(linkages[i], t);
+      for (double s : {1e-6, 1e6}) {
+        const std::string tag =
+            "angle_symmetric_parallel " + std::to_string(i) + " t " + std::to_string(t) + " scale " + std::to_string(s);
+        PosedLoop m;
+        ASSERT_NO_THROW(m = angle_symmetric_parallel_6r(scaled(linkages[i], s), t)) << tag;
+        EXPECT_LT(residual(m.geometry, m.theta), 1e-12) << tag;
+        for (int k = 0; k < 6; ++k) {
+          EXPECT_NEAR(m.geometry.a[k], s * one.geometry.a[k], 1e-9 * s) << tag << " a" << k + 1;
+          EXPECT_NEAR(m.geometry.d[k], s * one.geometry.d[k], 1e-9 * s) << tag << " d" << k + 1;
+          EXPECT_NEAR(angle_distance(m.geometry.alpha[k], one.geometry.alpha[k]), 0.0, 1e-9)
+              << tag << " alpha" << k + 1;
+          EXPECT_NEAR(angle_distance(m.theta[k], one.theta[k]), 0.0, 1e-9) << tag << " theta" << k + 1;
+        }
+      }
+    }
+  }
+  AngleSymmetricParallel6R large = scaled(AngleSymmetricParallel6R{}, 1e6);
+  const Vector3 normal = large.u.unitOrthogonal();
+  large.e1 = large.u + 1e-10 * large.u.norm() * normal;
+  EXPECT_THROW(angle_symmetric_parallel_6r(large, 0.0), std::invalid_argument);
+  large.e1 = large.u + 1e-6 * large.u.norm() * normal;
+  EXPECT_NO_THROW(angle_symmetric_parallel_6r(large, 0.0));
+}
+
+// A field that is not finite is refused with its name.
+TEST(Constructions, AngleSymmetricParallelNamesAFieldThatIsNotFinite) {
+  const auto message = [](const AngleSymmetricParallel6R& p, double t) {
+    try {
+      angle_symmetric_parallel_6r(p, t);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::vector<std::pair<std::string, Vector3 AngleSymmetricParallel6R::*>> vectors{
+      {"u", &AngleSymmetricParallel6R::u},   {"e1", &AngleSymmetricParallel6R::e1},
+      {"v", &AngleSymmetricParallel6R::v},   {"e4", &AngleSymmetricParallel6R::e4},
+      {"h", &AngleSymmetricParallel6R::h},   {"p1", &AngleSymmetricParallel6R::p1},
+      {"p3", &AngleSymmetricParallel6R::p3}, {"p4", &AngleSymmetricParallel6R::p4}};
+  for (const auto& [name, field] : vectors) {
+    for (double bad : {NAN, INFINITY}) {
+      AngleSymmetricParallel6R p;
+      (p.*field)[1] = bad;
+      EXPECT_NE(message(p, 0.3).find(": " + name + " is not finite"), std::string::npos) << name << " " << bad;
+    }
+  }
+  for (const std::string name : {"w_turn", "g_length", "t"}) {
+    AngleSymmetricParallel6R p;
+    p.kind = ParallelPairsKind::half_turn;
+    double t = 0.3;
+    (name == "w_turn" ? p.w_turn : name == "g_length" ? p.g_length : t) = -INFINITY;
+    EXPECT_NE(message(p, t).find(": " + name + " is not finite"), std::string::npos) << name;
+  }
 }
 
 // Bricard's doubly collapsible octahedron, built flat: in each of the four
