@@ -58,6 +58,7 @@ Spread spread(std::vector<double> values) {
 
 // What a found local dimension says against the known one.
 std::string dimension_reading(int found, std::optional<int> known, int free_parameters, int joints) {
+  if (found < 0) return "unknown: the deformation Jacobian had an entry that is not finite";
   if (!known) return "no single known dimension to compare with";
   if (found == *known) return "as known";
   if (found > *known) {
@@ -131,7 +132,7 @@ std::string dimension_counts(const FamilyGroup& group) {
   for (const CandidateRow* r : group.rows) ++counts[r->local_dimension];
   std::string out;
   for (const auto& [dimension, count] : counts) {
-    out += (out.empty() ? "" : ", ") + std::to_string(dimension) + " (" + std::to_string(count) + ")";
+    out += (out.empty() ? "" : ", ") + dimension_text(dimension) + " (" + std::to_string(count) + ")";
   }
   return out;
 }
@@ -308,7 +309,8 @@ std::string representative_sentence(const CandidateRow& r) {
   return "Representative: candidate " + std::to_string(r.id) + " (first found by run " + std::to_string(r.first_run) +
          ", start " + std::to_string(r.first_start) + "; " + count_of(r.hits, "hit") + "), E_mean " + g(r.E_mean, 3) +
          ", rigid residual " + g(r.rigid_residual, 2) + ", family residual " + g(r.family_residual, 2) +
-         ", local dimension " + std::to_string(r.local_dimension) + " of " + std::to_string(r.free_parameters) + ", " +
+         ", local dimension " + dimension_text(r.local_dimension) + (r.local_dimension >= 0 ? " of " : " among ") +
+         std::to_string(r.free_parameters) + (r.local_dimension >= 0 ? ", " : " free parameters, ") +
          (r.full_turn ? std::string("full turn")
                       : "input range [" + g(r.range_lo_deg) + ", " + g(r.range_hi_deg) + "] deg") +
          (r.setup != "none" && !r.setup.empty() ? ", setup " + r.setup : "") + ".";
@@ -397,7 +399,7 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
           "** in the full " + std::to_string(3 * group.joints) + "-parameter space.\n\n";
     md += "| found | candidates | free parameters | reading |\n|---|---|---|---|\n";
     for (const auto& [dimension, entry] : found) {
-      md += "| " + std::to_string(dimension) + " | " + std::to_string(entry.first) + " | " +
+      md += "| " + dimension_text(dimension) + " | " + std::to_string(entry.first) + " | " +
             std::to_string(entry.second) + " | " + dimension_reading(dimension, known, entry.second, group.joints) +
             " |\n";
     }

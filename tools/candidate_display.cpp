@@ -41,6 +41,15 @@ std::string count_of(long long count, const std::string& noun) {
   return std::to_string(count) + " " + noun + (count == 1 ? "" : "s");
 }
 
+std::string dimension_text(int local_dimension) {
+  return local_dimension >= 0 ? std::to_string(local_dimension) : std::string("unknown");
+}
+
+std::string dimension_of(int local_dimension, int free_parameters) {
+  return (local_dimension >= 0 ? std::to_string(local_dimension) : std::string("?")) + "/" +
+         std::to_string(free_parameters);
+}
+
 double scale_of(const CandidateRow& r) {
   const double scale = length_scale(candidate_geometry(r));
   return std::isfinite(scale) && scale > 0.0 ? scale : 1.0;

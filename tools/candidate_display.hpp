@@ -34,6 +34,12 @@ std::string grouped(long long n);
 // "1 hit", "2 hits".
 std::string count_of(long long count, const std::string& noun);
 
+// A stored local dimension: "3", or "unknown" for a negative one (the
+// deformation Jacobian had an entry that is not finite, LocalDimension::unknown).
+std::string dimension_text(int local_dimension);
+// "3/12", or "?/12" when the dimension is unknown: the tables' dim column.
+std::string dimension_of(int local_dimension, int free_parameters);
+
 // The stored geometry's length scale (core's length_scale: 1 for the
 // canonical geometry); 1 when it is not a positive number (a damaged row).
 double scale_of(const CandidateRow& r);

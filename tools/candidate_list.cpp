@@ -82,7 +82,12 @@ std::vector<Field> candidate_fields(const CandidateRow& r, int joints) {
   f.integer("hits", r.hits);
   f.integer("first_run", r.first_run);
   f.integer("first_start", r.first_start);
-  f.integer("local_dimension", r.local_dimension);
+  // Empty and null when unknown (stored as -1).
+  if (r.local_dimension >= 0) {
+    f.integer("local_dimension", r.local_dimension);
+  } else {
+    f.raw({"local_dimension", "", nullptr, dimension_text(r.local_dimension)});
+  }
   f.integer("free_parameters", r.free_parameters);
   // Null when not measured (loopfarm bonds --store), empty when measured and
   // none (the stored geometry does not move).
@@ -143,9 +148,7 @@ void print_candidate_table(const std::vector<CandidateRow>& rows, bool wide) {
     column("first",
            [](const CandidateRow& r) { return std::to_string(r.first_run) + ":" + std::to_string(r.first_start); });
   }
-  column("dim", [](const CandidateRow& r) {
-    return std::to_string(r.local_dimension) + "/" + std::to_string(r.free_parameters);
-  });
+  column("dim", [](const CandidateRow& r) { return dimension_of(r.local_dimension, r.free_parameters); });
   if (wide) {
     column("rigid_res", [](const CandidateRow& r) { return g(r.rigid_residual, 2); });
     column("family_res", [](const CandidateRow& r) { return g(r.family_residual, 2); });
@@ -164,10 +167,10 @@ void print_candidates_markdown(const std::vector<CandidateRow>& rows) {
   for (const CandidateRow& stored : rows) {
     const CandidateRow r = conventional(stored);
     const double length = kRoundOff * scale_of(r);
-    std::printf("| %lld | %s | %s | %s | %lld | %lld:%lld | %d/%d | %s | %s | %s | %s | %s | %s |\n", r.id,
+    std::printf("| %lld | %s | %s | %s | %lld | %lld:%lld | %s | %s | %s | %s | %s | %s | %s |\n", r.id,
                 r.family.c_str(), r.setup.c_str(), g(r.E_mean).c_str(), r.hits, r.first_run, r.first_start,
-                r.local_dimension, r.free_parameters, g(r.rigid_residual, 2).c_str(), g(r.family_residual, 2).c_str(),
-                range_text(r, true).c_str(), shown_list(r.a, length, 6).c_str(),
+                dimension_of(r.local_dimension, r.free_parameters).c_str(), g(r.rigid_residual, 2).c_str(),
+                g(r.family_residual, 2).c_str(), range_text(r, true).c_str(), shown_list(r.a, length, 6).c_str(),
                 shown_list(r.alpha_deg, kAngleRoundOffDeg, 6).c_str(), shown_list(r.d, length, 6).c_str());
   }
 }

@@ -127,6 +127,13 @@ void print_candidate(const CandidateAnalysis& c) {
 }
 
 void print_local_dimension(const LocalDimension& d) {
+  if (!d.known()) {
+    std::printf(
+        "local dimension         unknown (the deformation Jacobian has an entry that is not finite; %d free "
+        "parameters)\n",
+        d.parameters);
+    return;
+  }
   std::printf("local dimension         %d of %d free parameters (rank %d; singular values", d.dimension, d.parameters,
               d.rank);
   for (int i = 0; i < d.singular_values.size(); ++i) std::printf(" %s", readable(d.singular_values[i]).c_str());
@@ -167,7 +174,7 @@ void add_candidate_json(nlohmann::ordered_json& out, const CandidateAnalysis& c,
   for (const FamilyCheck& check : c.classification.checks) residuals[to_string(check.family)] = check.residual;
   out["family_residuals"] = residuals;
   out["canonical_key"] = c.canonical.key;
-  if (v.verified && c.local_dimension.parameters > 0) {
+  if (v.verified && c.local_dimension.parameters > 0 && c.local_dimension.known()) {
     out["local_dimension"] = c.local_dimension.dimension;
     const Eigen::VectorXd& values = c.local_dimension.singular_values;
     out["singular_values"] = std::vector<double>(values.data(), values.data() + values.size());

@@ -14,14 +14,15 @@ namespace loopfarm::cli {
 // Indented lines for the human-readable story: verification with every
 // circuit, family (claimed only for a verified loop), canonical key.
 void print_candidate(const CandidateAnalysis& candidate);
-// The local dimension line (only meaningful at a zero of the cycle energy).
+// The local dimension line (only meaningful at a zero of the cycle energy);
+// "unknown" when the Jacobian has an entry that is not finite.
 void print_local_dimension(const LocalDimension& dimension);
 
 // Adds the JSON fields to `object`, in this order: family, setup,
 // verified, rigid_residual, circuits, family_residuals, local_dimension, and
 // more. A family is named only for a verified loop (else
 // family_conditions_hold names it); local_dimension and singular_values are
-// null unless the loop is verified. With `analysed` false the fields are
+// null unless the loop is verified and its local dimension known. With `analysed` false the fields are
 // present and null (or false), so that every object has the same keys.
 void add_candidate_json(nlohmann::ordered_json& object, const CandidateAnalysis& candidate, bool analysed);
 

@@ -298,7 +298,8 @@ void list_fingerprint_classes(const ResultsDatabase& db, const ReportArguments& 
       r["hits"] = c.hits;
       r["representative"] = c.representative;
       r["family"] = c.family;
-      r["local_dimension"] = c.local_dimension;
+      r["local_dimension"] =
+          c.local_dimension >= 0 ? nlohmann::ordered_json(c.local_dimension) : nlohmann::ordered_json(nullptr);
       r["free_parameters"] = c.free_parameters;
       r["E_mean"] = std::isfinite(c.E_mean) ? nlohmann::ordered_json(c.E_mean) : nlohmann::ordered_json(nullptr);
       records.push_back(std::move(r));
@@ -329,7 +330,7 @@ void list_fingerprint_classes(const ResultsDatabase& db, const ReportArguments& 
     columns[i++].cells.push_back(grouped(c.hits));
     columns[i++].cells.push_back(std::to_string(c.representative));
     if (args.family.empty()) columns[i++].cells.push_back(c.family);
-    columns[i++].cells.push_back(std::to_string(c.local_dimension) + "/" + std::to_string(c.free_parameters));
+    columns[i++].cells.push_back(dimension_of(c.local_dimension, c.free_parameters));
     columns[i++].cells.push_back(fingerprint_text(c.fingerprint));
   }
   print_columns(columns, 0);

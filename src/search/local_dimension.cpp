@@ -22,6 +22,12 @@ LocalDimension local_dimension(const Eigen::MatrixXd& jacobian, double relative_
     out.dimension = out.parameters;
     return out;
   }
+  // A NaN singular value would count as below the threshold: no rank.
+  if (!jacobian.allFinite()) {
+    out.rank = LocalDimension::unknown;
+    out.dimension = LocalDimension::unknown;
+    return out;
+  }
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(jacobian);  // values only; J is at most a few thousand x 24
   out.singular_values = svd.singularValues();
   // A tall J has cols() singular values; a wide one fewer: the rest are zero.

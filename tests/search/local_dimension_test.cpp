@@ -1,6 +1,8 @@
 #include "loopfarm/search/local_dimension.hpp"
 
 #include <cmath>
+#include <limits>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -142,6 +144,31 @@ TEST(LocalDimension, RigidLoopKeepsOnlyTheScaleDirection) {
   scale << g.a, Eigen::VectorXd::Zero(4), g.d;
   const Eigen::MatrixXd J = cycle_deformation_jacobian(model, ws, cycle);
   EXPECT_LT((J * scale).cwiseAbs().maxCoeff(), 1e-9 * J.cwiseAbs().maxCoeff());
+}
+
+// A Jacobian with a NaN or an infinite entry (a cycle sample that failed)
+// has no rank to read: the dimension is unknown (-1), not the full one a NaN
+// compared with the threshold would give, wherever the entry lies. A finite
+// Jacobian of the same shape keeps its count.
+TEST(LocalDimension, AJacobianWithAnEntryThatIsNotFiniteHasAnUnknownDimension) {
+  const LoopGeometry g = paper_bennett_loop();
+  const JointVector start = bennett_angles(g, rad(120));
+  const Eigen::MatrixXd J = dimensionless(cycle_jacobian(g, &start), g);
+  ASSERT_EQ(local_dimension(J).dimension, 3);
+  for (double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                     -std::numeric_limits<double>::infinity()}) {
+    for (const auto& [row, col] : {std::pair{0, 0}, std::pair{5, 7}, std::pair{-1, 11}}) {
+      Eigen::MatrixXd broken = J;
+      broken(row < 0 ? broken.rows() - 1 : row, col) = bad;
+      const LocalDimension dim = local_dimension(broken);
+      EXPECT_EQ(dim.parameters, 12);
+      EXPECT_EQ(dim.rank, -1) << bad << " at " << row << ", " << col;
+      EXPECT_EQ(dim.dimension, -1) << bad << " at " << row << ", " << col;
+      EXPECT_FALSE(dim.known());
+      EXPECT_EQ(dim.singular_values.size(), 0);
+    }
+  }
+  EXPECT_TRUE(local_dimension(J).known());
 }
 
 }  // namespace

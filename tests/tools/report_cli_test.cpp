@@ -577,6 +577,55 @@ TEST_F(ReportCli, ARowThatIsNoLoopIsShownNotCrashedOn) {
   EXPECT_EQ(json_length(r.out), kCandidates);
 }
 
+// A candidate whose local dimension is unknown (its deformation Jacobian had
+// an entry that is not finite) is stored with -1 and shown as unknown: "?/12"
+// in the table and Markdown, empty in CSV, null in JSON, also by fingerprint.
+TEST_F(ReportCli, ALocalDimensionStoredAsUnknownIsShownSo) {
+  const fs::path path = dir_ / "unknown.sqlite";
+  {
+    ResultsDatabase db = ResultsDatabase::open(path.string(), DatabaseMode::write);
+    const std::int64_t run = db.open_run(test_job("jobs/unknown-test.toml", 2)).run_id;
+    const double s = std::sqrt(10.0);
+    StartRecord unknown =
+        verified(0, degrees({2 / s, 4 / s, 2 / s, 4 / s}, {30, 90, 30, 90}, {0, 0, 0, 0}), "bennett", 1e-25);
+    unknown.candidate.local_dimension = -1;
+    unknown.candidate.singular_values.clear();
+    db.commit(run, {unknown});
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT local_dimension FROM candidates", -1, &statement, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(statement), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(statement, 0), -1);
+  sqlite3_finalize(statement);
+  sqlite3_close(db);
+
+  const auto report_of = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), path.string());
+    const testing::CommandResult r = run_command(kExecutable, "report", args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.out;
+  };
+  const std::vector<std::string> table = lines_of(report_of({}));
+  ASSERT_GE(table.size(), 2u);
+  EXPECT_NE(table[1].find(" ?/12 "), std::string::npos) << table[1];
+  const std::vector<std::string> markdown = lines_of(report_of({"--format", "markdown"}));
+  ASSERT_EQ(markdown.size(), 3u);
+  EXPECT_NE(markdown[2].find("| ?/12 |"), std::string::npos) << markdown[2];
+  const std::vector<std::string> csv = lines_of(report_of({"--format", "csv"}));
+  ASSERT_EQ(csv.size(), 2u);
+  const std::vector<std::string> names = csv_fields(csv[0]), values = csv_fields(csv[1]);
+  const auto column = std::find(names.begin(), names.end(), "local_dimension");
+  ASSERT_NE(column, names.end());
+  ASSERT_EQ(values.size(), names.size());
+  EXPECT_EQ(values[static_cast<size_t>(column - names.begin())], "");
+  EXPECT_EQ(json_query("json_type", report_of({"--format", "json"}), "$[0].local_dimension"), "null");
+  EXPECT_EQ(json_query("json_type", report_of({"--by-fingerprint", "--family", "bennett", "--format", "json"}),
+                       "$[0].local_dimension"),
+            "null");
+}
+
 // The cells of a Markdown table row ("| a | b |": "a", "b"), trimmed.
 std::vector<std::string> markdown_cells(const std::string& line) {
   std::vector<std::string> cells = split(line, '|');

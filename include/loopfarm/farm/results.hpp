@@ -35,7 +35,7 @@ struct CandidateRecord {
   bool full_turn = false;       // the input turns fully
   double range_lo_deg = 0.0;    // input range covered, unwrapped, degrees
   double range_hi_deg = 0.0;
-  int local_dimension = 0;  // dimension of the zero set among the free parameters
+  int local_dimension = 0;  // dimension of the zero set among the free parameters; -1: unknown (LocalDimension)
   int free_parameters = 0;
   std::vector<double> singular_values;  // of the deformation Jacobian, descending
   std::string canonical_key;            // canonical.hpp's key (quantised to 1e-6)

@@ -183,7 +183,7 @@ struct CandidateRow {
   std::optional<std::string> bond_fingerprint;
   double E_mean = kNaN, E_max = kNaN;
   long long hits = 0, first_run = 0, first_start = 0;
-  int local_dimension = 0, free_parameters = 0;
+  int local_dimension = 0, free_parameters = 0;  // local_dimension -1: unknown (LocalDimension::unknown)
   double rigid_residual = kNaN, family_residual = kNaN;
   double bennett_residual = kNaN, planar_residual = kNaN, spherical_residual = kNaN, trivial_residual = kNaN;
   bool full_turn = false;
@@ -229,8 +229,8 @@ struct FingerprintClass {
   std::int64_t hits = 0;        // starts that found them
   // The first of them in the report's order (by E_mean, then id).
   std::int64_t representative = 0;
-  std::string family;  // the representative's
-  int local_dimension = 0, free_parameters = 0;
+  std::string family;                            // the representative's
+  int local_dimension = 0, free_parameters = 0;  // local_dimension -1: unknown
   double E_mean = std::numeric_limits<double>::quiet_NaN();
 };
 

@@ -15,6 +15,11 @@
 // keeps the loop movable, as for spherical loops among their twists); it
 // assumes J in dimensionless units: columns of lengths multiplied by the
 // length scale L (dimensionless_columns below), columns of angles as they are.
+//
+// A J with an entry that is not finite (NaN or infinite, as from a cycle
+// sample that failed) has no rank to read: the dimension is unknown, rank
+// and dimension both -1 and no singular values, never a count that a NaN
+// compared with the threshold would make (rank 0, the full dimension).
 #pragma once
 
 #include <vector>
@@ -24,11 +29,15 @@
 namespace loopfarm {
 
 struct LocalDimension {
+  static constexpr int unknown = -1;  // rank and dimension when J has an entry that is not finite
+
   int parameters = 0;               // free parameters (columns of J)
-  int rank = 0;                     // numerical rank of J
-  int dimension = 0;                // parameters - rank
-  double threshold = 0.0;           // absolute singular-value threshold used
-  Eigen::VectorXd singular_values;  // of J, descending
+  int rank = 0;                     // numerical rank of J; unknown: J has an entry that is not finite
+  int dimension = 0;                // parameters - rank; unknown: J has an entry that is not finite
+  double threshold = 0.0;           // absolute singular-value threshold used (0 when unknown)
+  Eigen::VectorXd singular_values;  // of J, descending (empty when unknown)
+
+  bool known() const { return dimension != unknown; }
 };
 
 LocalDimension local_dimension(const Eigen::MatrixXd& jacobian, double relative_tolerance = 1e-6,
