@@ -143,23 +143,91 @@ std::vector<Family> special_families(int n) {
   }
 }
 
+FoldingGoldberg folding_goldberg(Family family, const Best& best, const LoopGeometry& g, double family_residual,
+                                 double tolerance) {
+  FoldingGoldberg out;
+  if (!goldberg_type(family)) return out;
+  const LoopGeometry w = written_out(best, g);
+  const double L = length_scale(w);
+  auto fold = [&](int loop, double& length, double& denominator) {
+    const int link = loop + 1;
+    const bool line_symmetric = ((best.set >> loop) & 1) != 0;
+    const double half = 0.5 * (w.alpha[link] - w.alpha[0]);
+    length = (w.a[link] - w.a[0]) / L;
+    denominator = line_symmetric ? std::cos(half) : std::sin(half);
+    return std::abs(length) <= tolerance && std::abs(denominator) <= tolerance;
+  };
+  for (int loop = 0; loop < 2; ++loop) {
+    double length = 0.0, denominator = 0.0;
+    if (!fold(loop, length, denominator)) continue;
+    out.folds = true;
+    out.residual = std::max({family_residual, std::abs(length), std::abs(denominator)});
+    // The links of the folding loop in the 5R (representation links 1, 2 or 3, and 4,
+    // which equals 1) and the joint it locks, in the loop's own labels; the
+    // other Bennett loop (representation links 1 and 3 or 2, twice) is the 4R left.
+    const detail::Representation& r = *best.representation;
+    const int folded_link = loop == 0 ? 1 : 2;
+    const int other_link = loop == 0 ? 2 : 1;
+    std::vector<int> links = {r.index[0], r.index[static_cast<size_t>(folded_link)], r.index[3]};
+    std::sort(links.begin(), links.end());
+    const int locked_joint = r.angle_index[loop == 1 ? 4 : 0];
+    const LoopGeometry moving =
+        LoopGeometry{(JointVector(4) << w.a[0], w.a[other_link], w.a[0], w.a[other_link]).finished(),
+                     (JointVector(4) << w.alpha[0], w.alpha[other_link], w.alpha[0], w.alpha[other_link]).finished(),
+                     JointVector::Zero(4)};
+    const GeometricFit fit = geometric_fit(moving, tolerance);
+    double other_length = 0.0, other_denominator = 0.0;
+    const bool both = fold(1 - loop, other_length, other_denominator);
+    std::string names;
+    for (int k : links) names += (names.empty() ? "" : ", ") + std::to_string(k + 1);
+    out.detail = std::string(to_string(family)) + "'s conditions on a folding Bennett loop (links " + names +
+                 " equal): moves with joint " + std::to_string(locked_joint + 1) +
+                 " locked; locked 4R: " + to_string(fit.family) + (both ? " (folding too)" : "");
+    out.check.family = Family::degenerate;
+    out.check.residual = out.residual;
+    out.check.conditions = {{std::string(to_string(family)) + " residual", family_residual},
+                            {"folding loop: (link - link 1) / L", length},
+                            {"folding loop: denominator of its angle relation", denominator}};
+    return out;
+  }
+  return out;
+}
+
 GeometricFit geometric_fit(const LoopGeometry& g, double tolerance) {
   const int n = g.joints();
   GeometricFit best;
-  std::vector<Family> families = {Family::planar, Family::spherical};
-  for (Family f : special_families(n)) families.push_back(f);
-  for (Family f : families) {
-    const FamilyCheck c = family_check(f, g, tolerance);
-    if (c.residual < best.residual && !(best.residual <= tolerance)) {
-      best = {f, c.residual, to_string(f)};
-      if (f == Family::bennett) best.detail += std::string(" (") + to_string(c.setup) + " setup)";
-    }
+  // A fit replaces the best so far only while that one does not fit.
+  const auto offer = [&](GeometricFit fit) {
+    if (fit.residual < best.residual && !(best.residual <= tolerance)) best = std::move(fit);
+  };
+  for (Family f : {Family::planar, Family::spherical}) {
+    offer({f, family_check(f, g, tolerance).residual, to_string(f)});
   }
   if (n == 5) {
     FamilyCheck degenerate;
-    const GeometricFit d = degenerate_fit(g, tolerance, degenerate);
-    if (d.residual < best.residual) best = d;
+    offer(degenerate_fit(g, tolerance, degenerate));
   }
+  // The n-specific families: the first that fits and is no Goldberg-type
+  // fit on a folding Bennett loop; the first folding one only after them.
+  FoldingGoldberg folding;
+  for (Family f : special_families(n)) {
+    const Best fit = best_for(f, g, false, tolerance);
+    const FamilyCheck c = check_from(f, fit);
+    if (c.residual <= tolerance) {
+      FoldingGoldberg fold = folding_goldberg(f, fit, g, c.residual, tolerance);
+      if (fold.folds) {
+        if (!folding.folds) folding = std::move(fold);
+        continue;
+      }
+    }
+    std::string detail = to_string(f);
+    if (f == Family::bennett) {
+      detail += std::string(" (") +
+                to_string(fit.setup_sign > 0 ? BennettSetup::asymmetric : BennettSetup::line_symmetric) + " setup)";
+    }
+    offer({f, c.residual, detail});
+  }
+  if (folding.folds) offer({Family::degenerate, folding.residual, folding.detail});
   return best;
 }
 

@@ -131,11 +131,42 @@ struct GeometricFit {
   std::string detail;
 };
 
-// The best-fitting movable family of a loop by its geometry alone (planar,
-// spherical, degenerate, then the n-specific ones), for a merged loop: once a
-// family fits (residual <= tolerance), a later one replaces it only when it
-// fits and an earlier, more special one does not (goldberg_bent, which holds
-// every Goldberg loop, fits them to round-off too).
+// A loop that fits goldberg, myard or goldberg_bent with one of its two
+// Bennett loops equilateral and folding: (a, alpha) twice with Bennett's
+// angle relation singular, tan(t1/2) tan(t2/2) = sin((alpha2 + alpha1)/2) /
+// sin((alpha2 - alpha1)/2) (asymmetric setup) or cos(..) / cos(..)
+// (line-symmetric) with a zero denominator. Such a "Bennett loop" only folds,
+// so the 5R has no Goldberg motion (docs/research/discovery-5r-6r.md). It folds in two
+// ways. Folded with the joint next to the fused link locked at pi (representation
+// joint 5 when the second loop folds, joint 1 when the first does), the two
+// axes at its other ends coincide with the removed axis A and the loop turns
+// about it freely: the 5R moves as the other Bennett loop with that joint
+// locked, a degenerate loop whatever motion a search followed. Folded the
+// other way it locks the other loop: two 5R axes coincide and only they turn
+// (trivial). Both motions meet where the loop folds both ways, and a walk
+// through that pose can switch or stray between them, so no joint's travel
+// need look frozen (docs/research/discovery-5r-6r.md, "Goldberg geometries on a
+// folding Bennett loop"). Checked in the family's best representation, links 1 and 2
+// (first loop) and 1 and 3 (second), to `tolerance` (lengths over L).
+struct FoldingGoldberg {
+  bool folds = false;
+  double residual = kInf;  // the family's residual and the fold's two conditions, the largest
+  std::string detail;
+  FamilyCheck check;
+};
+
+FoldingGoldberg folding_goldberg(Family family, const Best& best, const LoopGeometry& g, double family_residual,
+                                 double tolerance);
+
+// The best-fitting movable family of a loop by its geometry alone, for a
+// merged or locked loop, with classify's precedence: planar, spherical,
+// degenerate (n = 5), then the n-specific ones in their order; the first
+// that fits (residual <= tolerance) is taken, so a later one never replaces
+// it however small its residual (goldberg_bent, which holds every Goldberg
+// loop, fits them to round-off too). A Goldberg-type fit on a folding
+// Bennett loop is no Goldberg motion (folding_goldberg): it is degenerate,
+// taken only when no later n-specific family fits, as classify takes it.
+// When none fits, the least residual.
 GeometricFit geometric_fit(const LoopGeometry& g, double tolerance);
 
 // Degenerate: over the adjacent pairs of axes, max(a_k / L, |sin alpha_k|,

@@ -432,5 +432,49 @@ TEST(Families, GoldbergOnAFoldingBennettLoopIsDegenerateWhateverTheWalk) {
   EXPECT_GE(verified, 12);
 }
 
+// The merged 5R of a 6R is read as classify reads a 5R: a Goldberg-type
+// loop on a folding Bennett loop (built as in
+// GoldbergOnAFoldingBennettLoopIsDegenerateWhateverTheWalk) is degenerate,
+// and with an idle joint added the 6R is degenerate with that merged 5R
+// described so, not as a Goldberg loop.
+TEST(Families, AnIdleJointOnAGoldbergOnAFoldingBennettLoopMergesToNoGoldberg5R) {
+  std::mt19937_64 rng(31);
+  for (int i = 0; i < 6; ++i) {
+    const double phi = i == 4 ? 1.1 : (i % 2 == 0 ? kPi : 0.0);  // opposite sides, same side, bent
+    double a, alpha, b, beta;
+    do {
+      alpha = twist(rng);
+      beta = twist(rng);
+      a = uniform(rng, 0.5, 2.0);
+      b = a * std::abs(std::sin(beta) / std::sin(alpha));
+    } while (b < 0.3 || b > 4.0 || std::abs(a - b) < 0.2);
+    const LoopGeometry l1 = bennett(a, alpha, b, beta), l2 = bennett(b, beta, b, beta);
+    const double t = uniform(rng, 0.3, kPi - 0.3);
+    JointVector folded(4);
+    folded << t + phi, kPi, -(t + phi), kPi;
+    const std::vector<Axis> x1 = joint_axes(l1, bennett_pose(l1, t)), x2 = joint_axes(l2, folded);
+    const Posed p = dh_from_axes(std::vector<Axis>{x1[1], x1[2], x1[3], x2[2], x2[1]});
+    const std::string family = i == 4 ? "goldberg_bent" : "goldberg";
+    const std::string tag = "folding " + family + " " + std::to_string(i);
+    const Classification five = classify(p.geometry, p.theta, std::vector<double>(5, 2 * kPi));
+    ASSERT_EQ(five.family, Family::degenerate) << tag << ": " << five.detail;
+    const Posed m = with_idle_joint(p, rng);
+    ASSERT_LT(closure_error(m), 1e-12) << tag;
+    const Classification c = classify(m.geometry, m.theta, std::vector<double>(6, 2 * kPi));
+    EXPECT_EQ(c.family, Family::degenerate) << tag << ": " << c.detail;
+    EXPECT_LT(c.residual, 1e-10) << tag;
+    EXPECT_NE(c.detail.find("axes 1 and 2 coincide; merged 5R: " + family + "'s conditions on a folding Bennett loop"),
+              std::string::npos)
+        << tag << ": " << c.detail;
+    EXPECT_NE(c.detail.find("locked 4R: bennett"), std::string::npos) << tag << ": " << c.detail;
+    for (const FamilyCheck& check : c.checks) {
+      if (check.family == Family::degenerate) {
+        ASSERT_EQ(check.conditions.size(), 3u) << tag;
+        EXPECT_EQ(check.conditions[2].name, "merged 5R loop: degenerate residual") << tag;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace loopfarm::family_tests
