@@ -280,19 +280,21 @@ Classification classify(const LoopGeometry& given, const JointVector& pose, std:
   out.checks = {bennett, planar, spherical, trivial};
   // 5R and 6R: degenerate, then the joint count's own families.
   GeometricFit degenerate, locked;
+  // The degenerate rules' own checks: coincident axes, a locked joint.
+  FamilyCheck coaxial_check, locked_check;
   // The joint count's own families' best representations, in the order
   // tried, their checks the last of out.checks: the detail line and the fold
   // test read the one that fits.
   std::vector<Best> special_fits;
   CubicMotionFit cubic;
   if (n == 5 || n == 6) {
-    FamilyCheck check;
-    degenerate = degenerate_fit(geometry, options.tolerance, check);
+    degenerate = degenerate_fit(geometry, options.tolerance, coaxial_check);
+    FamilyCheck check = coaxial_check;
     // A joint locked over the motion (no coincident axes: that is trivial):
     // the loop moves as the (n-1)R left by locking it, a degenerate loop too.
-    // The degenerate check keeps the better of the two.
+    // The degenerate check keeps the better of the two, unless one of them
+    // decides the family (below).
     if (!lockable.empty() && !(trivial.residual <= options.tolerance)) {
-      FamilyCheck locked_check;
       locked_check.family = Family::degenerate;
       locked =
           locked_fit(geometry, pose, lockable, joint_travel, options.tolerance, options.frozen_travel, locked_check);
@@ -337,6 +339,8 @@ Classification classify(const LoopGeometry& given, const JointVector& pose, std:
       if (c.family == Family::degenerate && folding.residual < c.residual) c = folding.check;
     }
   }
+  // The degenerate rule that decides the family, if one does.
+  const FamilyCheck* deciding = nullptr;
   if (trivial.residual <= tol) {
     out.family = Family::trivial;
     out.residual = trivial.residual;
@@ -356,6 +360,7 @@ Classification classify(const LoopGeometry& given, const JointVector& pose, std:
     out.family = Family::degenerate;
     out.residual = degenerate.residual;
     out.detail = degenerate.detail;
+    deciding = &coaxial_check;
   } else if (special) {
     out.family = special->family;
     out.residual = special->residual;
@@ -368,10 +373,12 @@ Classification classify(const LoopGeometry& given, const JointVector& pose, std:
     out.residual = folding.residual;
     out.detail = folding.detail;
     if (locked.residual <= tol) out.detail += "; the motion found: " + locked.detail;
+    deciding = &folding.check;
   } else if (locked.residual <= tol) {
     out.family = Family::degenerate;
     out.residual = locked.residual;
     out.detail = locked.detail;
+    deciding = &locked_check;
   } else if (bennett.residual <= tol) {
     out.family = Family::bennett;
     out.setup = bennett.setup;
@@ -387,6 +394,14 @@ Classification classify(const LoopGeometry& given, const JointVector& pose, std:
     std::snprintf(buffer, sizeof buffer, "nearest family: %s (residual %.3g)", to_string(nearest->family),
                   nearest->residual);
     out.detail = buffer;
+  }
+  // The degenerate check shown is the rule that decided, so that it agrees
+  // with the family's residual and detail, although another rule may read a
+  // smaller residual (a coaxial pair decides before a locked joint).
+  if (deciding) {
+    for (FamilyCheck& c : out.checks) {
+      if (c.family == Family::degenerate) c = *deciding;
+    }
   }
   if (out.family != Family::unclassified) out.fitting.push_back(out.family);
   const auto add_fitting = [&](Family f, double residual) {

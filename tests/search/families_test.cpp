@@ -174,6 +174,42 @@ TEST(Families, BennettWithAnIdleJointIsDegenerate) {
   }
 }
 
+// Both degenerate rules fit a Bennett loop with an idle joint whose pair of
+// axes is 1e-10 rad from coaxial (within the tolerance), posed with the idle
+// joint at 0, where it closes exactly: the coaxial pair, tried first,
+// decides, at a residual of 1e-10. Told that joint 2 rocks, the locked-joint
+// rule reads the exact Bennett loop, to round-off. The degenerate check shown
+// is the rule that decided, with the residual reported.
+TEST(Families, TheDegenerateCheckShownIsTheRuleThatDecided) {
+  std::mt19937_64 rng(43);
+  const double tilt = 1e-10;
+  for (int i = 0; i < 4; ++i) {
+    const Posed q = random_bennett_member(rng);
+    const LoopGeometry& b = q.geometry;
+    Posed m;
+    m.geometry = make_loop({0.0, b.a[0], b.a[1], b.a[2], b.a[3]},
+                           {tilt, b.alpha[0] - tilt, b.alpha[1], b.alpha[2], b.alpha[3]}, {0, 0, 0, 0, 0});
+    m.theta = (JointVector(5) << q.theta[0], 0.0, q.theta[1], q.theta[2], q.theta[3]).finished();
+    const std::string tag = "tilted idle joint " + std::to_string(i);
+    ASSERT_LT(closure_error(m), 1e-12) << tag;
+    const std::vector<double> travel = {2 * kPi, 1e-4, 2 * kPi, 2 * kPi, 2 * kPi};  // joint 2 rocks
+    const Classification c = classify(m.geometry, m.theta, travel);
+    EXPECT_EQ(c.family, Family::degenerate) << tag << ": " << c.detail;
+    EXPECT_NE(c.detail.find("axes 1 and 2 coincide; merged 4R: bennett"), std::string::npos) << tag << ": " << c.detail;
+    EXPECT_GT(c.residual, 0.5 * tilt) << tag;
+    EXPECT_LE(c.residual, ClassifyOptions{}.tolerance) << tag;
+    int shown = 0;
+    for (const FamilyCheck& check : c.checks) {
+      if (check.family != Family::degenerate) continue;
+      ++shown;
+      EXPECT_EQ(check.residual, c.residual) << tag;
+      ASSERT_FALSE(check.conditions.empty()) << tag;
+      EXPECT_EQ(check.conditions.front().name, "a1 / L") << tag;
+    }
+    EXPECT_EQ(shown, 1) << tag;
+  }
+}
+
 TEST(Families, ALockedJointOnABennettLoopIsADegenerate5R) {
   // The 5R moves as the Bennett loop with the extra joint locked: verified
   // (rigid closure, every joint free), that joint frozen, and classified

@@ -582,10 +582,14 @@ inline void expect_movable_member(const Posed& member, Family family, std::mt199
   ASSERT_FALSE(c.fitting.empty()) << tag;
   EXPECT_EQ(c.fitting.front(), family) << tag;
   EXPECT_LT(c.residual, 1e-10) << tag;
-  // The family's own check says so too, whatever family won.
+  // The family's own check says so too, whatever family won; the residual
+  // reported is that of the reported family's check.
   for (const FamilyCheck& check : c.checks) {
     if (check.family == family) {
       EXPECT_LT(check.residual, 1e-10) << tag;
+    }
+    if (check.family == c.family) {
+      EXPECT_EQ(check.residual, c.residual) << tag << ": " << to_string(c.family) << ", " << c.detail;
     }
   }
 }
