@@ -360,8 +360,10 @@ ResultsDatabase ResultsDatabase::open(const std::string& path, DatabaseMode mode
   }
   const FileAccess access = file_access(path);
   // A writer that could not write is refused before anything is created:
-  // the file (update mode), its directory, companions it may not write.
-  if (mode != DatabaseMode::read) check_writer_access(path, access, mode == DatabaseMode::update);
+  // an existing read-only file (a mode without a write bit too, so that
+  // `run` as root does not write a file made read-only on purpose), its
+  // directory, companions it may not write.
+  if (mode != DatabaseMode::read) check_writer_access(path, access, true);
 
   if (mode == DatabaseMode::read) {
     if (!exists) fail(path, "no such file");

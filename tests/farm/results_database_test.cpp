@@ -1177,6 +1177,29 @@ TEST_F(ResultsDatabaseTest, AReaderOfAReadOnlyFileCreatesNoCompanions) {
   EXPECT_EQ(fs::status(path).permissions(), fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
 }
 
+// A file made read-only (chmod a-w) is written by neither writer, whoever
+// runs it (root included, whom permissions do not stop): the refusal names
+// the mode, and the file is left as it was.
+TEST_F(ResultsDatabaseTest, NoWriterWritesAReadOnlyFile) {
+  const std::string path = file("r.sqlite");
+  {
+    ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
+    write_four_candidates(db);
+  }
+  const std::string before = file_bytes(path);
+  fs::permissions(path, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  for (const DatabaseMode mode : {DatabaseMode::write, DatabaseMode::update}) {
+    try {
+      ResultsDatabase::open(path, mode);
+      ADD_FAILURE() << "a read-only file was opened for writing";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("a read-only file (mode 0444)"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(file_bytes(path), before);
+  EXPECT_FALSE(fs::exists(path + "-wal") || fs::exists(path + "-shm"));
+}
+
 // A finished database is one file, and reading it keeps it one file.
 TEST_F(ResultsDatabaseTest, AClosedDatabaseAndItsReadersLeaveOneFile) {
   const std::string path = file("r.sqlite");
