@@ -356,6 +356,34 @@ TEST(Families, GoldbergOnAnEquilateralBennettLoopMovesWithALockedJoint) {
   EXPECT_GE(moving, 3);
 }
 
+// A Goldberg-type 5R on a folding Bennett loop (docs/research/discovery-5r-6r.md):
+// Bennett loop 1 (a, alpha, b, beta) at input t and loop 2 equilateral
+// (b, beta) folded at its joints F and D, (t + phi, pi, -(t + phi), pi),
+// fused at A at phi; the 5R B C D E F read off the axes. `folded_residual`
+// is loop 2's closure at the folded pose (0 up to round-off).
+struct FoldingGoldberg5R {
+  LoopGeometry bennett_loop, folding_loop;  // loops 1 and 2
+  Posed loop;
+  double folded_residual = 0.0;
+};
+
+FoldingGoldberg5R goldberg_on_a_folding_bennett_loop(std::mt19937_64& rng, double phi) {
+  double a, alpha, b, beta;
+  do {
+    alpha = twist(rng);
+    beta = twist(rng);
+    a = uniform(rng, 0.5, 2.0);
+    b = a * std::abs(std::sin(beta) / std::sin(alpha));
+  } while (b < 0.3 || b > 4.0 || std::abs(a - b) < 0.2);
+  const LoopGeometry l1 = bennett(a, alpha, b, beta), l2 = bennett(b, beta, b, beta);
+  const double t = uniform(rng, 0.3, kPi - 0.3);
+  JointVector folded(4);
+  folded << t + phi, kPi, -(t + phi), kPi;
+  const std::vector<Axis> x1 = joint_axes(l1, bennett_pose(l1, t)), x2 = joint_axes(l2, folded);
+  return {l1, l2, dh_from_axes(std::vector<Axis>{x1[1], x1[2], x1[3], x2[2], x2[1]}),
+          closure_residual(l2, folded).cwiseAbs().maxCoeff()};
+}
+
 TEST(Families, GoldbergOnAFoldingBennettLoopIsDegenerateWhateverTheWalk) {
   // docs/research/discovery-5r-6r.md, "Goldberg geometries on a folding Bennett loop":
   // built from the mechanism, independently of the conditions. Bennett loop 1
@@ -373,22 +401,11 @@ TEST(Families, GoldbergOnAFoldingBennettLoopIsDegenerateWhateverTheWalk) {
   int locked_walks = 0, trivial_walks = 0;
   for (int i = 0; i < 8; ++i) {
     const double phi = i == 6 ? 1.1 : (i % 2 == 0 ? kPi : 0.0);  // opposite sides, same side, bent
-    double a, alpha, b, beta;
-    do {
-      alpha = twist(rng);
-      beta = twist(rng);
-      a = uniform(rng, 0.5, 2.0);
-      b = a * std::abs(std::sin(beta) / std::sin(alpha));
-    } while (b < 0.3 || b > 4.0 || std::abs(a - b) < 0.2);
-    const LoopGeometry l1 = bennett(a, alpha, b, beta), l2 = bennett(b, beta, b, beta);
-    const double t = uniform(rng, 0.3, kPi - 0.3);
+    const FoldingGoldberg5R built = goldberg_on_a_folding_bennett_loop(rng, phi);
+    const LoopGeometry &l1 = built.bennett_loop, &l2 = built.folding_loop;
     const std::string tag = "folding " + std::to_string(i);
-    // Loop 2 folded at F and D: (t + phi, pi, -(t + phi), pi) closes exactly.
-    JointVector folded(4);
-    folded << t + phi, kPi, -(t + phi), kPi;
-    ASSERT_LT(closure_residual(l2, folded).cwiseAbs().maxCoeff(), 1e-12) << tag;
-    std::vector<Axis> x1 = joint_axes(l1, bennett_pose(l1, t)), x2 = joint_axes(l2, folded);
-    const Posed p = dh_from_axes(std::vector<Axis>{x1[1], x1[2], x1[3], x2[2], x2[1]});
+    ASSERT_LT(built.folded_residual, 1e-12) << tag;
+    const Posed& p = built.loop;
     ASSERT_LT(closure_error(p), 1e-12) << tag;
     const Family family = i == 6 ? Family::goldberg_bent : Family::goldberg;
     for (const FamilyCheck& check : classify(p.geometry, p.theta, {}).checks) {
@@ -423,8 +440,7 @@ TEST(Families, GoldbergOnAFoldingBennettLoopIsDegenerateWhateverTheWalk) {
     JointVector other(4);
     const double s = uniform(rng, 0.5, 2.5);
     other << kPi, s, kPi, -s;
-    x1 = joint_axes(l1, bennett_pose(l1, kPi - phi));
-    x2 = joint_axes(l2, other);
+    const std::vector<Axis> x1 = joint_axes(l1, bennett_pose(l1, kPi - phi)), x2 = joint_axes(l2, other);
     const Posed q =
         rewritten(dh_from_axes(std::vector<Axis>{x1[1], x1[2], x1[3], x2[2], x2[1]}), 2, false, 0);  // joint D first
     ASSERT_LT(closure_error(q), 1e-12) << tag;
@@ -477,21 +493,12 @@ TEST(Families, AnIdleJointOnAGoldbergOnAFoldingBennettLoopMergesToNoGoldberg5R) 
   std::mt19937_64 rng(31);
   for (int i = 0; i < 6; ++i) {
     const double phi = i == 4 ? 1.1 : (i % 2 == 0 ? kPi : 0.0);  // opposite sides, same side, bent
-    double a, alpha, b, beta;
-    do {
-      alpha = twist(rng);
-      beta = twist(rng);
-      a = uniform(rng, 0.5, 2.0);
-      b = a * std::abs(std::sin(beta) / std::sin(alpha));
-    } while (b < 0.3 || b > 4.0 || std::abs(a - b) < 0.2);
-    const LoopGeometry l1 = bennett(a, alpha, b, beta), l2 = bennett(b, beta, b, beta);
-    const double t = uniform(rng, 0.3, kPi - 0.3);
-    JointVector folded(4);
-    folded << t + phi, kPi, -(t + phi), kPi;
-    const std::vector<Axis> x1 = joint_axes(l1, bennett_pose(l1, t)), x2 = joint_axes(l2, folded);
-    const Posed p = dh_from_axes(std::vector<Axis>{x1[1], x1[2], x1[3], x2[2], x2[1]});
+    const FoldingGoldberg5R built = goldberg_on_a_folding_bennett_loop(rng, phi);
+    const Posed& p = built.loop;
     const std::string family = i == 4 ? "goldberg_bent" : "goldberg";
     const std::string tag = "folding " + family + " " + std::to_string(i);
+    ASSERT_LT(built.folded_residual, 1e-12) << tag;
+    ASSERT_LT(closure_error(p), 1e-12) << tag;
     const Classification five = classify(p.geometry, p.theta, std::vector<double>(5, 2 * kPi));
     ASSERT_EQ(five.family, Family::degenerate) << tag << ": " << five.detail;
     const Posed m = with_idle_joint(p, rng);
