@@ -402,9 +402,10 @@ Walk walk_curve(const ClosureSystem& system, const JointVector& x0, const PointI
       const JointVector segment = next - x;
       const double tau = std::clamp(d.dot(segment) / segment.squaredNorm(), 0.0, 1.0);
       const double gap = (d - tau * segment).norm();
-      const double turn = angle_between(info.tangent, next_info.tangent);
+      // The angles are computed only where the gap closes (&& stops first), not at every step.
       if (gap <= 0.05 * step + 1e-12 &&
-          angle_between(info.tangent, first_tangent) <= turn + first_turn + std::acos(kSameDirection)) {
+          angle_between(info.tangent, first_tangent) <=
+              angle_between(info.tangent, next_info.tangent) + first_turn + std::acos(kSameDirection)) {
         closes = true;
         next = x + d;  // exactly the first point's image
         next_info = start;
