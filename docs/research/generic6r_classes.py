@@ -39,6 +39,18 @@
   docs/research/generic6r_classes.py t7-offsets DB
       # each T7 loop closing to <= 1e-11 with d1, d4 scaled by 0 and 2: does it still move (the
       # script's rigid closure, followed 80 steps with every pose closing to <= 1e-10)?
+  docs/research/generic6r_classes.py t7-permutations DB LOOPFARM
+      # each T7 loop with the twists of one triad permuted in all 6 ways (a = |sin alpha| / k of the
+      # triad), with the loop's offsets (d4 = +-d1 exactly) and with d = 0: verified by `loopfarm verify`?
+  docs/research/generic6r_classes.py t7-signs DB LOOPFARM
+      # each T7 loop with one twist negated, or replaced by -180 deg - alpha, one triad's twists
+      # negated, or all six (the mirror image), with the loop's offsets (as above) and with d = 0: verified?
+  docs/research/generic6r_classes.py t7-triad-relations SEED N
+      # N random triads with negative twists and N with positive ones at random joint angles: the
+      # residuals of the two relations between their end axes (distance, angle, feet of the normal)
+  docs/research/generic6r_classes.py t7-flip DB
+      # each T7 loop with joint axes 1, 3, 5 reversed (every twist + 180 deg, d1, d3, d5 negated):
+      # the other branch's pairing conditions with the signed ratio sin(alpha) / a, twists in (-180, 180]
   docs/research/generic6r_classes.py waldron SEED LOOPFARM
       # Waldron's hybrid: two Bennett loops ABCD, AEFG sharing the axis A, links AB, AE fused and
       # DA, GA fused, joint A removed: the 6R B C D G F E; verified with loopfarm
@@ -713,6 +725,214 @@ def cmd_t7_offsets(db):
                                        else 'no assembly'))
         print(f"start {r[1]}:", '; '.join(out), flush=True)
 
+
+def t7_loops(db):
+    """The T7 loops of a run closing to <= 1e-11, as t7-offsets takes them: start, a, alpha [deg], d in the labelling
+    where T7's visible conditions hold (links 1-3 one Bennett ratio, links 4-6 another, d1 and d4 the only offsets)."""
+    for r in rows(db, 'AND rigid_residual <= 1e-11'):
+        w = t7_representation(list(r[6:12]), list(r[12:18]), list(r[18:24]))
+        if w:
+            yield (r[1], *w)
+
+
+def t7_branch(d):
+    return '+' if abs(d[3] - d[0]) < 1e-6 else '-'
+
+
+def verify(loopfarm, a, al, d):
+    out = subprocess.run([loopfarm, 'verify', '--a', ','.join(map(repr, a)), '--alpha-deg=' + ','.join(map(repr, al)),
+                          '--d=' + ','.join(map(repr, d)), '--json'], capture_output=True, text=True)
+    return json.loads(out.stdout)
+
+
+def t7_offsets(d):
+    """The offsets in T7's form: d1 = delta, d4 = +-delta exactly, the others 0. A search's loop has the others and
+    |d4| - |d1| at 1e-12 or so, enough for `loopfarm verify` not to call it verified as given: start 1164 (one of the
+    8 T7 loops docs/guide/families.md lists) closes to 2.4e-12 with its stored offsets, and verify's polish moves it
+    by 3.6e-12 (more than round-off, 1e-12) onto a loop that moves."""
+    return [d[0], 0.0, 0.0, d[0] if t7_branch(d) == '+' else -d[0], 0.0, 0.0]
+
+
+def verdict(loopfarm, a, al, d, tally, key):
+    """`loopfarm verify` (every circuit over the whole turn): 'Y' verified, 'p' not, but its polish onto the motion the
+    geometry approximates (moved by more than round-off) verified, 'n' neither; counted in tally[key] and tally[key, 'p'],
+    the largest such polish's displacement in tally[key, 'moved']."""
+    j = verify(loopfarm, a, al, d)
+    if j['verified']:
+        tally[key] += 1
+        return 'Y'
+    if (j.get('polish') or {}).get('verified'):
+        tally[key, 'p'] += 1
+        tally[key, 'moved'] = max(tally[key, 'moved'], j['polish']['displacement'])
+        return 'p'
+    return 'n'
+
+
+def tally_line(tally, key, n):
+    near = f" (and {tally[key, 'p']} more once polished onto a motion, moved by <= {tally[key, 'moved']:.1g})" \
+        if tally[key, 'p'] else ''
+    return f"{tally[key]} of {n} verified{near}"
+
+
+def cmd_t7_permutations(db, loopfarm):
+    """Each T7 loop with the twists of links 1-3, or of links 4-6, permuted in all 6 ways (the identity among them),
+    each link's length recomputed from its triad's Bennett ratio, a = |sin alpha| / k: does `loopfarm verify` (every
+    circuit over the whole turn) verify it? With the loop's offsets in T7's form (t7_offsets) and with every offset 0."""
+    import itertools
+    tally, n = collections.Counter(), 0
+    for start, A, AL, D in t7_loops(db):
+        n += 1
+        k = (kappa(A, AL, 0), kappa(A, AL, 3))
+        out = []
+        for tri in (0, 1):
+            for name, d in (('its offsets', t7_offsets(D)), ('d = 0', [0.0] * 6)):
+                marks = ''
+                for perm in itertools.permutations(range(3)):
+                    al = list(AL)
+                    for i, q in enumerate(perm):
+                        al[3 * tri + i] = AL[3 * tri + q]
+                    a = [abs(math.sin(math.radians(x))) / k[i // 3] for i, x in enumerate(al)]
+                    marks += verdict(loopfarm, a, al, d, tally, (tri, name))
+                out.append(f"links {3 * tri + 1}-{3 * tri + 3}, {name}: {marks}")
+        print(f"start {start} (d4 = {t7_branch(D)}d1):", '; '.join(out), flush=True)
+    for tri in (0, 1):
+        for name, label in (('its offsets', "the loops' offsets"), ('d = 0', 'd = 0')):
+            print(f"twists of links {3 * tri + 1}-{3 * tri + 3} permuted, {label}: {tally_line(tally, (tri, name), 6 * n)}")
+
+
+def cmd_t7_signs(db, loopfarm):
+    """Each T7 loop with mixed twist signs: one twist negated (6 ways), one twist replaced by -180 deg - alpha (its cosine
+    negated, 6 ways), the twists of links 1-3 or of links 4-6 negated; and all six negated with the offsets (the mirror
+    image). The lengths stay (|sin alpha| does not change). Verified by `loopfarm verify` (every circuit over the whole
+    turn)? With the loop's offsets in T7's form (t7_offsets) and with every offset 0."""
+    def changed(al, i, f):
+        return [f(x) if j == i else x for j, x in enumerate(al)]
+    kinds = [('one twist negated', 'alpha_i -> -alpha_i',
+              [lambda al, d, i=i: (changed(al, i, lambda x: -x), d) for i in range(6)]),
+             ('one twist replaced by -180 deg - alpha', 'alpha_i -> -180 - alpha_i',
+              [lambda al, d, i=i: (changed(al, i, lambda x: -180 - x), d) for i in range(6)]),
+             ('the twists of links 1-3 negated', 'links 1-3', [lambda al, d: ([-x for x in al[:3]] + al[3:], d)]),
+             ('the twists of links 4-6 negated', 'links 4-6', [lambda al, d: (al[:3] + [-x for x in al[3:]], d)]),
+             ('all six twists and the offsets negated (the mirror image)', 'mirror',
+              [lambda al, d: ([-x for x in al], [-x for x in d])])]
+    tally, n = collections.Counter(), 0
+    for start, A, AL, D in t7_loops(db):
+        n += 1
+        out = []
+        for name, short, variants in kinds:
+            marks = [''.join(verdict(loopfarm, A, *f(list(AL), list(d0)), tally, (name, dname)) for f in variants)
+                     for dname, d0 in (('its offsets', t7_offsets(D)), ('d = 0', [0.0] * 6))]
+            out.append(f"{short} {marks[0]} / {marks[1]}")
+        print(f"start {start} (verified? with its offsets / with d = 0):", '; '.join(out), flush=True)
+    for name, short, variants in kinds:
+        print(f"{name}: with the loops' offsets {tally_line(tally, (name, 'its offsets'), n * len(variants))}, "
+              f"with d = 0 {tally_line(tally, (name, 'd = 0'), n * len(variants))}")
+
+
+def triad_end_axes(a, al, th):
+    """A triad (three links, no offsets) at joint angles th: the distance D of its end axes (axes 1 and 4; signed,
+    positive along z1 x z4), their angle beta, and the feet of their common normal: s1 on axis 1 from link 1's foot,
+    s4 on axis 4 from link 3's foot."""
+    F = [[1.0 if i == j else 0.0 for j in range(4)] for i in range(4)]
+    for i in range(3):
+        F = mat_mul(F, dh(th[i], 0.0, a[i], al[i]))
+    v, p = [F[0][2], F[1][2], F[2][2]], [F[0][3], F[1][3], F[2][3]]
+    n = cross([0.0, 0.0, 1.0], v)
+    c, pv = v[2], dot(p, v)
+    s1, s4 = (p[2] - c * pv) / (1 - c * c), (c * p[2] - pv) / (1 - c * c)
+    w = [p[i] + s4 * v[i] - (s1 if i == 2 else 0.0) for i in range(3)]
+    return math.copysign(math.sqrt(dot(w, w)), dot(w, n)), math.atan2(math.sqrt(dot(n, n)), c), s1, s4
+
+
+def triad_relations(k, al, D, beta, s1, s4):
+    """The residuals of the two relations of a triad of Bennett ratio k (C = cos(beta/2), S = sin(beta/2)):
+    (-)  C^2 (s1 - s4)^2 + (S D - lam_m C)^2 = kap_m, lam_m = (1 + sum cos alpha) / k, kap_m = 16 prod cos^2(alpha/2) / k^2
+    (+)  S^2 (s1 + s4)^2 + (C D - lam_p S)^2 = kap_p, lam_p = (1 - sum cos alpha) / k, kap_p = 16 prod sin^2(alpha/2) / k^2"""
+    C, S = math.cos(beta / 2), math.sin(beta / 2)
+    lm, lp = (1 + sum(math.cos(x) for x in al)) / k, (1 - sum(math.cos(x) for x in al)) / k
+    km = 16 * math.prod(math.cos(x / 2) ** 2 for x in al) / k ** 2
+    kp = 16 * math.prod(math.sin(x / 2) ** 2 for x in al) / k ** 2
+    return (C * C * (s1 - s4) ** 2 + (S * D - lm * C) ** 2 - km, S * S * (s1 + s4) ** 2 + (C * D - lp * S) ** 2 - kp)
+
+
+def cmd_t7_triad_relations(seed, count):
+    """N random triads with negative twists, then N with positive twists (k in [0.3, 3], |alpha| in [0.1, 3.05] rad,
+    lengths |sin alpha| / k, joint angles 0 and two random): the largest absolute residual of the two end-axis
+    relations; for positive twists with D replaced by -D, and as they are."""
+    import random
+    rng = random.Random(int(seed))
+    n, worst = int(count), collections.defaultdict(float)
+    for t in range(2 * n):
+        k = rng.uniform(0.3, 3.0)
+        al = [(1 if t >= n else -1) * rng.uniform(0.1, 3.05) for _ in range(3)]
+        th = [0.0, rng.uniform(-math.pi, math.pi), rng.uniform(-math.pi, math.pi)]
+        D, beta, s1, s4 = triad_end_axes([abs(math.sin(x)) / k for x in al], al, th)
+        if t < n:
+            worst['negative'] = max(worst['negative'], *map(abs, triad_relations(k, al, D, beta, s1, s4)))
+        else:
+            worst['positive, -D'] = max(worst['positive, -D'], *map(abs, triad_relations(k, al, -D, beta, s1, s4)))
+            worst['positive, D'] = max(worst['positive, D'], *map(abs, triad_relations(k, al, D, beta, s1, s4)))
+    print(f"positive twists with D as it is (not a relation): worst residual {worst['positive, D']:.1e}")
+    print(f"positive twists, D replaced by -D: worst residual {worst['positive, -D']:.1e} over {n} triads")
+    print(f"negative twists: worst residual of the two relations {worst['negative']:.1e} over {n} triads")
+
+
+def t7_pairing(al_deg, k1, k2):
+    """T7's two pairing conditions on each branch ('-': d4 = -d1, '+': d4 = d1) for twists al_deg and ratios k1 (links
+    1-3), k2 (links 4-6): the larger relative difference of the two sides."""
+    x = [math.radians(v) for v in al_deg]
+    out = {}
+    for branch, sg, f in (('-', 1, math.cos), ('+', -1, math.sin)):
+        sides = [((1 + sg * sum(math.cos(v) for v in x[3 * t:3 * t + 3])) / k,
+                  math.prod(f(v / 2) for v in x[3 * t:3 * t + 3]) / k) for t, k in ((0, k1), (1, k2))]
+        out[branch] = max(abs(u - w) / max(abs(u), abs(w)) for u, w in zip(*sides))
+    return out
+
+
+def flip_axes(a, al_deg, d, joints):
+    """The same loop with the axes of the given joints (0-based) reversed: the twists of the links before and after
+    each + 180 deg, its offset negated (and its joint angle: see flip_pose); twists wrapped to (-180, 180]."""
+    al, d = list(al_deg), list(d)
+    for j in joints:
+        al[j - 1] += 180
+        al[j] += 180
+        d[j] = -d[j]
+    return list(a), [180 - (180 - x) % 360 for x in al], d
+
+
+def flip_pose(th, joints):
+    return [-x if i in joints else x for i, x in enumerate(th)]
+
+
+def cmd_t7_flip(db):
+    """Each T7 loop with joint axes 1, 3, 5 reversed (every twist + 180 deg, d1, d3, d5 negated): which branch's
+    pairing conditions it meets with the signed ratio k = sin(alpha) / a, twists in (-180, 180] (and with |sin alpha| / a);
+    and, as a check that it is the same loop, the closure of the reversed loop at up to 21 poses of the original's
+    motion (the script's rigid closure) with theta1, theta3, theta5 negated."""
+    def signed(a, al):
+        return math.sin(math.radians(al[0])) / a[0], math.sin(math.radians(al[3])) / a[3]
+    flip, worst, met, n = (0, 2, 4), 0.0, collections.Counter(), collections.Counter()
+    for start, A, AL, D in t7_loops(db):
+        branch, other = t7_branch(D), '+' if t7_branch(D) == '-' else '-'
+        n[branch] += 1
+        before = t7_pairing(AL, *signed(A, AL))
+        A2, AL2, D2 = flip_axes(A, AL, D, flip)
+        after, after_abs = t7_pairing(AL2, *signed(A2, AL2)), t7_pairing(AL2, kappa(A2, AL2, 0), kappa(A2, AL2, 3))
+        if t7_branch(D2) == other and after[other] < 1e-9:
+            met[branch] += 1
+        worst = max(worst, after[other])
+        al, al2 = [math.radians(x) for x in AL], [math.radians(x) for x in AL2]
+        th = assemble(A, al, D)
+        poses = trace(A, al, D, th, 20) if th else []
+        closure = max((max(map(abs, closure_residual(A2, al2, D2, flip_pose(p, flip)))) for p in poses), default=None)
+        print(f"start {start}: d4 = {branch}d1, its '{branch}' conditions {before[branch]:.1g} ('{other}': "
+              f"{before[other]:.2g}); reversed: d4 = {t7_branch(D2)}d1, twists {' '.join(f'{x:.1f}' for x in AL2)} deg, "
+              f"signed k {' '.join(f'{x:.4f}' for x in signed(A2, AL2))}, the '{other}' conditions {after[other]:.1g} "
+              f"(|k|: {after_abs[other]:.1g}), the '{branch}' ones {after[branch]:.2g}; closure at "
+              + (f"{len(poses)} poses {closure:.1g}" if poses else "no pose (no assembly found)"), flush=True)
+    print(f"{met['+']} of {n['+']} '+' loops meet the '-' conditions and {met['-']} of {n['-']} '-' loops the '+' ones "
+          f"after axes 1, 3, 5 are reversed (signed k, twists in (-180, 180]); worst residual {worst:.1g}")
+
 if __name__ == '__main__':
     if len(sys.argv) >= 3 and sys.argv[1] == 'classes':
         cmd_classes(sys.argv[2])
@@ -743,5 +963,13 @@ if __name__ == '__main__':
         cmd_t7_normal(sys.argv[2], sys.argv[3], sys.argv[4])
     elif len(sys.argv) >= 3 and sys.argv[1] == 't7-offsets':
         cmd_t7_offsets(sys.argv[2])
+    elif len(sys.argv) >= 4 and sys.argv[1] == 't7-permutations':
+        cmd_t7_permutations(sys.argv[2], sys.argv[3])
+    elif len(sys.argv) >= 4 and sys.argv[1] == 't7-signs':
+        cmd_t7_signs(sys.argv[2], sys.argv[3])
+    elif len(sys.argv) >= 4 and sys.argv[1] == 't7-triad-relations':
+        cmd_t7_triad_relations(sys.argv[2], sys.argv[3])
+    elif len(sys.argv) >= 3 and sys.argv[1] == 't7-flip':
+        cmd_t7_flip(sys.argv[2])
     else:
         sys.exit(__doc__)
