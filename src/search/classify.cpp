@@ -91,6 +91,25 @@ std::string special_detail(Family family, const Best& best, const LoopGeometry& 
                   w.alpha[2] * 180.0 / kPi, w.d[0] / L, w.d[3] / L);
     return buffer;
   }
+  if (family == Family::bennett_triads) {
+    // The two triads' shared quantities, from the best representation
+    // (bennett_triads_conditions: equal for both triads in it).
+    const LoopGeometry w = written_out(best, g);
+    const double L = length_scale(w);
+    const double k = std::sin(w.alpha[0]) / w.a[0];
+    double sum = 1.0, product = 1.0;
+    for (int i = 0; i < 3; ++i) {
+      sum += std::cos(w.alpha[i]);
+      product *= std::cos(0.5 * w.alpha[i]);
+    }
+    char buffer[320];
+    std::snprintf(buffer, sizeof buffer,
+                  "Bennett-ratio triads (links 1-3 and 4-6 of the best representation, sin alpha / a = %.4g and %.4g "
+                  "/ L, no offsets inside them, d1 = -d4 = %.4g L) with the same (1 + sum of cos alpha) / k = %.4g L "
+                  "and product of cos(alpha / 2) / k = %.4g L",
+                  k * L, std::sin(w.alpha[3]) / w.a[3] * L, w.d[0] / L, sum / k / L, product / k / L);
+    return buffer;
+  }
   if (family == Family::waldron_hybrid) {
     // The dyads' Bennett ratios and how far apart the two loops' feet lie on
     // the fourth axis (Waldron's slide), from the fit of the best representation.

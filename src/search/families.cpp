@@ -54,6 +54,8 @@ const char* to_string(Family family) {
       return "cubic_321";
     case Family::angle_symmetric_parallel:
       return "angle_symmetric_parallel";
+    case Family::bennett_triads:
+      return "bennett_triads";
   }
   return "unknown";
 }
@@ -78,6 +80,7 @@ int family_joints(Family family) {
     case Family::bricard_trihedral:
     case Family::bennett_pair:
     case Family::bennett_dyads:
+    case Family::bennett_triads:
     case Family::sarrus:
     case Family::bricard_octahedral_plane:
     case Family::waldron_hybrid:
@@ -130,6 +133,10 @@ std::optional<int> family_dimension(Family family, int joints) {
       return 4;
     case Family::bennett_dyads:
       return 9;
+    case Family::bennett_triads:
+      // 18 parameters, 11 conditions; local_dimension reads 7 on the
+      // search's members (docs/guide/families.md).
+      return 7;
     case Family::sarrus:
       // 18 parameters less five conditions; the first-order count
       // (local_dimension) reads 14 on members (docs/guide/families.md).

@@ -627,6 +627,70 @@ void bennett_dyads_conditions(const RepresentationView& w, Sink& c) {
         });
 }
 
+// Two Bennett-ratio triads (6R, docs/guide/families.md; found by the generic
+// 6R search): links 1-3 with one Bennett ratio k1 = sin(alpha) / a and no
+// offset between them (d2 = d3 = 0), links 4-6 likewise (k2, d5 = d6 = 0),
+// opposite offsets where the triads meet (d4 = -d1), and two quantities the
+// same for both triads: (1 + the sum of their cosines of twists) / k and the
+// product of their cos(alpha / 2) over k. The ratios are signed, so all six
+// twists have one sign. The loops with d4 = +d1 (1 - the sum of cosines and
+// sin(alpha / 2) in the two quantities) are these written with axes 1, 3 and
+// 5 flipped, which adds pi to every twist and negates d1.
+template <class RepresentationView, class Sink>
+void bennett_triads_conditions(const RepresentationView& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  add_bennett_product(w, c, "a1 sin(alpha2) - a2 sin(alpha1)", 0, 1, 1.0);
+  add_bennett_product(w, c, "a1 sin(alpha3) - a3 sin(alpha1)", 0, 2, 1.0);
+  add_bennett_product(w, c, "a4 sin(alpha5) - a5 sin(alpha4)", 3, 4, 1.0);
+  add_bennett_product(w, c, "a4 sin(alpha6) - a6 sin(alpha4)", 3, 5, 1.0);
+  add_offset(w, c, "d2", 1, -1, 0.0);
+  add_offset(w, c, "d3", 2, -1, 0.0);
+  add_offset(w, c, "d5", 4, -1, 0.0);
+  add_offset(w, c, "d6", 5, -1, 0.0);
+  add_offset(w, c, "d1 + d4", 0, 3, 1.0);
+  // q(triad 1) / k1 = q(triad 2) / k2, times sin(alpha1) sin(alpha4), over L:
+  // (q1 a1 sin(alpha4) - q2 a4 sin(alpha1)) / L. `dq(i)` is dq / dalpha_i.
+  const auto add_equal = [&](const char* text, const auto& q, const auto& dq) {
+    const auto value = [&] { return q(0) * w.a(0) * w.sin_alpha(3) - q(3) * w.a(3) * w.sin_alpha(0); };
+    c.add([&] { return std::string(text); }, [&] { return value() / s.L; },
+          [&] {
+            GeometryVector g = -(value() / (s.L * s.L)) * s.dL;
+            const double one = w.a(0) * w.sin_alpha(3), two = w.a(3) * w.sin_alpha(0);
+            g[0] += q(0) * w.sin_alpha(3) / s.L;
+            g[3] += -q(3) * w.sin_alpha(0) / s.L;
+            for (int i = 0; i < 3; ++i) {
+              g[n + i] += dq(i) * one / s.L;
+              g[n + 3 + i] += -dq(3 + i) * two / s.L;
+            }
+            g[n + 3] += q(0) * w.a(0) * w.cos_alpha(3) / s.L;
+            g[n + 0] += -q(3) * w.a(3) * w.cos_alpha(0) / s.L;
+            return g;
+          });
+  };
+  const auto sum = [&](int first) {
+    return 1.0 + w.cos_alpha(first) + w.cos_alpha(first + 1) + w.cos_alpha(first + 2);
+  };
+  add_equal(
+      "((1 + cos(alpha1) + cos(alpha2) + cos(alpha3)) a1 sin(alpha4) - (1 + cos(alpha4) + cos(alpha5) + cos(alpha6)) "
+      "a4 sin(alpha1)) / L",
+      sum, [&](int i) { return -w.sin_alpha(i); });
+  // cos(alpha / 2) = sqrt((1 + cos(alpha)) / 2): the twists lie in (-pi, pi].
+  const auto half = [&](int i) { return std::sqrt(0.5 * (1.0 + w.cos_alpha(i))); };
+  const auto product = [&](int first) { return half(first) * half(first + 1) * half(first + 2); };
+  add_equal(
+      "(cos(alpha1/2) cos(alpha2/2) cos(alpha3/2) a1 sin(alpha4) - cos(alpha4/2) cos(alpha5/2) cos(alpha6/2) a4 "
+      "sin(alpha1)) / L",
+      product, [&](int i) {
+        const int first = i < 3 ? 0 : 3;
+        double others = 1.0;
+        for (int j = first; j < first + 3; ++j) {
+          if (j != i) others *= half(j);
+        }
+        return -0.5 * std::sin(0.5 * w.alpha(i)) * others;
+      });
+}
+
 // Waldron's hybrid 6R (docs/guide/families.md): two Bennett loops B C D A
 // and G F E A sharing the joint axis A, links AB and AE fused into one body
 // and DA and GA into another, joint A removed: the 6R B C D G F E. In one
@@ -1735,6 +1799,7 @@ inline int condition_sets(Family family, int joints) {
     case Family::hooke:
     case Family::bricard_octahedral_collapsible:
     case Family::bennett_dyads:
+    case Family::bennett_triads:
     case Family::waldron_hybrid:
     case Family::double_goldberg:
     case Family::sarrus:
@@ -1755,8 +1820,8 @@ inline int condition_sets(Family family, int joints) {
 // tabulates them only then).
 constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
-         family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::sarrus ||
-         family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid ||
+         family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::bennett_triads ||
+         family == Family::sarrus || family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid ||
          family == Family::goldberg_6r || family == Family::double_goldberg || family == Family::hooke ||
          family == Family::bricard_octahedral_collapsible || family == Family::angle_symmetric_parallel;
 }
@@ -1805,6 +1870,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     bennett_pair_conditions(set, w, c);
   } else if constexpr (F == Family::bennett_dyads) {
     bennett_dyads_conditions(w, c);
+  } else if constexpr (F == Family::bennett_triads) {
+    bennett_triads_conditions(w, c);
   } else if constexpr (F == Family::waldron_hybrid) {
     waldron_hybrid_conditions(w, c);
   } else if constexpr (F == Family::goldberg_6r) {

@@ -77,6 +77,8 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm, double zero_le
       return best_over_representations<Family::bennett_pair>(g, by_norm, zero_length);
     case Family::bennett_dyads:
       return best_over_representations<Family::bennett_dyads>(g, by_norm, zero_length);
+    case Family::bennett_triads:
+      return best_over_representations<Family::bennett_triads>(g, by_norm, zero_length);
     case Family::sarrus:
       return best_over_representations<Family::sarrus>(g, by_norm, zero_length);
     case Family::bricard_octahedral_plane:
@@ -131,6 +133,7 @@ std::vector<Family> special_families(int n) {
               Family::bennett_pair,
               Family::goldberg_6r,
               Family::double_goldberg,
+              Family::bennett_triads,
               Family::bennett_dyads,
               Family::waldron_hybrid,
               Family::sarrus,

@@ -499,6 +499,66 @@ inline LoopGeometry bennett_dyads_geometry(std::mt19937_64& rng) {
   }
 }
 
+// Two Bennett-ratio triads (bennett_triads) from their conditions: links 1-3
+// of ratio k1 = |sin alpha| / a, links 4-6 of k2, alpha1..alpha5 given (in
+// (-pi, 0)), alpha6 and k2 solved from the two quantities the triads share
+// (a quadratic in cos(alpha6/2), or in sin(alpha6/2) when `plus`; `root`
+// picks one), d1 given and d4 = -d1, or d4 = d1 when `plus` (that form is the
+// first with axes 1, 3 and 5 flipped); no other offset. None where the
+// quadratic has no root in range or k2 lies beyond 20 times k1 either way.
+inline std::optional<LoopGeometry> bennett_triads_loop(bool plus, double k1, const std::array<double, 5>& alpha,
+                                                       double d1, int root) {
+  const double sign = plus ? -1.0 : 1.0;
+  const auto half = [&](double x) { return plus ? std::sin(0.5 * x) : std::cos(0.5 * x); };
+  const double lambda = (1.0 + sign * (std::cos(alpha[0]) + std::cos(alpha[1]) + std::cos(alpha[2]))) / k1;
+  const double mu = half(alpha[0]) * half(alpha[1]) * half(alpha[2]) / k1;
+  const double c45 = std::cos(alpha[3]) + std::cos(alpha[4]), h45 = half(alpha[3]) * half(alpha[4]);
+  // With x = half(alpha6), 1 +- the sum of cosines of links 4-6 is sign c45 +
+  // 2 x^2, so k2 = (sign c45 + 2 x^2) / lambda, and mu k2 = h45 x:
+  // 2 mu x^2 - lambda h45 x + sign mu c45 = 0.
+  const double qa = 2.0 * mu, qb = -lambda * h45, qc = sign * mu * c45;
+  const double discriminant = qb * qb - 4.0 * qa * qc;
+  if (!(discriminant >= 0.0) || qa == 0.0) return std::nullopt;
+  const double x = (-qb + (root == 0 ? 1.0 : -1.0) * std::sqrt(discriminant)) / (2.0 * qa);
+  // alpha6 in (-pi, 0): cos(alpha6/2) in (0, 1), sin(alpha6/2) in (-1, 0).
+  if (plus ? !(x > -1.0 && x < 0.0) : !(x > 0.0 && x < 1.0)) return std::nullopt;
+  const double alpha6 = plus ? 2.0 * std::asin(x) : -2.0 * std::acos(x);
+  const double k2 = (sign * c45 + 2.0 * x * x) / lambda;
+  if (!(k2 > 0.0) || !(k2 < 20.0 * k1) || !(k2 > k1 / 20.0)) return std::nullopt;
+  LoopGeometry g;
+  g.alpha = JointVector(6);
+  g.alpha << alpha[0], alpha[1], alpha[2], alpha[3], alpha[4], alpha6;
+  g.a = JointVector(6);
+  for (int i = 0; i < 6; ++i) g.a[i] = std::abs(std::sin(g.alpha[i])) / (i < 3 ? k1 : k2);
+  g.d = JointVector::Zero(6);
+  g.d[0] = d1;
+  g.d[3] = plus ? d1 : -d1;
+  return g;
+}
+
+// A random bennett_triads loop (d4 = -d1, twists in (-0.95 pi, -0.05 pi)),
+// its lengths within [0.2, 3]. Most assemble (docs/guide/families.md).
+inline LoopGeometry bennett_triads_geometry(std::mt19937_64& rng) {
+  for (;;) {
+    const double k1 = uniform(rng, 0.4, 1.5), d1 = uniform(rng, -0.2, 0.2);
+    std::array<double, 5> alpha;
+    for (double& t : alpha) t = -uniform(rng, 0.05 * kPi, 0.95 * kPi);
+    for (int root : {0, 1}) {
+      const std::optional<LoopGeometry> g = bennett_triads_loop(false, k1, alpha, d1, root);
+      if (g && g->a.minCoeff() >= 0.2 && g->a.maxCoeff() <= 3.0) return *g;
+    }
+  }
+}
+
+// One in a closed pose, found by the rigid closure from random guesses.
+inline Posed bennett_triads_member(std::mt19937_64& rng) {
+  for (;;) {
+    const LoopGeometry g = bennett_triads_geometry(rng);
+    JointVector theta;
+    if (closed_pose(g, rng, theta)) return {g, theta};
+  }
+}
+
 // A Sarrus loop from its mechanism (constructions.hpp: two chains of parallel
 // axes between a base and a top), not from its conditions: random axis
 // directions, points and links, read off the axes at the top's travel 0.

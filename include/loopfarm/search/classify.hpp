@@ -26,6 +26,11 @@
 //              removed and nothing fused: moves with two degrees of freedom
 //   bennett_dyads (n = 6) two Bennett dyads with equal (cos alpha + cos
 //              beta) / kappa joined by two equal links (docs/guide/families.md)
+//   bennett_triads (n = 6) two triads of links, 1-3 and 4-6 of a
+//              representation, each of one signed Bennett ratio k = sin
+//              alpha / a with no offsets inside (d2 = d3 = d5 = d6 = 0), d4 =
+//              -d1, and the same (1 + sum of cos alpha) / k and product of
+//              cos(alpha / 2) over k for both (docs/guide/families.md)
 //   waldron_hybrid (n = 6) Waldron's hybrid: two Bennett dyads (links 1-2
 //              and 4-5 of a representation, no offset at joints 2 and 5)
 //              whose fourth axes, found in the fused links 3 and 6, are one
@@ -146,6 +151,8 @@ enum class Family {
   // 6R: three pairs of parallel axes (1-2, 4-5 and 3-6 of a representation)
   // whose opposite joints turn by equal angles
   angle_symmetric_parallel,
+  // 6R: two triads of links of one Bennett ratio each (found by the generic search)
+  bennett_triads,
 };
 const char* to_string(Family family);
 
@@ -176,6 +183,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::bricard_octahedral_collapsible,
     Family::cubic_321,
     Family::angle_symmetric_parallel,
+    Family::bennett_triads,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -231,7 +239,7 @@ struct Classification {
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, goldberg_6r,
-  // double_goldberg, bennett_dyads, waldron_hybrid, sarrus,
+  // double_goldberg, bennett_triads, bennett_dyads, waldron_hybrid, sarrus,
   // angle_symmetric_parallel, bricard_octahedral_plane,
   // bricard_octahedral_collapsible, cubic_321, hooke (the order they are tried).
   std::vector<FamilyCheck> checks;
