@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <span>
 #include <tuple>
 #include <utility>
@@ -19,6 +20,7 @@
 #include "loopfarm/core/equilibrium.hpp"
 #include "loopfarm/core/loop.hpp"
 #include "loopfarm/search/classify.hpp"
+#include "loopfarm/search/verify.hpp"
 #include "plot.hpp"
 
 namespace loopfarm::cli {
@@ -70,6 +72,59 @@ std::string dimension_reading(int found, std::optional<int> known, int free_para
            std::to_string(3 * joints) + " parameters) may hold only part of the family at this point";
   }
   return "less than known";
+}
+
+// The joint a cycle drives and the circuit it runs on (an index into the
+// motion's circuits), as compute_cycle chooses them.
+struct Drive {
+  int joint = 0;
+  int circuit = -1;
+};
+
+// The first joint (canonical numbering) that turns fully on a moving
+// circuit, on the first such circuit; else joint 1 on the moving circuit
+// where it travels farthest, or, where joint 1 moves on none, the joint that
+// travels farthest (the first of equals); nothing when no circuit moves.
+std::optional<Drive> drive_of(const MotionAnalysis& motion, const VerificationOptions& options) {
+  const std::vector<Circuit>& circuits = motion.circuits;
+  const auto moves = [&](const Circuit& c, int joint) {
+    return static_cast<int>(c.ranges.size()) > joint &&
+           c.moves(joint, options.min_input_travel, options.residual_tolerance);
+  };
+  int n = 0;
+  for (const Circuit& c : circuits) n = std::max(n, static_cast<int>(c.ranges.size()));
+  for (int j = 0; j < n; ++j) {
+    for (size_t c = 0; c < circuits.size(); ++c) {
+      if (moves(circuits[c], j) && circuits[c].ranges[static_cast<size_t>(j)].crank()) {
+        return Drive{j, static_cast<int>(c)};
+      }
+    }
+  }
+  // No joint turns fully: the farthest travel of joint j, and where.
+  const auto farthest = [&](int j) {
+    Drive best{j, -1};
+    double travel = 0.0;
+    for (size_t c = 0; c < circuits.size(); ++c) {
+      if (!moves(circuits[c], j)) continue;
+      const JointRange& r = circuits[c].ranges[static_cast<size_t>(j)];
+      if (r.hi - r.lo >= options.min_input_travel && r.hi - r.lo > travel) {
+        travel = r.hi - r.lo;
+        best.circuit = static_cast<int>(c);
+      }
+    }
+    return std::make_pair(best, travel);
+  };
+  if (const Drive first = farthest(0).first; first.circuit >= 0) return first;
+  std::optional<Drive> out;
+  double most = 0.0;
+  for (int j = 1; j < n; ++j) {
+    const auto [drive, travel] = farthest(j);
+    if (drive.circuit >= 0 && travel > most) {
+      most = travel;
+      out = drive;
+    }
+  }
+  return out;
 }
 
 void write_text(const std::filesystem::path& path, const std::string& text) {
@@ -145,27 +200,55 @@ std::string free_parameter_counts(const FamilyGroup& group) {
   return out;
 }
 
-// The cycle energy of the representative's canonical geometry, as `loopfarm
-// energy` computes it (assembly at theta0, then the cycle): a full turn from 0,
-// or, for a loop whose verified motion does not turn fully, the verified range.
+// The cycle energy of the representative's canonical geometry along its
+// rigid loop's motion (atlas.hpp says which joint drives it and where).
 Representation compute_cycle(const CandidateRow& r) {
   const LoopGeometry geometry = LoopGeometry::from_degrees(
       std::span<const double>(r.a), std::span<const double>(r.alpha_deg), std::span<const double>(r.d));
+  Representation out;
+  CycleOptions cycle_options;
+  cycle_options.samples = kAtlasCycleSamples;
+  VerificationOptions options;
+  std::optional<VerificationSummary> verification;
+  try {
+    verification = verify_motion(geometry, nullptr, options);
+  } catch (const std::invalid_argument&) {
+    // Not a loop the tracer takes: cycled as below, which says what it can.
+  }
+  const std::optional<Drive> drive = verification ? drive_of(verification->motion, options) : std::nullopt;
+  if (drive) {
+    // motion_window starts a cycle on the reported circuit, its input the
+    // options' input joint: report the chosen circuit, driven by the chosen joint.
+    verification->circuit = drive->circuit;
+    verification->verified = true;
+    verification->on_motion = false;
+    options.input_joint = drive->joint;
+    const std::optional<MotionWindow> window =
+        motion_window(geometry, *verification, std::nullopt, options, kAtlasCycleSamples);
+    if (window && window->range > 0.0) {
+      // The driven joint as the model's joint 1 (its input).
+      const LoopModel model(relabelled(geometry, drive->joint));
+      EquilibriumWorkspace workspace(model);
+      out.input_joint = drive->joint;
+      out.theta0 = window->theta0;
+      out.full_turn = window->range >= 2.0 * kPi;
+      out.on_motion = true;
+      out.circuit = std::move(verification->motion.circuits[static_cast<size_t>(drive->circuit)]);
+      cycle_options.range = window->range;
+      const EquilibriumSummary assembly =
+          assemble_from_angles(model, workspace, relabelled_angles(window->pose, drive->joint));
+      cycle_energy(model, workspace, out.theta0, assembly.state, cycle_options, out.cycle);
+      return out;
+    }
+  }
   const LoopModel model(geometry);
   EquilibriumWorkspace workspace(model);
-  Representation out;
-  CycleOptions options;
-  options.samples = kAtlasCycleSamples;
-  const double span_deg = r.range_hi_deg - r.range_lo_deg;
-  if (!r.full_turn && std::isfinite(span_deg) && span_deg > 0.0 && span_deg < 360.0) {
-    out.full_turn = false;
-    out.theta0 = 0.5 * (r.range_lo_deg + r.range_hi_deg) / kDegreesPerRadian;
-    options.range = span_deg / kDegreesPerRadian;
-  }
   const EquilibriumSummary assembly = assemble(model, workspace, out.theta0);
-  cycle_energy(model, workspace, out.theta0, assembly.state, options, out.cycle);
+  cycle_energy(model, workspace, out.theta0, assembly.state, cycle_options, out.cycle);
   return out;
 }
+
+std::string input_name(const Representation& rep) { return "theta" + std::to_string(rep.input_joint + 1); }
 
 void pick_frames(const Representation& rep, int count, std::vector<std::vector<double>>& theta,
                  std::vector<double>& input_deg) {
@@ -182,9 +265,10 @@ void pick_frames(const Representation& rep, int count, std::vector<std::vector<d
     const double position =
         rep.full_turn ? static_cast<double>(k) / frames : (frames > 1 ? static_cast<double>(k) / (frames - 1) : 0.0);
     const size_t index = std::min(samples.size() - 1, static_cast<size_t>(std::lround(position * samples.size())));
-    const CycleSample& s = *samples[index];
-    theta.emplace_back(s.state.theta.data(), s.state.theta.data() + s.state.theta.size());
-    input_deg.push_back(s.theta_in * kDegreesPerRadian);
+    // The cycle's model numbers the driven joint 1: back to the canonical numbering.
+    const JointVector canonical = relabelled_angles(samples[index]->state.theta, -rep.input_joint);
+    theta.emplace_back(canonical.data(), canonical.data() + canonical.size());
+    input_deg.push_back(samples[index]->theta_in * kDegreesPerRadian);
   }
 }
 
@@ -205,7 +289,7 @@ std::vector<JointPlacement> joint_placements(const LoopGeometry& geometry, const
 }
 
 std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vector<double>>& theta,
-                             const std::vector<double>& input_deg, const std::string& title) {
+                             const std::vector<double>& input_deg, const std::string& input, const std::string& title) {
   const LoopGeometry geometry = LoopGeometry::from_degrees(
       std::span<const double>(row.a), std::span<const double>(row.alpha_deg), std::span<const double>(row.d));
   const int n = geometry.joints();
@@ -297,8 +381,8 @@ std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vec
       svg += buffer;
     }
     std::snprintf(buffer, sizeof buffer,
-                  "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">theta1 = %.0f deg</text></g>\n",
-                  kPanel * (static_cast<double>(k) + 0.5), kTop + kPanel + 18, input_deg[k]);
+                  "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%s = %.0f deg</text></g>\n",
+                  kPanel * (static_cast<double>(k) + 0.5), kTop + kPanel + 18, input.c_str(), input_deg[k]);
     svg += buffer;
   }
   svg += "</svg>\n";
@@ -316,12 +400,24 @@ std::string representative_sentence(const CandidateRow& r) {
          (r.setup != "none" && !r.setup.empty() ? ", setup " + r.setup : "") + ".";
 }
 
-std::string chart_joints_sentence(const CandidateRow& r, const std::string& drawings) {
+std::string chart_joints_sentence(const CandidateRow& r, const Representation& rep, const std::string& drawings) {
+  const size_t driven = static_cast<size_t>(rep.input_joint);
+  const std::string joint = std::to_string(rep.input_joint + 1), angle = input_name(rep);
   std::string out = drawings +
                     " are drawn from the canonical form (as stored; the representation that gives the canonical key), "
-                    "its joint 1 the input (theta1)";
+                    "driven by its joint " +
+                    joint + " (" + angle + ")";
+  if (!rep.on_motion) {
+    out += " over a full turn from the assembly at 0 (no motion of the rigid loop was found)";
+  } else if (rep.full_turn) {
+    out += driven == 0 ? ", which turns fully on a circuit of the rigid loop"
+                       : ", the first of its joints that turns fully on a circuit of the rigid loop (joint 1 does not)";
+  } else {
+    out += " over a window of its range on a circuit of the rigid loop (no joint turns fully" +
+           std::string(driven == 0 ? ")" : ", and joint 1 does not move)");
+  }
   const ConventionalJoints map = conventional_joints(r);
-  if (map.joint.empty()) return out + ".";
+  if (map.joint.size() <= driven) return out + ".";
   bool numbered_alike = true, negated = false;
   std::string from, to;
   for (size_t i = 0; i < map.joint.size(); ++i) {
@@ -332,13 +428,14 @@ std::string chart_joints_sentence(const CandidateRow& r, const std::string& draw
   }
   // Numbered alike with no angle negated: the same representation.
   if (numbered_alike && !negated) return out + "; here the canonical form is the conventional form.";
-  const std::string input = std::to_string(map.joint[0] + 1);
-  out += numbered_alike ? "; its joints are numbered as the conventional form's, and theta1 is the angle of joint 1"
-                        : ": its joints " + from + " are joints " + to +
-                              " of the conventional form, and theta1 is the angle of joint " + input;
-  return out + (map.negated[0]
-                    ? " there measured the other way (joint " + input + " of the conventional form is at -theta1)."
-                    : " there.");
+  const std::string input = std::to_string(map.joint[driven] + 1);
+  out += numbered_alike
+             ? "; its joints are numbered as the conventional form's, and " + angle + " is the angle of joint " + joint
+             : ": its joints " + from + " are joints " + to + " of the conventional form, and " + angle +
+                   " is the angle of joint " + input;
+  return out + (map.negated[driven] ? " there measured the other way (joint " + input +
+                                          " of the conventional form is at -" + angle + ")."
+                                    : " there.");
 }
 
 int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
@@ -354,17 +451,19 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
       "parameters **including the scale**: the known one in the full 3n-parameter space (docs/guide/families.md, "
       "docs/guide/classification.md), the found one (`candidates.local_dimension`) among the search's free "
       "parameters, so a sub-space search (ties, zero offsets, symmetry) can find less than the family has and a "
-      "point on a larger family more. The representative is a full-turn candidate if there is one, with the "
-      "smallest rigid-closure residual; its cycle energy is recomputed from its stored canonical form with joint 1 "
-      "as the input (" +
+      "point on a larger family more. The representative is a full-turn candidate (its input turned fully on the "
+      "motion the search verified) if there is one, with the smallest rigid-closure residual. Its cycle energy is "
+      "recomputed from its stored canonical form along the motion of its rigid loop, every circuit of which is "
+      "traced here: driven by the first of its joints that turns fully on a circuit, over a full turn, or, when no "
+      "joint does, by joint 1 over a window of its range on a circuit (" +
       std::to_string(kAtlasCycleSamples) +
       " samples, log axis; energies below the zero threshold of the run that found it "
-      "are round-off of a zero and are drawn on the threshold's dashed line) and its motion drawn at " +
+      "are round-off of a zero and are drawn on the threshold's dashed line); its motion is drawn at " +
       std::to_string(kFrames) +
-      " input angles of that cycle (oblique view; dashed: joint axes, black: links, dots: joints). The canonical "
-      "form may number the joints otherwise than the conventional one, reverse the loop or flip axes: each family "
-      "says which joint of the conventional form its charts drive. Unclassified candidates come first: a possible new "
-      "family.\n\n";
+      " input angles of that cycle (oblique view; dashed: joint axes, black: links, dots: joints). The joint "
+      "driven is not always joint 1, and the canonical form may number the joints otherwise than the conventional "
+      "one, reverse the loop or flip axes: each family says which joint its charts drive, in both forms. Unclassified "
+      "candidates come first: a possible new family.\n\n";
   md +=
       "| family | joints | candidates | hits | local dimension found (candidates) | free parameters | known dimension "
       "|\n";
@@ -434,10 +533,12 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
     const std::filesystem::path png = dir / (stem + "_cycle.png");
     EnergyPlotStyle style;
     style.title = group.family + " (" + std::to_string(group.joints) + "R), candidate " + std::to_string(r.id) +
-                  ": cycle energy of the canonical geometry" + (rep.full_turn ? "" : " over the verified range");
+                  ": cycle energy of the canonical geometry driven by joint " + std::to_string(rep.input_joint + 1) +
+                  (rep.full_turn ? "" : " over a window of its range");
     style.log_scale = true;
     style.theta0 = rep.theta0;
     style.theta0_deg = rep.theta0 * kDegreesPerRadian;
+    style.input_joint = rep.input_joint;
     const auto threshold = zero_thresholds.find(r.first_run);
     if (threshold != zero_thresholds.end() && threshold->second > 0.0) {
       style.zero_threshold = threshold->second;
@@ -454,7 +555,7 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
     std::vector<double> input_deg;
     pick_frames(rep, kFrames, theta, input_deg);
     const std::filesystem::path svg = dir / (stem + "_motion.svg");
-    write_text(svg, motion_strip_svg(r, theta, input_deg,
+    write_text(svg, motion_strip_svg(r, theta, input_deg, input_name(rep),
                                      group.family + " (" + std::to_string(group.joints) + "R), candidate " +
                                          std::to_string(r.id) + ": the loop at " + std::to_string(theta.size()) +
                                          " input angles"));
@@ -462,7 +563,7 @@ int write_atlas(const std::filesystem::path& gnuplot, const std::vector<Candidat
     if (!r.detail.empty()) md += "Classification: " + r.detail + ".\n";
     md += "\nThe representative's parameters (conventional form, L = 1, twists in degrees):\n" +
           parameter_block(conventional(r)) + "\nIts canonical form (L = 1, twists in degrees):\n" + parameter_block(r) +
-          "\n" + chart_joints_sentence(r, "The cycle-energy chart and the motion drawing") + "\n\n";
+          "\n" + chart_joints_sentence(r, rep, "The cycle-energy chart and the motion drawing") + "\n\n";
     md += "Cycle energy recomputed here: E_mean " + g(rep.cycle.E_mean, 3) + ", E_max " + g(rep.cycle.E_max, 3) + ", " +
           std::to_string(rep.cycle.failed_samples) + " failed samples.\n\n";
     md += "![cycle energy of candidate " + std::to_string(r.id) + "](" + png.filename().string() + ")\n\n";

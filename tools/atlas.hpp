@@ -3,7 +3,8 @@
 // parameters in their conventional form, the local dimension found against the
 // family's known one, and one representative with its cycle-energy chart (PNG,
 // gnuplot) and a strip of frames of its motion (SVG, drawn from the forward
-// kinematics of its stored canonical form).
+// kinematics of its stored canonical form), driven by a joint that its rigid
+// motion turns (compute_cycle).
 #pragma once
 
 #include <cstdint>
@@ -18,6 +19,7 @@
 
 #include "loopfarm/core/cycle.hpp"
 #include "loopfarm/core/loop.hpp"
+#include "loopfarm/core/motion.hpp"
 #include "loopfarm/farm/results_database.hpp"
 
 namespace loopfarm::cli {
@@ -42,12 +44,6 @@ std::string atlas_stem(const std::string& family, int joints);
 // E_mean ..., full turn, setup asymmetric.": the sentence the Markdown atlas
 // and the HTML page (escaped) both print under a family's heading.
 std::string representative_sentence(const CandidateRow& row);
-
-// What the representative's drawings (`drawings`: "The cycle-energy chart and
-// the motion drawing") are drawn from, for both atlases: the stored canonical
-// form, its joint 1 the input (theta1), and which joint of the conventional
-// form (the parameters printed beside them) each of its joints is.
-std::string chart_joints_sentence(const CandidateRow& row, const std::string& drawings);
 
 int write_atlas(const std::filesystem::path& gnuplot, const std::vector<CandidateRow>& rows,
                 const std::map<std::int64_t, double>& zero_thresholds, const std::string& header,
@@ -76,21 +72,46 @@ std::string dimension_counts(const FamilyGroup& group);
 std::string free_parameter_counts(const FamilyGroup& group);
 
 // The representative's cycle energy, recomputed from its canonical geometry
-// as `loopfarm energy` computes it (assembly at theta0, then the cycle of
-// kAtlasCycleSamples samples): a full turn from 0 or, for a loop whose
-// verified motion does not turn fully, the verified range.
+// along the motion of its rigid loop, as `loopfarm verify` computes it. The
+// stored full_turn and input range belong to the labelling the search
+// verified the loop in, whose input need not be the canonical form's joint
+// 1; so every circuit of the canonical form is traced here (verify_motion)
+// and the joint driven is the first, in the canonical numbering, that turns
+// fully on a moving circuit, over a full turn. When no joint turns fully:
+// joint 1 over a window of its range (cycle_window) on the moving circuit
+// where it travels farthest, or, where joint 1 moves on none, the joint that
+// travels farthest. The geometry is relabelled (loop.hpp relabelled) so that
+// the driven joint is the cycle model's joint 1, assembled at a pose on that
+// circuit (motion_window: a full turn starts at 0 unless a sample would lie
+// at a singular pose there) and cycled over kAtlasCycleSamples samples. A
+// row whose rigid loop is not found to move (a stored row is only data) is
+// cycled as before, joint 1 over a full turn from the assembly at 0.
 inline constexpr int kAtlasCycleSamples = 360;
 struct Representation {
-  CycleSummary cycle;
+  CycleSummary cycle;   // theta_in: the driven joint's angle; states in the relabelled order
+  int input_joint = 0;  // the joint driven, in the canonical numbering (0-based)
   double theta0 = 0.0;  // [rad]
   bool full_turn = true;
+  bool on_motion = false;  // driven along a moving circuit of the rigid loop
+  // That circuit, in the canonical numbering (empty when not on_motion).
+  std::optional<Circuit> circuit;
 };
 Representation compute_cycle(const CandidateRow& row);
 
+// "theta3": the name of the angle the cycle drives (canonical numbering).
+std::string input_name(const Representation& rep);
+
+// What the representative's drawings (`drawings`: "The cycle-energy chart and
+// the motion drawing") are drawn from, for both atlases: the stored canonical
+// form, the joint `rep` drives (and why that one), and which joint of the
+// conventional form (the parameters printed beside them) each of its joints
+// and the driven one are.
+std::string chart_joints_sentence(const CandidateRow& row, const Representation& rep, const std::string& drawings);
+
 // `count` poses of the cycle, evenly spaced in input angle, in input order
 // (failed samples left out): a full turn at k/count of the turn, a range
-// with both ends. `theta` gets each pose's joint angles [rad], `input_deg`
-// its input angle.
+// with both ends. `theta` gets each pose's joint angles [rad] in the
+// canonical numbering, `input_deg` its input angle (the driven joint's).
 void pick_frames(const Representation& rep, int count, std::vector<std::vector<double>>& theta,
                  std::vector<double>& input_deg);
 
@@ -107,9 +128,10 @@ inline constexpr double kAxisHalf = 0.45;
 
 // The SVG strip of frames (exposed for the atlas only; one row of `frames`
 // panels): the joint axes and links of the loop at evenly spaced samples of
-// its motion. `theta` holds each frame's joint angles [rad], `input_deg` the
-// input angle shown under each frame.
+// its motion. `theta` holds each frame's joint angles [rad] (canonical
+// numbering), `input_deg` the input angle shown under each frame, named
+// `input` ("theta3").
 std::string motion_strip_svg(const CandidateRow& row, const std::vector<std::vector<double>>& theta,
-                             const std::vector<double>& input_deg, const std::string& title);
+                             const std::vector<double>& input_deg, const std::string& input, const std::string& title);
 
 }  // namespace loopfarm::cli

@@ -13,7 +13,7 @@
 #include "atlas.hpp"
 #include "candidate_display.hpp"
 #include "loopfarm/core/motion.hpp"
-#include "loopfarm/farm/candidate_pose.hpp"
+#include "loopfarm/search/verify.hpp"
 
 namespace loopfarm::cli {
 namespace {
@@ -211,10 +211,19 @@ std::string histogram_svg(const EnergyHistogram& h, const std::vector<RunRow>& r
 // decades of round-off its computed energy lies in. A cursor line (class
 // "cursor") follows the page's input angle.
 std::string energy_svg(const Representation& rep, double threshold, double lo_deg, double hi_deg) {
+  // A sample's input angle [deg] on the chart: a full turn's folded into
+  // [lo_deg, lo_deg + 360) (its cycle may start a little off 0, away from a
+  // singular pose).
+  const auto angle_deg = [&](const CycleSample* s) {
+    const double deg = s->theta_in * kDegreesPerRadian;
+    if (!rep.full_turn) return deg;
+    const double turns = std::floor((deg - lo_deg) / 360.0);
+    return deg - 360.0 * turns;
+  };
   std::vector<const CycleSample*> samples;
   for (const CycleSample& s : rep.cycle.samples) samples.push_back(&s);
   std::sort(samples.begin(), samples.end(),
-            [](const CycleSample* x, const CycleSample* y) { return x->theta_in < y->theta_in; });
+            [&](const CycleSample* x, const CycleSample* y) { return angle_deg(x) < angle_deg(y); });
   const double bottom = std::floor(std::log10(threshold));
   double top = bottom + 1;
   for (const CycleSample* s : samples) {
@@ -269,15 +278,14 @@ std::string energy_svg(const Representation& rep, double threshold, double lo_de
       flush();
       continue;
     }
-    std::snprintf(b, sizeof b, "%.1f,%.1f ", x_of(s->theta_in * kDegreesPerRadian),
-                  y_of(std::log10(std::max(s->energy, threshold))));
+    std::snprintf(b, sizeof b, "%.1f,%.1f ", x_of(angle_deg(s)), y_of(std::log10(std::max(s->energy, threshold))));
     points += b;
   }
   flush();
   std::snprintf(b, sizeof b,
                 "<line class=\"cursor\" x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>\n<text x=\"%.1f\" "
-                "y=\"%.1f\" text-anchor=\"middle\">input angle theta1 [deg]</text>\n</svg>\n",
-                kLeft, kTop, kLeft, kTop + plot_h, kLeft + plot_w / 2, kHeight - 6);
+                "y=\"%.1f\" text-anchor=\"middle\">input angle %s [deg]</text>\n</svg>\n",
+                kLeft, kTop, kLeft, kTop + plot_h, kLeft + plot_w / 2, kHeight - 6, input_name(rep).c_str());
   svg += b;
   return svg;
 }
@@ -302,23 +310,18 @@ struct MotionFrames {
   double lo_deg = 0.0, hi_deg = 360.0;
 };
 
-// kMotionFrames poses of the rigid loop's verified motion (the circuit
-// candidate_pose finds, traced as loopfarm motion traces it), evenly spaced
-// in input angle: a full turn from 0, or a rocker's range with both ends,
-// shifted by whole turns to lie over the cycle's range. Empty when the
-// motion cannot be traced (a stored row is only data).
+// kMotionFrames poses of the rigid loop's verified motion (the circuit the
+// cycle runs on, compute_cycle), evenly spaced in the driven joint's angle:
+// a full turn from 0, or a rocker's range with both ends, shifted by whole
+// turns to lie over the cycle's range. Empty when the cycle is not on a
+// motion (a stored row is only data) or the circuit cannot be followed.
 MotionFrames traced_frames(const LoopGeometry& geometry, const Representation& rep) {
   MotionFrames out;
-  std::optional<CandidatePose> pose;
-  try {
-    pose = candidate_pose(geometry, 90.0);
-  } catch (const std::invalid_argument&) {
-    return out;
-  }
-  if (!pose) return out;
-  const Circuit circuit = trace_circuit(geometry, pose->theta);
-  if (circuit.points.empty() || circuit.ranges.empty()) return out;
-  const JointRange& range = circuit.input_range(0);
+  if (!rep.circuit || rep.circuit->points.empty() || rep.circuit->ranges.empty()) return out;
+  const Circuit& circuit = *rep.circuit;
+  MotionOptions options = VerificationOptions().motion();
+  options.input_joint = rep.input_joint;
+  const JointRange& range = circuit.input_range(rep.input_joint);
   out.full_turn = range.crank();
   double lo = 0.0, span = 2 * kPi;
   if (!out.full_turn) {
@@ -333,7 +336,7 @@ MotionFrames traced_frames(const LoopGeometry& geometry, const Representation& r
     const double angle = lo + span * (out.full_turn ? static_cast<double>(k) / kMotionFrames
                                                     : static_cast<double>(k) / (kMotionFrames - 1));
     JointVector theta;
-    if (!pose_at_input(geometry, circuit, angle, theta)) continue;
+    if (!pose_at_input(geometry, circuit, angle, theta, options)) continue;
     out.theta.emplace_back(theta.data(), theta.data() + theta.size());
     out.input_deg.push_back(angle * kDegreesPerRadian);
   }
@@ -363,6 +366,7 @@ nlohmann::json motion_json(const CandidateRow& r, const Representation& rep, dou
   const int n = geometry.joints();
   nlohmann::json j;
   j["joints"] = n;
+  j["input"] = input_name(rep);
   j["full_turn"] = frames.full_turn;
   j["lo_deg"] = rounded(lo_deg, 4);
   j["hi_deg"] = rounded(hi_deg, 4);
@@ -543,7 +547,7 @@ const char* const kScript = R"JS(
     }
 
     function show() {
-      label.textContent = 'theta1 = ' + angle.toFixed(1) + ' deg';
+      label.textContent = m.input + ' = ' + angle.toFixed(1) + ' deg';
       if (chart) {
         const x0 = +chart.dataset.x0, x1 = +chart.dataset.x1, lo = +chart.dataset.lo, hi = +chart.dataset.hi;
         // The chart's image of the angle (whole turns apart); none outside its range.
@@ -634,9 +638,12 @@ int write_html_atlas(const ResultsDatabase& db, const HtmlSelection& selection, 
       "full-turn candidate if there is one, with the smallest rigid-closure residual (as in <code>report "
       "--atlas</code>). Its parameters are shown in the conventional form (L = 1, twists in degrees, positive where "
       "the loop allows, as the report's table shows them), then in the canonical form, which gives the "
-      "de-duplication key and from which the 3D view and the cycle-energy chart are drawn, its joint 1 the input: "
-      "each family says which joint of the conventional form that is. Unclassified candidates come first: a "
-      "possible new family.</p>\n<table class=\"data\">"
+      "de-duplication key and from which the 3D view and the cycle-energy chart are drawn along the motion of the "
+      "rigid loop, every circuit of which is traced here: driven by the first of its joints that turns fully on a "
+      "circuit, over a full turn, or, when no joint does, by joint 1 over a window of its range on a circuit. Each "
+      "family says which joint that is, in both forms. Unclassified candidates come first: a possible new "
+      "family.</p>\n"
+      "<table class=\"data\">"
       "<tr><th>family</th><th>joints</th><th>candidates</th><th>hits</th><th>local dimension found "
       "(candidates)</th><th>free parameters</th><th>known dimension</th><th>representative</th></tr>\n";
   for (const FamilyGroup& group : groups) {
@@ -688,7 +695,7 @@ int write_html_atlas(const ResultsDatabase& db, const HtmlSelection& selection, 
         "<p class=\"note\">Parameters (conventional form, L = 1, twists in degrees):</p>\n" +
         parameters_html(conventional(r)) + "<p class=\"note\">Canonical form (L = 1, twists in degrees):</p>\n" +
         parameters_html(r) + "<p class=\"note\">" +
-        html_escape(chart_joints_sentence(r, "The 3D view and the cycle-energy chart")) + "</p>\n</div>\n</div>\n";
+        html_escape(chart_joints_sentence(r, rep, "The 3D view and the cycle-energy chart")) + "</p>\n</div>\n</div>\n";
     body += "</section>\n";
   }
 

@@ -279,7 +279,7 @@ GnuplotInput energy_curve_gnuplot(const CycleSummary& summary, const EnergyPlotS
   gp += gnuplot_terminal(style.format, 960, 600 + 20 * static_cast<int>(style.notes.size()));
   gp += "set output " + gnuplot_string(output.string()) + "\n";
   gp += "set title " + gnuplot_lines(style.title, style.notes) + " noenhanced\n";
-  gp += "set xlabel 'input angle theta_1 [deg]'\n";
+  gp += "set xlabel 'input angle theta_" + std::to_string(style.input_joint + 1) + " [deg]'\n";
   gp += "set ylabel 'cycle energy E / (k_a L^2)'\n";
   gp += "set grid\nset key outside bottom center horizontal\nset autoscale xfix\n";
   const bool all_zero = clamp && highest <= threshold;

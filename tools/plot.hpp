@@ -69,6 +69,7 @@ struct EnergyPlotStyle {
   // the start angle appears exactly as the user gave it.
   double theta0_deg = 0.0;
   double theta0 = 0.0;  // [rad]
+  int input_joint = 0;  // the joint whose angle the x axis shows (0-based)
   // E/(k_a L^2) at or below which an energy is zero (> 0), and where that
   // threshold comes from ("job default", "run 1"), for the chart's key.
   double zero_threshold = 1e-12;

@@ -23,6 +23,7 @@
 #include "command_test_support.hpp"
 #include "loopfarm/farm/results_database.hpp"
 #include "loopfarm/search/canonical.hpp"
+#include "loopfarm/search/verify.hpp"
 
 namespace loopfarm {
 namespace {
@@ -150,15 +151,15 @@ constexpr int kFiller = 1200;      // bennett-like rows of run 1 beyond the real
 constexpr int kCandidates = 1206;  // 4 real loops, the filler, 2 of run 2
 constexpr int kBennett = 1203;     // the Bennett loop, the filler, run 2's
 
-// A 4R test job of `starts` starts, seed 1, zero threshold 1e-12, report
-// threshold 1e-6.
-RunIdentity test_job(const std::string& job_path, std::uint64_t starts) {
+// A 4R test job (or of `joints` joints) of `starts` starts, seed 1, zero
+// threshold 1e-12, report threshold 1e-6.
+RunIdentity test_job(const std::string& job_path, std::uint64_t starts, int joints = 4) {
   RunIdentity id;
   id.job_path = job_path;
   id.job_text = "[search]\nstarts = " + std::to_string(starts) + "\n";
   id.seed = 1;
   id.starts = starts;
-  id.joints = 4;
+  id.joints = joints;
   id.zero_threshold = 1e-12;
   id.report_threshold = 1e-6;
   return id;
@@ -709,6 +710,151 @@ TEST_F(ReportCli, TheAtlasesShowABennettLoopWithPositiveTwists) {
   // The canonical form, which the charts are drawn from, stays shown and says how its joints map.
   EXPECT_NE(md.find("canonical form"), std::string::npos) << md;
   EXPECT_NE(md.find("of the conventional form"), std::string::npos) << md;
+}
+
+// The number after `label` in `text` ("E_mean " in "..., E_mean 2.5e-30, ...", up to a
+// comma, space or quote), NaN if none.
+double number_after(const std::string& text, const std::string& label) {
+  const size_t at = text.find(label);
+  if (at == std::string::npos) return std::nan("");
+  const size_t start = at + label.size();
+  const size_t end = text.find_first_of(", \"", start);
+  return to_number(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
+}
+
+// The stored full_turn and input range belong to the labelling the search
+// verified a loop in; the canonical form's joint 1 may rock where another
+// joint turns fully. Both atlases then drive a joint that turns fully (the
+// first in the canonical numbering), over a full turn, and read a zero: a
+// Bennett-triads 6R of the generic 6R search as stored in canonical form
+// (joint 1 rocks on both circuits, joints 2 to 5 turn fully), and a planar
+// crank-rocker stored with its rocking joint first (joints 2 and 3 turn fully),
+// which the conventional form numbers otherwise. Each says which joint it
+// drives, in both forms.
+TEST_F(ReportCli, TheAtlasesDriveAJointThatTurnsFullyWhereJointOneRocks) {
+  struct Case {
+    std::string name, family;
+    LoopGeometry stored;
+  };
+  const std::vector<Case> cases = {{"triads", "bennett_triads",
+                                    degrees({0.5358164540989007, 0.8249169227425416, 0.7966869784893877,
+                                             0.9128809676663918, 1.455081393381001, 1.150730041840033},
+                                            {-27.47893022437578, -134.7338773702884, -33.19625118602273,
+                                             -141.1443361773064, -90.38069489801955, -82.2900369250908},
+                                            {9.580387347121904e-15, -5.299541570880196e-14, -0.247900690510372,
+                                             5.712772204102417e-15, -4.808719565969614e-15, 0.247900690510327})},
+                                   {"crank-rocker", "planar", degrees({3, 1, 3.2, 2.5}, {0, 0, 0, 0}, {0, 0, 0, 0})}};
+  const bool gnuplot = std::system("command -v gnuplot >/dev/null 2>&1") == 0;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const int n = c.stored.joints();
+    // The loop as the tracer sees it: joint 1 turns fully on no circuit, and
+    // the first joint that turns fully on one is the one the atlases must drive.
+    const VerificationSummary v = verify_motion(c.stored, nullptr);
+    ASSERT_TRUE(v.verified);
+    int first_crank = -1;
+    for (int j = 0; j < n && first_crank < 0; ++j) {
+      for (const Circuit& circuit : v.motion.circuits) {
+        if (circuit.ranges[static_cast<size_t>(j)].crank()) first_crank = j;
+      }
+    }
+    ASSERT_GT(first_crank, 0) << "joint 1 turns fully, or no joint does";
+    const std::string joint = std::to_string(first_crank + 1), angle = "theta" + joint;
+    // Which joint of the conventional form that is, and whether its angle runs the other way.
+    JointVector probe = JointVector::Zero(n);
+    probe[first_crank] = 1.0;
+    const JointVector mapped = canonical_angles(conventional_form(c.stored), probe);
+    int conventional = 0;
+    for (int k = 1; k < n; ++k) {
+      if (std::abs(mapped[k]) > std::abs(mapped[conventional])) conventional = k;
+    }
+    const std::string there = angle + " is the angle of joint " + std::to_string(conventional + 1) + " there" +
+                              (mapped[conventional] < 0.0 ? " measured the other way" : ".");
+
+    // Stored as the search stores it: a full turn (of its own input).
+    const fs::path path = dir_ / (c.name + ".sqlite");
+    {
+      ResultsDatabase db = ResultsDatabase::open(path.string(), DatabaseMode::write);
+      const std::int64_t run = db.open_run(test_job("jobs/" + c.name + "-test.toml", 2, n)).run_id;
+      db.commit(run, {verified(0, c.stored, c.family, 1e-29)});
+    }
+    const std::string driven = "driven by its joint " + joint + " (" + angle +
+                               "), the first of its joints that turns "
+                               "fully on a circuit of the rigid loop (joint 1 does not)";
+
+    const fs::path page = dir_ / (c.name + ".html");
+    testing::CommandResult r = run_command(kExecutable, "report", {path.string(), "--html", page.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream in(page);
+    const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_LT(number_after(html, "recomputed (360 samples, log axis), E_mean "), 1e-20);
+    EXPECT_NE(html.find(driven), std::string::npos) << html.substr(html.find("drawn from the canonical form"), 600);
+    EXPECT_NE(html.find(there), std::string::npos) << there;
+    EXPECT_NE(html.find("input angle " + angle + " [deg]"), std::string::npos);
+    EXPECT_NE(html.find("\"input\":\"" + angle + "\""), std::string::npos);
+
+    if (!gnuplot) continue;
+    const fs::path atlas = dir_ / (c.name + "-atlas");
+    r = run_command(kExecutable, "report", {path.string(), "--atlas", atlas.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream md_in(atlas / "atlas.md");
+    const std::string md((std::istreambuf_iterator<char>(md_in)), std::istreambuf_iterator<char>());
+    const size_t recomputed = md.find("Cycle energy recomputed here: ");
+    ASSERT_NE(recomputed, std::string::npos) << md;
+    EXPECT_LT(number_after(md.substr(recomputed), "E_mean "), 1e-20) << md.substr(recomputed, 100);
+    EXPECT_NE(md.find(driven), std::string::npos) << md;
+    EXPECT_NE(md.find(there), std::string::npos) << there << "\n" << md;
+    std::ifstream svg_in(atlas / (std::to_string(n) + "r_" + c.family + "_motion.svg"));
+    const std::string svg((std::istreambuf_iterator<char>(svg_in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(svg.find(">" + angle + " = 0 deg<"), std::string::npos) << svg.substr(0, 300);
+  }
+}
+
+// Where no joint turns fully, joint 1 is driven over a window of its range
+// on a circuit as the tracer finds it on the stored geometry, not over the
+// stored input range, which belongs to the search's labelling: a planar
+// triple rocker (joint 1 swings through [73.9, 286.1] deg) stored with the
+// range of another of its joints, [-140.3, 140.3] deg.
+TEST_F(ReportCli, TheAtlasesDriveJointOneOverItsTracedRangeWhereNoJointTurnsFully) {
+  const fs::path path = dir_ / "rocker.sqlite";
+  {
+    ResultsDatabase db = ResultsDatabase::open(path.string(), DatabaseMode::write);
+    const std::int64_t run = db.open_run(test_job("jobs/rocker-test.toml", 2)).run_id;
+    StartRecord rocker = verified(0, degrees({2, 2.5, 3, 4.6}, {0, 0, 0, 0}, {0, 0, 0, 0}), "planar", 1e-29);
+    rocker.candidate.full_turn = false;
+    rocker.candidate.range_lo_deg = -140.264174;
+    rocker.candidate.range_hi_deg = 140.264174;
+    db.commit(run, {rocker});
+  }
+  const std::string driven =
+      "driven by its joint 1 (theta1) over a window of its range on a circuit of the rigid loop (no joint turns fully)";
+  const fs::path page = dir_ / "rocker.html";
+  testing::CommandResult r = run_command(kExecutable, "report", {path.string(), "--html", page.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(page);
+  const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_LT(number_after(html, "recomputed (360 samples, log axis), E_mean "), 1e-20);
+  EXPECT_NE(html.find(driven), std::string::npos);
+  // The chart spans a window inside joint 1's range (an image of it whole
+  // turns away), not the stored one.
+  const size_t chart = html.find("<svg class=\"chart energy\"");
+  ASSERT_NE(chart, std::string::npos);
+  const double lo = number_after(html.substr(chart), "data-lo=\""), hi = number_after(html.substr(chart), "data-hi=\"");
+  const double turns = 360.0 * std::round((180.0 - 0.5 * (lo + hi)) / 360.0);
+  EXPECT_GT(hi - lo, 90.0) << lo << " " << hi;
+  EXPECT_GT(lo + turns, 73.9) << lo;
+  EXPECT_LT(hi + turns, 286.1) << hi;
+
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) GTEST_SKIP() << "no gnuplot for --atlas";
+  const fs::path atlas = dir_ / "rocker-atlas";
+  r = run_command(kExecutable, "report", {path.string(), "--atlas", atlas.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream md_in(atlas / "atlas.md");
+  const std::string md((std::istreambuf_iterator<char>(md_in)), std::istreambuf_iterator<char>());
+  const size_t recomputed = md.find("Cycle energy recomputed here: ");
+  ASSERT_NE(recomputed, std::string::npos) << md;
+  EXPECT_LT(number_after(md.substr(recomputed), "E_mean "), 1e-20) << md.substr(recomputed, 100);
+  EXPECT_NE(md.find(driven), std::string::npos) << md;
 }
 
 }  // namespace
