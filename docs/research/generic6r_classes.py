@@ -54,6 +54,18 @@
   docs/research/generic6r_classes.py waldron SEED LOOPFARM
       # Waldron's hybrid: two Bennett loops ABCD, AEFG sharing the axis A, links AB, AE fused and
       # DA, GA fused, joint A removed: the 6R B C D G F E; verified with loopfarm
+  docs/research/generic6r_classes.py b8-conditions DB
+      # each B8 loop's labelling (reversal and shift; the B form turned into the A form) and the
+      # residuals of B8's eight known conditions: five visible, C1, C2, C3 (b8_conditions)
+  docs/research/generic6r_classes.py b8-count DB LOOPFARM
+      # B8's number of conditions at each B8 loop by the reciprocal-wrench method: singular values of
+      # the normal rows at 40 poses of its `loopfarm motion`, and whether the eight known are among them
+  docs/research/generic6r_classes.py b8-build DB SEED N EPS LOOPFARM
+      # N loops built from C1-C3 near the run's B8 loops, offsets solved by closure, verified with
+      # loopfarm and counted as above; each verified one moved off C1, C2, C3 by EPS: does it close?
+      # B8's loops (all three b8-*): the unclassified loops closing to <= 1e-11 with B8's five
+      # visible conditions in some labelling (b8_loops; in g6.sqlite the six of bond fingerprint
+      # 6R/4 22 22 11 22 ...)
 
 Classes, tested on every shift and reversal of the canonical representation, each equality to 1e-6
 (lengths in L, twists in degrees / 57.3; k_i = |sin alpha_i| / a_i, Bennett's ratio; a link
@@ -933,6 +945,415 @@ def cmd_t7_flip(db):
     print(f"{met['+']} of {n['+']} '+' loops meet the '-' conditions and {met['-']} of {n['-']} '-' loops the '+' ones "
           f"after axes 1, 3, 5 are reversed (signed k, twists in (-180, 180]); worst residual {worst:.1g}")
 
+
+# ---- B8: Bennett dyads at links 2-3 and 5-6 (bond fingerprint 6R/4 22 22 11 22 ...) ----
+# Geometries here are (a, alpha [rad], d) triples of lists; the labelling operations are loop.hpp's.
+def b8_shift(g, s):
+    return tuple([v[(i + s) % 6] for i in range(6)] for v in g)
+
+
+def b8_reverse(g):
+    """The loop traversed backwards: joint k -> 5 - k, link k -> 4 - k (0-based, mod 6), offsets negated."""
+    a, al, d = g
+    return [a[(4 - k) % 6] for k in range(6)], [al[(4 - k) % 6] for k in range(6)], [-d[5 - k] for k in range(6)]
+
+
+def b8_visible(g):
+    """B8's five visible conditions (signed Bennett ratios k = sin(alpha) / a), lengths over
+    L = sqrt(sum(a^2 + d^2) / 6)."""
+    a, al, d = g
+    L = math.sqrt(sum(x * x for x in a + d) / 6)
+    return {'d3': d[2] / L, 'd6': d[5] / L,
+            'k2 = k3': (a[1] * math.sin(al[2]) - a[2] * math.sin(al[1])) / L,
+            'k5 = k6': (a[4] * math.sin(al[5]) - a[5] * math.sin(al[4])) / L,
+            'd1 + d4 = d2 + d5': (d[0] + d[3] - d[1] - d[4]) / L}
+
+
+def b8_labelling(g):
+    """B8's labelling of a loop: the first reversal (no, yes) and shift (0..5) of its stored form with Bennett dyads at
+    links 2-3 and 5-6 (signed ratios equal) and d3 = d6 = 0, each to TOL; in it, the "A form" has d1 + d4 = d2 + d5
+    and is kept, the "B form" has d1 + d2 = d4 + d5 and is turned into the A form by flipping axes 2, 4, 6 and taking
+    the mirror image (alpha_i -> -180 deg - alpha_i, d1, d3, d5 negated). None if neither holds to TOL.
+    Returns the A-form geometry, 'A' or 'B', (reversal, shift)."""
+    for r in (0, 1):
+        for s in range(6):
+            h = b8_shift(g, s)
+            if r:
+                h = b8_reverse(h)
+            v = b8_visible(h)
+            if max(abs(v[k]) for k in ('d3', 'd6', 'k2 = k3', 'k5 = k6')) > TOL:
+                continue
+            a, al, d = h
+            L = math.sqrt(sum(x * x for x in a + d) / 6)
+            if abs(d[0] + d[3] - d[1] - d[4]) <= TOL * L:
+                return (list(a), list(al), list(d)), 'A', (r, s)
+            if abs(d[0] + d[1] - d[3] - d[4]) <= TOL * L:
+                return (list(a), [math.remainder(-math.pi - x, 2 * math.pi) for x in al],
+                        [-d[0], d[1], -d[2], d[3], -d[4], d[5]]), 'B', (r, s)
+    return None
+
+
+def b8_loops(db):
+    """B8's loops of a run: the unclassified loops closing to <= 1e-11 with B8's five visible conditions in some
+    labelling (b8_labelling; stricter than classify's 'B8' pattern, which ignores the ratios' signs and the offsets'
+    sum: of the B8 loops docs/research/discovery-5r-6r.md tabulates from an earlier run, the offsets' sum leaves out
+    1406, from a cubic motion polynomial, and 2632 and 3253, of local dimension 6 and 7). Read-only. On the run of
+    jobs/generic-6r.toml in g6.sqlite (docs/research/report-generic-6r.md) these are the six loops of bond fingerprint
+    6R/4 22 22 11 22 ...; a fingerprint is stored only after `loopfarm bonds --store`, so it is shown, not used.
+    Yields (start, fingerprint or None, rigid residual, A-form geometry, form, (reversal, shift))."""
+    con = sqlite3.connect(f'file:{db}?mode=ro', uri=True)
+    has_fp = any(c[1] == 'bond_fingerprint' for c in con.execute("PRAGMA table_info(candidates)"))
+    q = (f"SELECT first_start, {'bond_fingerprint' if has_fp else 'NULL'}, rigid_residual, {','.join(COLS)} "
+         "FROM candidates WHERE family = 'unclassified' AND joints = 6 AND rigid_residual <= 1e-11 ORDER BY first_start")
+    for r in con.execute(q).fetchall():
+        w = b8_labelling((list(r[3:9]), [math.radians(x) for x in r[9:15]], list(r[15:21])))
+        if w:
+            yield (r[0], r[1], r[2], *w)
+
+
+def b8_conditions(g):
+    """The eight known conditions of B8 in the A form (lengths over L): the five visible ones and
+    C1 tan(alpha2/2) tan(alpha3/2) = tan(alpha5/2) tan(alpha6/2), C2 (cos alpha2 + cos alpha3)/k2 = (cos alpha5 +
+    cos alpha6)/k5 (bennett_dyads' invariant), C3 tan(alpha1/2)/a1 = tan(alpha4/2)/a4, each cleared of denominators."""
+    a, al, d = g
+    L = math.sqrt(sum(x * x for x in a + d) / 6)
+    s = [math.sin(x / 2) for x in al]
+    c = [math.cos(x / 2) for x in al]
+    v = b8_visible(g)
+    v['C1'] = s[1] * s[2] * c[4] * c[5] - c[1] * c[2] * s[4] * s[5]
+    v['C2'] = ((math.cos(al[1]) + math.cos(al[2])) * a[1] * math.sin(al[4])
+               - (math.cos(al[4]) + math.cos(al[5])) * a[4] * math.sin(al[1])) / L
+    v['C3'] = (a[3] * s[0] * c[3] - a[0] * c[0] * s[3]) / L
+    return v
+
+
+def cmd_b8_conditions(db):
+    """Each B8 loop's labelling and the residuals of the eight known conditions."""
+    loops = list(b8_loops(db))
+    for start, fp, rigid, g, form, (r, s) in loops:
+        print(f"start {start}: reversal {'yes' if r else 'no'}, shift {s}, "
+              + ("A form (d1 + d4 = d2 + d5) as labelled" if form == 'A' else
+                 "B form (d1 + d2 = d4 + d5) as labelled, axes 2, 4, 6 flipped and mirrored")
+              + f"; rigid residual {rigid:.1g}; fingerprint {fp or '(not stored)'}")
+    if not loops:
+        print('no B8 loop')
+        return
+    table = {start: b8_conditions(g) for start, fp, rigid, g, form, rs in loops}
+    names = list(next(iter(table.values())))
+    print('condition (A form, lengths over L)'.ljust(36), ' '.join(f"{s:>8d}" for s in table))
+    for n in names:
+        print(n.ljust(36), ' '.join(f"{table[s][n]:+.1e}" for s in table))
+    print('C1: tan(alpha2/2) tan(alpha3/2) = tan(alpha5/2) tan(alpha6/2); C2: (cos alpha2 + cos alpha3)/k2 = '
+          '(cos alpha5 + cos alpha6)/k5; C3: tan(alpha1/2)/a1 = tan(alpha4/2)/a4 (each cleared of denominators)')
+    worst = max(((abs(v[n]), s) for s, v in table.items() for n in names))
+    print(f"{len(table)} B8 loops, {sum(1 for x in loops if x[4] == 'B')} of them in the B form; largest residual of the "
+          f"{len(names)} conditions {worst[0]:.2g} (start {worst[1]})")
+
+
+def b8_frames(a, al, d, th):
+    F = [[1.0 if i == j else 0.0 for j in range(4)] for i in range(4)]
+    out = [F]
+    for i in range(6):
+        F = mat_mul(F, dh(th[i], d[i], a[i], al[i]))
+        out.append(F)
+    return out
+
+
+def b8_twists(a, al, d, th):
+    """Spatial twists (omega, v) of the six joints and of the 18 parameters a1..a6, alpha1..alpha6, d1..d6 at the
+    pose th: the joints' screws, and each parameter's displacement of the links after it."""
+    Fs = b8_frames(a, al, d, th)
+    St, Sp = [], [None] * 18
+    for i in range(6):
+        R = [row[:3] for row in Fs[i][:3]]
+        p = [Fs[i][0][3], Fs[i][1][3], Fs[i][2][3]]
+
+        def spatial(w, v):
+            W, V = [dot(r, w) for r in R], [dot(r, v) for r in R]
+            pw = cross(p, W)
+            return W + [V[k] + pw[k] for k in range(3)]
+        z, x = [0.0, 0.0, 1.0], [math.cos(th[i]), math.sin(th[i]), 0.0]
+        foot = [a[i] * x[0], a[i] * x[1], d[i]]
+        St.append(spatial(z, [0.0, 0.0, 0.0]))
+        Sp[i] = spatial([0.0, 0.0, 0.0], x)               # a_i: a slide along the common normal
+        Sp[6 + i] = spatial(x, cross(foot, x))            # alpha_i: a turn about the normal through its far foot
+        Sp[12 + i] = spatial([0.0, 0.0, 0.0], z)          # d_i: a slide along the axis
+    return St, Sp
+
+
+def b8_motion_poses(loopfarm, g, count):
+    """count poses spread over the first circuit of `loopfarm motion` of g, each closed by the script's rigid closure
+    to <= 1e-9 (poses that do not are dropped)."""
+    a, al, d = g
+    out = subprocess.run([loopfarm, 'motion', '--a', ','.join(map(repr, a)), '--alpha-deg=' + ','.join(
+        repr(math.degrees(x)) for x in al), '--d=' + ','.join(map(repr, d)), '--csv', '-'], capture_output=True, text=True)
+    rows_ = [r for r in out.stdout.splitlines() if r]
+    if len(rows_) < 2:
+        return []
+    head = rows_[0].split(',')
+    data = [dict(zip(head, r.split(','))) for r in rows_[1:]]
+    data = [r for r in data if r['circuit'] == data[0]['circuit']]
+    poses = []
+    for i in sorted(set(int(i * (len(data) - 1) / (count - 1)) for i in range(count))):
+        th = [math.radians(float(data[i][f'theta{k}_deg'])) for k in range(1, 7)]
+        for _ in range(8):
+            if max(map(abs, closure_residual(a, al, d, th))) < 1e-15:
+                break
+            th, _ = lm_close(a, al, d, th, [1, 2, 3, 4, 5], 3, 1e-12)
+        if max(map(abs, closure_residual(a, al, d, th))) < 1e-9:
+            poses.append(th)
+    return poses
+
+
+def b8_normal_rows(g, poses):
+    """The reciprocal-wrench method: at each pose of the motion the six joint screws are dependent, and the unit wrench
+    w reciprocal to all of them turns the closure's first-order change under a parameter change dp into the scalar
+    sum_j (w . S_pj) dp_j, which must vanish for the changed loop to close near that pose. The rows (w . S_pj)_j over
+    the poses span the normal space of the movable set at g; its rank is the number of conditions."""
+    out = []
+    for th in poses:
+        St, Sp = b8_twists(*g, th)
+        w = sym_eig([[sum(S[i] * S[j] for S in St) for j in range(6)] for i in range(6)])[1][0]
+        out.append([dot(w, S) for S in Sp])
+    return out
+
+
+def singular_values_of(M):
+    """Singular values (descending) of a matrix given by its rows: one-sided Jacobi (Hestenes) on the columns, accurate
+    to round-off relative to the largest (the Gram matrix's eigenvalues would square the precision)."""
+    U = [list(col) for col in zip(*M)]
+    for _ in range(60):
+        off = 0.0
+        for p in range(len(U)):
+            for q in range(p + 1, len(U)):
+                x, y, z = dot(U[p], U[p]), dot(U[q], U[q]), dot(U[p], U[q])
+                if x * y == 0.0 or abs(z) <= 1e-16 * math.sqrt(x * y):
+                    continue
+                off = max(off, abs(z) / math.sqrt(x * y))
+                zeta = (y - x) / (2 * z)
+                t = math.copysign(1.0, zeta) / (abs(zeta) + math.sqrt(1 + zeta * zeta))
+                c = 1 / math.sqrt(1 + t * t)
+                s = c * t
+                U[p], U[q] = [c * u - s * v for u, v in zip(U[p], U[q])], [s * u + c * v for u, v in zip(U[p], U[q])]
+        if off < 1e-15:
+            break
+    return sorted((math.sqrt(dot(u, u)) for u in U), reverse=True)
+
+
+def b8_count(loopfarm, g, count=40):
+    """The reciprocal-wrench count at g: the singular values (descending) of the normal rows at `count` poses of its
+    motion over the 18 parameters, and the number of conditions, those above the largest gap (ratio of neighbours; the
+    rows' round-off, ~1e-12, is far below the smallest condition's, >= 1e-5 at B8's loops). None if fewer than 20 poses."""
+    poses = b8_motion_poses(loopfarm, g, count)
+    if len(poses) < 20:
+        return None
+    rows_ = b8_normal_rows(g, poses)
+    sv = singular_values_of(rows_)
+    floor = [max(x, 1e-17 * sv[0]) for x in sv]
+    return rows_, sv, max(range(1, 18), key=lambda i: floor[i - 1] / floor[i])
+
+
+def b8_known_in_normal_space(g, rows_, n):
+    """The gradients of B8's eight known conditions (b8_conditions) over the 18 parameters: the largest relative part
+    of one outside the span of the n leading normal directions, and the gradients' rank (singular values above 1e-6
+    of the largest, gradients scaled to 1)."""
+    basis, rest = [], [list(r) for r in rows_]
+    for _ in range(n):  # Gram-Schmidt with pivoting
+        r = max(rest, key=lambda x: dot(x, x))
+        u = [x / math.sqrt(dot(r, r)) for x in r]
+        basis.append(u)
+        rest = [[x - dot(v, u) * y for x, y in zip(v, u)] for v in rest]
+    grads = []
+    for j in range(18):
+        gp, gm = [list(v) for v in g], [list(v) for v in g]
+        gp[j // 6][j % 6] += 1e-6
+        gm[j // 6][j % 6] -= 1e-6
+        cp, cm = b8_conditions(gp), b8_conditions(gm)
+        grads.append([(cp[k] - cm[k]) / 2e-6 for k in cp])
+    grads = [[x / math.sqrt(sum(y * y for y in col)) for x in col] for col in zip(*grads)]  # one row per condition
+    outside = 0.0
+    for v in grads:
+        w = list(v)
+        for u in basis:
+            w = [x - dot(v, u) * y for x, y in zip(w, u)]
+        outside = max(outside, math.sqrt(dot(w, w)))
+    sv = singular_values_of(grads)
+    return outside, sum(1 for x in sv if x > 1e-6 * sv[0])
+
+
+def cmd_b8_count(db, loopfarm):
+    """The number of B8's conditions at each B8 loop (A form) by the reciprocal-wrench method (b8_count, 40 poses of
+    its `loopfarm motion`), the dimension of its movable set 18 less that; and whether the eight known conditions are
+    among them (b8_known_in_normal_space)."""
+    found, known, worst = collections.Counter(), collections.Counter(), 0.0
+    for start, fp, rigid, g, form, rs in b8_loops(db):
+        c = b8_count(loopfarm, g)
+        if c is None:
+            print(f"start {start}: motion not traced to 20 poses, not counted")
+            continue
+        rows_, sv, n = c
+        found[n] += 1
+        outside, rank = b8_known_in_normal_space(g, rows_, n)
+        known[rank] += 1
+        worst = max(worst, outside)
+        print(f"start {start}: {len(rows_)} poses; singular values {' '.join(f'{x:.1e}' for x in sv)}; largest gap "
+              f"{sv[n - 1]:.1e} to {sv[n]:.1e}: {n} conditions, dimension {18 - n}; the 8 known conditions' gradients "
+              f"rank {rank}, outside that normal space <= {outside:.0e}", flush=True)
+    print('; '.join(f"{k} loops: {n} conditions, dimension {18 - n}" for n, k in sorted(found.items()))
+          + '; the 8 known conditions ' + ', '.join(f"of rank {r} at {k} loops" for r, k in sorted(known.items()))
+          + f", outside the normal space <= {worst:.0e}")
+
+
+def b8_to_q(g):
+    """The 13 parameters B8's visible conditions leave (A form): k2, alpha2, alpha3, k5, alpha5, alpha6, a1, alpha1,
+    a4, alpha4, d1, d2, d4 (k2 = k3, k5 = k6 the dyads' signed ratios; d3 = d6 = 0, d5 = d1 + d4 - d2)."""
+    a, al, d = g
+    return [math.sin(al[1]) / a[1], al[1], al[2], math.sin(al[4]) / a[4], al[4], al[5], a[0], al[0], a[3], al[3],
+            d[0], d[1], d[3]]
+
+
+def b8_from_q(q):
+    k2, al2, al3, k5, al5, al6, a1, al1, a4, al4, d1, d2, d4 = q
+    return ([a1, math.sin(al2) / k2, math.sin(al3) / k2, a4, math.sin(al5) / k5, math.sin(al6) / k5],
+            [al1, al2, al3, al4, al5, al6], [d1, d2, 0.0, d4, d1 + d4 - d2, 0.0])
+
+
+def b8_solve_c123(q):
+    """alpha6, k5 and a4 from C1, C2 and C3, the other parameters as given."""
+    q = list(q)
+    t = lambda x: math.tan(x / 2)
+    q[5] = 2 * math.atan(t(q[1]) * t(q[2]) / t(q[4]))                                      # C1
+    q[3] = q[0] * (math.cos(q[4]) + math.cos(q[5])) / (math.cos(q[1]) + math.cos(q[2]))   # C2
+    q[8] = q[6] * t(q[9]) / t(q[7])                                                       # C3
+    return q
+
+
+def b8_pose_error(g, th):
+    """The closure error at a pose as a 6-vector: the rotation's axial part and the translation."""
+    F = [[1.0 if i == j else 0.0 for j in range(4)] for i in range(4)]
+    for i in range(6):
+        F = mat_mul(F, dh(th[i], g[2][i], g[0][i], g[1][i]))
+    return [(F[2][1] - F[1][2]) / 2, (F[0][2] - F[2][0]) / 2, (F[1][0] - F[0][1]) / 2, F[0][3], F[1][3], F[2][3]]
+
+
+def b8_close(q, poses, held, free=(10, 11, 12), iters=80):
+    """Levenberg-Marquardt on the closure at every pose: the unknowns the parameters q[free] (the offsets d1, d2, d4)
+    and at each pose k the joint angles but the held one (held[k]). Returns q, poses and the root-sum-square closure
+    error over the poses."""
+    q, poses = list(q), [list(t) for t in poses]
+
+    def error(q, poses):
+        g = b8_from_q(q)
+        return [x for th in poses for x in b8_pose_error(g, th)]
+    r = error(q, poses)
+    s, lam = sum(x * x for x in r), 1e-6
+    for _ in range(iters):
+        if s < 1e-28:
+            break
+        g = b8_from_q(q)
+        tw = [b8_twists(*g, th) for th in poses]
+        cols = []
+        for j in free:  # d p / d q_j by central differences, through the parameters' twists
+            qp, qm = list(q), list(q)
+            qp[j] += 1e-7
+            qm[j] -= 1e-7
+            gp, gm = b8_from_q(qp), b8_from_q(qm)
+            dp = [(x - y) / 2e-7 for x, y in zip(gp[0] + gp[1] + gp[2], gm[0] + gm[1] + gm[2])]
+            cols.append([sum(dp[i] * Sp[i][m] for i in range(18)) for St, Sp in tw for m in range(6)])
+        for k, (St, Sp) in enumerate(tw):
+            for jj in range(6):
+                if jj != held[k]:
+                    cols.append([St[jj][m] if kk == k else 0.0 for kk in range(len(poses)) for m in range(6)])
+        A = [[dot(ci, cj) for cj in cols] for ci in cols]
+        b = [-dot(ci, r) for ci in cols]
+        for _ in range(12):
+            step = solve([[x + (lam if i == j else 0.0) for j, x in enumerate(row)] for i, row in enumerate(A)], b)
+            q2, P2 = list(q), [list(t) for t in poses]
+            for n, j in enumerate(free):
+                q2[j] += step[n]
+            n = len(free)
+            for k in range(len(poses)):
+                for jj in range(6):
+                    if jj != held[k]:
+                        P2[k][jj] += step[n]
+                        n += 1
+            r2 = error(q2, P2)
+            s2 = sum(x * x for x in r2)
+            if s2 < s:
+                q, poses, r, s, lam = q2, P2, r2, s2, max(lam / 10, 1e-15)
+                break
+            lam *= 10
+        else:
+            break
+    return q, poses, math.sqrt(s)
+
+
+def b8_held(g, poses):
+    """At each pose, the joint that turns fastest along the motion (the largest part of the joint screws' null vector):
+    held while the others are solved, so that no pose sits at a turning point of its held joint."""
+    out = []
+    for th in poses:
+        St = b8_twists(*g, th)[0]
+        v = sym_eig([[dot(St[i], St[j]) for j in range(6)] for i in range(6)])[1][0]
+        out.append(max(range(6), key=lambda i: abs(v[i])))
+    return out
+
+
+def cmd_b8_build(db, seed, count, eps, loopfarm, size=0.005, npose=12):
+    """Loops built from C1-C3: the i-th starts from B8 loop i mod (their number) in the A form, its parameters k2, alpha2,
+    alpha3, alpha5, a1, alpha1, alpha4 moved at random (uniform, size 0.005, relative for k2 and a1), then alpha6, k5
+    and a4 solved from C1, C2, C3 and the offsets d1, d2, d4 (the two offset conditions being unknown) by closing the
+    loop at 12 poses of the original's motion (`loopfarm motion`); kept if it closes to <= 1e-11 there, and checked
+    with `loopfarm verify`. Near misses: each verified one with alpha6 moved by EPS (C1 off), k5 scaled by 1 + EPS
+    (C2 off) or a4 scaled by 1 + EPS (C3 off), the offsets and poses solved again from the verified loop's: does it close?"""
+    import random
+    rng = random.Random(int(seed))
+    eps = float(eps)
+    loops = list(b8_loops(db))
+    if not loops:
+        sys.exit('no B8 loop')
+    base, built, near, tried, counted = {}, 0, collections.Counter(), 0, collections.Counter()
+    for i in range(int(count)):
+        start, fp, rigid, g, form, rs = loops[i % len(loops)]
+        if start not in base:
+            poses = b8_motion_poses(loopfarm, g, npose)
+            base[start] = (poses, b8_held(g, poses))
+        poses, held = base[start]
+        q = b8_to_q(g)
+        for j in (0, 1, 2, 4, 6, 7, 9):
+            q[j] += size * rng.uniform(-1, 1) * (abs(q[j]) if j in (0, 6) else 1)
+        q, P, res = b8_close(b8_solve_c123(q), poses, held)
+        a, al, d = b8_from_q(q)
+        j = verify(loopfarm, a, [math.degrees(x) for x in al], d) if res <= 1e-11 else {}
+        line = f"{i}: from start {start}, closure at {len(P)} poses {res:.1e}"
+        if j:
+            line += (f"; loopfarm verify: verified {j['verified']}, E_mean {j['E_mean']:.1g}, local dimension "
+                     f"{j['local_dimension']}")
+        if j.get('verified'):
+            built += 1
+            c = b8_count(loopfarm, (a, al, d))
+            counted[c[2] if c else None] += 1
+            line += f"; by the wrench method {c[2]} conditions, dimension {18 - c[2]}" if c else "; not counted"
+            miss = []
+            for name, k, f in (('C1', 5, lambda x: x + eps), ('C2', 3, lambda x: x * (1 + eps)),
+                               ('C3', 8, lambda x: x * (1 + eps))):
+                q2 = list(q)
+                q2[k] = f(q2[k])
+                q2, P2, r2 = b8_close(q2, P, held)
+                a2, al2, d2 = b8_from_q(q2)
+                ok = r2 <= 1e-11 and verify(loopfarm, a2, [math.degrees(x) for x in al2], d2)['verified']
+                near[name, ok] += 1
+                tried += 1
+                miss.append(f"{name} off: closure {r2:.1e}{' verified' if ok else ''}")
+            line += '; ' + ', '.join(miss)
+        print(line, flush=True)
+    closed = sum(v for (n, ok), v in near.items() if ok)
+    dims = [f"{k} with {n} conditions, dimension {18 - n}" for n, k in sorted(x for x in counted.items() if x[0])]
+    print(f"{built} of {count} built verified ({', '.join(dims + [f'{counted[None]} not counted'] * (None in counted))})"
+          + f", {closed} of {tried} near misses close (EPS {eps:g}; "
+          + ', '.join(f"{n} off: {near[n, True]} of {near[n, True] + near[n, False]}" for n in ('C1', 'C2', 'C3')) + ')')
+
+
 if __name__ == '__main__':
     if len(sys.argv) >= 3 and sys.argv[1] == 'classes':
         cmd_classes(sys.argv[2])
@@ -971,5 +1392,11 @@ if __name__ == '__main__':
         cmd_t7_triad_relations(sys.argv[2], sys.argv[3])
     elif len(sys.argv) >= 3 and sys.argv[1] == 't7-flip':
         cmd_t7_flip(sys.argv[2])
+    elif len(sys.argv) >= 3 and sys.argv[1] == 'b8-conditions':
+        cmd_b8_conditions(sys.argv[2])
+    elif len(sys.argv) >= 4 and sys.argv[1] == 'b8-count':
+        cmd_b8_count(sys.argv[2], sys.argv[3])
+    elif len(sys.argv) >= 7 and sys.argv[1] == 'b8-build':
+        cmd_b8_build(*sys.argv[2:7])
     else:
         sys.exit(__doc__)
