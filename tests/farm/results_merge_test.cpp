@@ -35,6 +35,7 @@
 #include "loopfarm/search/bond_relations.hpp"
 #include "loopfarm/search/canonical.hpp"
 #include "loopfarm/search/verify.hpp"
+#include "refusal.hpp"
 
 #ifndef LOOPFARM_SOURCE_DIR
 #error "LOOPFARM_SOURCE_DIR is defined by tests/CMakeLists.txt"
@@ -132,16 +133,6 @@ void exec(const std::string& path, const std::string& sql) {
 std::string file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const DatabaseError& e) {
-    EXPECT_EQ(e.cause(), DatabaseError::Cause::refused) << e.what();
-    return e.what();
-  }
-  return "no DatabaseError";
 }
 
 // What one run of the starts writes, by content: the starts but for their
@@ -371,7 +362,7 @@ TEST_F(MergeTest, TheSliceIsPartOfTheRunsIdentity) {
                         Case{more, "--starts 30"}}) {
     SCOPED_TRACE(c.why);
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
-    const std::string text = error_of([&] { db.open_run(c.id); });
+    const std::string text = testing::refusal([&] { db.open_run(c.id); });
     EXPECT_NE(text.find(path), std::string::npos) << text;
     EXPECT_NE(text.find(c.why), std::string::npos) << text;
     EXPECT_NE(text.find("--new-run"), std::string::npos) << text;
@@ -428,7 +419,7 @@ TEST_F(MergeTest, AVersion1DatabaseIsReadAsItIsAndUpgradedByItsNextRun) {
     // Opening for writing and then refusing another job leaves it version 1.
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
     RunIdentity other = identity("[search]\nseed = 99\n", 99);
-    EXPECT_NE(error_of([&] { db.open_run(other); }).find("--new-run"), std::string::npos);
+    EXPECT_NE(testing::refusal([&] { db.open_run(other); }).find("--new-run"), std::string::npos);
   }
   EXPECT_EQ(value(path, "PRAGMA user_version"), "1");
   // Its own job resumes it: upgraded in the same transaction, rows kept.
@@ -769,7 +760,7 @@ void expect_read_and_a_refused_run_leave_it(const std::string& path, const std::
   EXPECT_EQ(file_bytes(path), before);
   {
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
-    EXPECT_NE(error_of([&] { db.open_run(identity("[search]\nseed = 99\n", 99)); }).find("--new-run"),
+    EXPECT_NE(testing::refusal([&] { db.open_run(identity("[search]\nseed = 99\n", 99)); }).find("--new-run"),
               std::string::npos);
   }
   EXPECT_EQ(value(path, "PRAGMA user_version"), version);
@@ -790,7 +781,7 @@ void expect_a_failing_upgrade_leaves_it(const std::string& fixture, const std::s
   const Rows runs = rows(path, "SELECT * FROM runs");
   {
     ResultsDatabase db = ResultsDatabase::open(path, DatabaseMode::write);
-    const std::string message = error_of([&] { db.open_run(own); });
+    const std::string message = testing::refusal([&] { db.open_run(own); });
     EXPECT_NE(message.find(path), std::string::npos) << message;
     EXPECT_NE(message.find("kept"), std::string::npos) << message;
   }
@@ -1269,7 +1260,7 @@ TEST_F(MergeTest, RefusesMismatchedInputsAndWritesNothing) {
     const std::vector<std::string> files = listing();
     std::vector<std::string> bytes;
     for (const std::string& name : files) bytes.push_back(file_bytes(file(name)));
-    const std::string text = error_of([&] { ResultsDatabase::merge(c.output, c.inputs); });
+    const std::string text = testing::refusal([&] { ResultsDatabase::merge(c.output, c.inputs); });
     EXPECT_NE(text.find(c.culprit), std::string::npos) << text;
     for (const std::string& why : c.why) EXPECT_NE(text.find(why), std::string::npos) << text;
     EXPECT_EQ(text.find('\n'), std::string::npos) << text;

@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "loopfarm/farm/results_database.hpp"
+#include "refusal.hpp"
 
 namespace loopfarm {
 namespace {
@@ -23,17 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using store::FileAccess;
 using store::ReaderConnection;
-
-// The message `action` throws (DatabaseError), or "" when it throws none.
-std::string refusal(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const DatabaseError& error) {
-    EXPECT_EQ(error.cause(), DatabaseError::Cause::refused) << error.what();
-    return error.what();
-  }
-  return "";
-}
+using testing::refusal;
 
 // An existing, writable file in a writable directory, nothing beside it.
 FileAccess alone() {
