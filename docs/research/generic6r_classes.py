@@ -66,6 +66,18 @@
       # B8's loops (all three b8-*): the unclassified loops closing to <= 1e-11 with B8's five
       # visible conditions in some labelling (b8_loops; in g6.sqlite the six of bond fingerprint
       # 6R/4 22 22 11 22 ...)
+  docs/research/generic6r_classes.py near DB LOOPFARM FINGERPRINT
+      # per unclassified loop whose bond fingerprint starts with FINGERPRINT (quoted), how near the trivial set:
+      # the joint with the least fold residual max(|a_{k-1} - a_k|, |sin(alpha_{k-1} - alpha_k)|, |d_k|), the
+      # nearest two joint axes (max(|sin angle|, distance)) over the poses of `loopfarm motion --csv`, the least
+      # joint travel and the largest of the joints not turning fully (the rocking), the nearest family
+  docs/research/generic6r_classes.py locked-bennett DB LOOPFARM FINGERPRINT
+      # per loop of the class: its Bennett-ratio triad (three consecutive links of one ratio, d = 0 inside), the
+      # two joints outside it (nearly locked) and their travel, Bennett's conditions on the 4R of the other four
+      # axes over the poses of its motion; then the least parameter gap between members over relabellings
+  docs/research/generic6r_classes.py triad-reorder DB LOOPFARM START FIRST
+      # the loop at START with the links FIRST, FIRST+1, FIRST+2 (a Bennett-ratio triad) in each of the six
+      # orders: does `loopfarm verify` find a circuit that moves, and its family and detail
 
 Classes, tested on every shift and reversal of the canonical representation, each equality to 1e-6
 (lengths in L, twists in degrees / 57.3; k_i = |sin alpha_i| / a_i, Bennett's ratio; a link
@@ -75,7 +87,7 @@ equals another when a and the twist agree up to sign and pi):
   T7    k1 = k2 = k3, k4 = k5 = k6, d2 = d3 = d5 = d6 = 0, |d1| = |d4|
   B8    k2 = k3, k5 = k6, d3 = d6 = 0
 """
-import collections, json, math, re, sqlite3, subprocess, sys
+import collections, itertools, json, math, re, sqlite3, subprocess, sys
 
 TOL = 1e-6
 COLS = [f'a{i}' for i in range(1, 7)] + [f'alpha{i}_deg' for i in range(1, 7)] + [f'd{i}' for i in range(1, 7)]
@@ -1354,6 +1366,267 @@ def cmd_b8_build(db, seed, count, eps, loopfarm, size=0.005, npose=12):
           + ', '.join(f"{n} off: {near[n, True]} of {near[n, True] + near[n, False]}" for n in ('C1', 'C2', 'C3')) + ')')
 
 
+# ---- The near-miss classes: near (trivial set), locked-bennett, triad-reorder ----
+def class_rows(db, fingerprint):
+    """The unclassified loops whose bond fingerprint starts with fingerprint (read-only): start, rigid residual,
+    E_mean, local dimension, fingerprint, a, alpha [deg], d."""
+    con = sqlite3.connect(f'file:{db}?mode=ro', uri=True)
+    q = (f"SELECT first_start, rigid_residual, E_mean, local_dimension, bond_fingerprint, {','.join(COLS)} "
+         "FROM candidates WHERE family = 'unclassified' AND substr(bond_fingerprint, 1, length(?1)) = ?1 "
+         "ORDER BY first_start")
+    return [(r[0], r[1], r[2], r[3], r[4], list(r[5:11]), list(r[11:17]), list(r[17:23]))
+            for r in con.execute(q, (fingerprint,))]
+
+
+def geometry_args(a, al_deg, d):
+    return ['--a=' + ','.join(map(repr, a)), '--alpha-deg=' + ','.join(map(repr, al_deg)), '--d=' + ','.join(map(repr, d))]
+
+
+def niced(cmd):
+    return subprocess.run(['nice', '-n', '15'] + cmd, capture_output=True, text=True)
+
+
+def verify_niced(loopfarm, a, al_deg, d):
+    return json.loads(niced([loopfarm, 'verify', '--json'] + geometry_args(a, al_deg, d)).stdout)
+
+
+def circuit_travels(j):
+    """Each joint's travel [rad] over the circuit `loopfarm verify --json` reports (None if it reports none)."""
+    if not j.get('circuits') or not j.get('circuit'):
+        return None
+    return [math.radians(x['range_deg'][1] - x['range_deg'][0]) for x in j['circuits'][j['circuit'] - 1]['joints']]
+
+
+def motion_poses(loopfarm, a, al_deg, d, circuit=None):
+    """The poses (joint angles [rad]) of `loopfarm motion --csv` on one circuit (default: the first listed)."""
+    out = niced([loopfarm, 'motion', '--csv', '-'] + geometry_args(a, al_deg, d)).stdout.splitlines()
+    if len(out) < 2:
+        return []
+    head = out[0].split(',')
+    data = [dict(zip(head, r.split(','))) for r in out[1:] if r]
+    want = str(circuit) if circuit is not None else (data[0]['circuit'] if data else None)
+    return [[math.radians(float(r[f'theta{k}_deg'])) for k in range(1, len(a) + 1)] for r in data if r['circuit'] == want]
+
+
+def joint_axes(a, al, d, th):
+    """Joint axis i as (point, unit direction): z of frame i-1 (frame 0 = the base), the DH convention above."""
+    F = [[1.0 if i == j else 0.0 for j in range(4)] for i in range(4)]
+    out = []
+    for i in range(len(a)):
+        out.append(([F[0][3], F[1][3], F[2][3]], [F[0][2], F[1][2], F[2][2]]))
+        F = mat_mul(F, dh(th[i], d[i], a[i], al[i]))
+    return out
+
+
+def axis_gap(l1, l2):
+    """How near two lines are to one: max(|sin angle|, distance), and the two."""
+    (p1, w1), (p2, w2) = l1, l2
+    c = cross(w1, w2)
+    s = math.sqrt(dot(c, c))
+    dp = [y - x for x, y in zip(p1, p2)]
+    if s > 1e-9:
+        dist = abs(dot(dp, c)) / s
+    else:  # parallel: the distance of p2 from line 1
+        t = dot(dp, w1)
+        dist = math.sqrt(max(0.0, dot(dp, dp) - t * t))
+    return max(s, dist), s, dist
+
+
+def common_normal(l1, l2):
+    """The common normal of two skew lines: distance, |sin angle|, its feet as parameters t1 on l1, t2 on l2."""
+    (p1, w1), (p2, w2) = l1, l2
+    c = cross(w1, w2)
+    s = math.sqrt(dot(c, c))
+    dp = [y - x for x, y in zip(p1, p2)]
+    b, e, f = dot(w1, w2), dot(dp, w1), dot(dp, w2)
+    den = 1 - b * b
+    return abs(dot(dp, c)) / s, s, (e - b * f) / den, (b * e - f) / den
+
+
+def fold_residual(a, al_deg, d, k):
+    """Joint k (0-based) folds the loop when the links on either side are equal and d_k = 0: axes k-1 and k+1
+    coincide at theta_k = 180 deg, the trivial set. Residual max(|a_{k-1} - a_k|, |sin(alpha_{k-1} - alpha_k)|, |d_k|)."""
+    return max(abs(a[k - 1] - a[k]), abs(math.sin(math.radians(al_deg[k - 1] - al_deg[k]))), abs(d[k]))
+
+
+def cmd_near(db, loopfarm, fingerprint, full=1.0):
+    """Per loop of the class: the joint with the least fold residual; the nearest two joint axes over the poses of
+    `loopfarm motion --csv` (circuit as verify reports it) and the joint angles there; each joint's travel over that
+    circuit, the least, and the largest of the joints that do not turn fully (travel < 2 pi - full rad: the rocking);
+    the nearest family (least residual of `loopfarm verify --json`)."""
+    loops = class_rows(db, fingerprint)
+    print(f"{len(loops)} loops of fingerprint {fingerprint!r}")
+    print("| start | dim | rigid (verify) | verified | fold: joint, residual | nearest axes, gap (sin, dist) | "
+          "least travel [rad] (joint) | largest rocking [rad] (joints) | nearest family, residual |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    summary = collections.defaultdict(list)
+    for start, rigid, e_mean, dim, fp, a, al_deg, d in loops:
+        n = len(a)
+        al = [math.radians(x) for x in al_deg]
+        fold, fk = min((fold_residual(a, al_deg, d, k), k) for k in range(n))
+        j = verify_niced(loopfarm, a, al_deg, d)
+        travel = circuit_travels(j)
+        fam = {k: x for k, x in j['family_residuals'].items() if x is not None}
+        near = min(fam.items(), key=lambda kv: kv[1]) if fam else ('?', float('nan'))
+        best = (float('inf'), 0, 0, 0.0, 0.0, [])
+        for th in motion_poses(loopfarm, a, al_deg, d, j.get('circuit')):
+            ax = joint_axes(a, al, d, th)
+            for i in range(n):
+                for k in range(i + 1, n):
+                    g, s, dist = axis_gap(ax[i], ax[k])
+                    if g < best[0]:
+                        best = (g, i, k, s, dist, th)
+        g, i, k, s, dist, th = best
+        kind = ('adjacent' if (k - i) in (1, n - 1) else 'across one joint' if (k - i) in (2, n - 2) else 'opposite')
+        if travel:
+            least = min(range(n), key=lambda m: travel[m])
+            rock = [m for m in range(n) if travel[m] < 2 * math.pi - full]
+            big = max(rock, key=lambda m: travel[m]) if rock else None
+            trav = f"{travel[least]:.2g} ({least + 1})"
+            rocking = f"{travel[big]:.2g} ({','.join(str(m + 1) for m in rock)})" if rock else '-'
+            summary['least'].append(travel[least])
+            if rock:
+                summary['rocking'].append(travel[big])
+        else:
+            trav = rocking = 'no circuit'
+        summary['fold'].append(fold)
+        summary['gap'].append(g)
+        summary[kind].append(start)
+        print(f"| {start} | {dim} | {g2(j['rigid_residual'])} | {j['verified']} | {fk + 1}, {fold:.2g} | "
+              f"{i + 1},{k + 1} ({kind}), {g:.2g} ({s:.2g}, {dist:.2g}) | {trav} | {rocking} | {near[0]} {near[1]:.3g} |")
+        sys.stdout.flush()
+    rng = lambda key: f"{min(summary[key]):.2g}..{max(summary[key]):.2g}" if summary[key] else '-'
+    print(f"fold residual {rng('fold')}; axis gap {rng('gap')}; least travel {rng('least')}; largest rocking "
+          f"{rng('rocking')}; nearest axes " + ', '.join(f"{kind} in {len(summary[kind])}" for kind in
+                                                         ('adjacent', 'across one joint', 'opposite') if summary[kind]))
+
+
+def g2(x):
+    return 'None' if x is None else f'{x:.2g}'
+
+
+def bennett_triad(a, al_deg, d, tol=TOL):
+    """The first run of three consecutive links k, k+1, k+2 (0-based k) with one Bennett ratio and no offset at the two
+    joints inside it (k+1, k+2), to tol: the best such k as (largest ratio difference or inside |d|, k), or None."""
+    n, found = len(a), []
+    for k in range(n):
+        ks = [kappa(a, al_deg, (k + i) % n) for i in range(3)]
+        res = max(max(ks) - min(ks), abs(d[(k + 1) % n]), abs(d[(k + 2) % n]))
+        if res < tol * max(1.0, ks[0]):
+            found.append((res, k))
+    return min(found) if found else None
+
+
+def bennett_4r(poses, a, al, d, moving):
+    """The 4R of the four moving axes (in loop order) in each pose: ranges over the poses of Bennett's conditions
+    (opposite links equal in a and |sin alpha|, one ratio |sin alpha| / a, the offsets along each axis zero). Link 3
+    (from the last moving axis back to the first) is the merged link over the locked joints."""
+    stats = {}
+    for th in poses:
+        ax = joint_axes(a, al, d, th)
+        L = [ax[m] for m in moving]
+        links = [common_normal(L[i], L[(i + 1) % 4]) for i in range(4)]
+        offs = [links[i][2] - links[i - 1][3] for i in range(4)]
+        kap = [s / dd for dd, s, _, _ in links]
+        vals = {'merged vs opposite a': abs(links[3][0] - links[1][0]),
+                'merged vs opposite |sin|': abs(links[3][1] - links[1][1]),
+                'other pair a': abs(links[0][0] - links[2][0]), 'other pair |sin|': abs(links[0][1] - links[2][1]),
+                'ratio spread': max(kap) - min(kap), 'largest |offset|': max(abs(x) for x in offs)}
+        for key, x in vals.items():
+            lo, hi = stats.get(key, (float('inf'), 0.0))
+            stats[key] = (min(lo, x), max(hi, x))
+    return stats
+
+
+def pattern_gap(p, q):
+    """The largest parameter difference of two loops after scaling each to mean a = 1 (twists up to sign, offsets up
+    to sign), least over q's shifts, reversals and mirror image: (gap, labelling)."""
+    def gap(p, q):
+        (a1, al1, d1), (a2, al2, d2) = p, q
+        s1, s2 = sum(a1) / len(a1), sum(a2) / len(a2)
+        w = lambda x: abs((x + math.pi) % (2 * math.pi) - math.pi)
+        return max(max(abs(x / s1 - y / s2) for x, y in zip(a1, a2)),
+                   max(min(w(math.radians(x - y)), w(math.radians(x + y))) for x, y in zip(al1, al2)),
+                   max(abs(abs(x / s1) - abs(y / s2)) for x, y in zip(d1, d2)))
+    a, al, d = q
+    n, best = len(a), (float('inf'), '')
+    for mirror in (1, -1):
+        AL0, D0 = [mirror * x for x in al], [mirror * x for x in d]
+        for s in range(n):
+            A, AL, D = [a[(i + s) % n] for i in range(n)], [AL0[(i + s) % n] for i in range(n)], [D0[(i + s) % n] for i in range(n)]
+            m = ' mirror' if mirror < 0 else ''
+            best = min(best, (gap(p, (A, AL, D)), f'shift {s}{m}'),
+                       (gap(p, ([A[(n - 2 - i) % n] for i in range(n)], [AL[(n - 2 - i) % n] for i in range(n)],
+                                [D[(n - 1 - i) % n] for i in range(n)])), f'shift {s} reversed{m}'))
+    return best
+
+
+def cmd_locked_bennett(db, loopfarm, fingerprint):
+    """Per loop of the class: the Bennett-ratio triad (links k, k+1, k+2, one ratio, d = 0 inside), the two joints
+    outside it (k+4, k+5, joints numbered so that link i runs from joint i to joint i+1) and their travel over
+    verify's circuit, whether they are the two least travelled, and Bennett's conditions on the 4R of the four other
+    axes over the poses of `loopfarm motion --csv` (its first circuit). Then how far apart the members are."""
+    loops = class_rows(db, fingerprint)
+    print(f"{len(loops)} loops of fingerprint {fingerprint!r}")
+    for start, rigid, e_mean, dim, fp, a, al_deg, d in loops:
+        n = len(a)
+        t = bennett_triad(a, al_deg, d)
+        if t is None:
+            print(f"start {start}: no Bennett-ratio triad")
+            continue
+        res, k = t
+        links = [(k + i) % n for i in range(3)]
+        locked = [(k + 4) % n, (k + 5) % n]
+        moving = [(k + i) % n for i in range(4)]
+        outer = max(abs(a[links[0]] - a[links[2]]), abs(wrapd(al_deg[links[0]] - al_deg[links[2]])) / 57.3)
+        j = verify_niced(loopfarm, a, al_deg, d)
+        travel = circuit_travels(j)
+        if travel:
+            two = sorted(range(n), key=lambda m: travel[m])[:2]
+            trav = (f"travel {travel[locked[0]]:.2g}, {travel[locked[1]]:.2g} rad "
+                    f"({'the two least' if sorted(two) == sorted(locked) else 'least: ' + ','.join(str(m + 1) for m in two)};"
+                    f" the others {' '.join(f'{travel[m]:.2g}' for m in moving)})")
+        else:
+            trav = 'no circuit reported'
+        stats = bennett_4r(motion_poses(loopfarm, a, al_deg, d), a, [math.radians(x) for x in al_deg], d, moving)
+        print(f"start {start} (dim {dim}): triad links {','.join(str(m + 1) for m in links)}, ratio "
+              f"{kappa(a, al_deg, links[0]):.6f} (ratio spread and inside |d| <= {res:.0e}), outer links {links[0] + 1} = "
+              f"{links[2] + 1} to {outer:.0e}; joints {locked[0] + 1},{locked[1] + 1} nearly locked: {trav}")
+        print(f"  4R of axes {','.join(str(m + 1) for m in moving)}, over the poses: " +
+              '; '.join(f'{key} {lo:.2g}..{hi:.2g}' for key, (lo, hi) in stats.items()))
+        sys.stdout.flush()
+    for x, y in ((x, y) for i, x in enumerate(loops) for y in loops[i + 1:]):
+        g, name = pattern_gap(tuple(x[5:8]), tuple(y[5:8]))
+        print(f"start {x[0]} vs {y[0]}: least parameter gap over relabellings and mirror {g:.3g} ({name})")
+
+
+def cmd_triad_reorder(db, loopfarm, start, first):
+    """The loop at START with the links of its triad (FIRST, FIRST+1, FIRST+2) put in each of the six orders (twist
+    and a together; offsets kept): `loopfarm verify`'s exit code (0: a circuit moves) and its family and detail."""
+    con = sqlite3.connect(f'file:{db}?mode=ro', uri=True)
+    v = con.execute(f"SELECT {','.join('c.' + x for x in COLS)} FROM candidates c JOIN starts s USING (candidate_id) "
+                    "WHERE s.start_index = ?", (int(start),)).fetchone()
+    a, al, d = list(v[0:6]), list(v[6:12]), list(v[12:18])
+    idx = [(int(first) - 1 + i) % 6 for i in range(3)]
+    ks = [kappa(a, al, i) for i in idx]
+    print(f"start {start}: triad links {','.join(str(i + 1) for i in idx)}, ratios {' '.join(f'{x:.9f}' for x in ks)}, "
+          f"offsets inside {d[idx[1]]:.1e}, {d[idx[2]]:.1e}")
+    moved = 0
+    for p in itertools.permutations(idx):
+        A, AL = list(a), list(al)
+        for i, k in zip(idx, p):
+            A[i], AL[i] = a[k], al[k]
+        r = niced([loopfarm, 'verify'] + geometry_args(A, AL, d))
+        lines = [l.strip() for l in r.stdout.splitlines()]
+        fam = next((l.split()[-1] for l in lines if l.startswith('family ')), '?')
+        det = next((l.split(None, 1)[1] for l in lines if l.startswith('detail ')), '')
+        moved += r.returncode == 0
+        verdict_ = 'moves' if r.returncode == 0 else 'rigid' if r.returncode == 4 else f'exit {r.returncode}'
+        print(f"  links in the order {','.join(str(k + 1) for k in p)}: {verdict_}, {fam}" + (f" ({det})" if det else ''))
+        sys.stdout.flush()
+    print(f"  {moved} of 6 orders move")
+
+
 if __name__ == '__main__':
     if len(sys.argv) >= 3 and sys.argv[1] == 'classes':
         cmd_classes(sys.argv[2])
@@ -1398,5 +1671,11 @@ if __name__ == '__main__':
         cmd_b8_count(sys.argv[2], sys.argv[3])
     elif len(sys.argv) >= 7 and sys.argv[1] == 'b8-build':
         cmd_b8_build(*sys.argv[2:7])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'near':
+        cmd_near(*sys.argv[2:5])
+    elif len(sys.argv) >= 5 and sys.argv[1] == 'locked-bennett':
+        cmd_locked_bennett(*sys.argv[2:5])
+    elif len(sys.argv) >= 6 and sys.argv[1] == 'triad-reorder':
+        cmd_triad_reorder(*sys.argv[2:6])
     else:
         sys.exit(__doc__)
