@@ -56,14 +56,19 @@
       # DA, GA fused, joint A removed: the 6R B C D G F E; verified with loopfarm
   docs/research/generic6r_classes.py b8-conditions DB
       # each B8 loop's labelling (reversal and shift; the B form turned into the A form) and the
-      # residuals of B8's eight known conditions: five visible, C1, C2, C3 (b8_conditions)
+      # residuals of B8's ten conditions: five visible, C1, C2, C3 (b8_conditions), the offset conditions L, Q, and
+      # Q' (the same conic as Q; b8_offset_conditions)
   docs/research/generic6r_classes.py b8-count DB LOOPFARM
       # B8's number of conditions at each B8 loop by the reciprocal-wrench method: singular values of
       # the normal rows at 40 poses of its `loopfarm motion`, and whether the eight known are among them
   docs/research/generic6r_classes.py b8-build DB SEED N EPS LOOPFARM
       # N loops built from C1-C3 near the run's B8 loops, offsets solved by closure, verified with
       # loopfarm and counted as above; each verified one moved off C1, C2, C3 by EPS: does it close?
-      # B8's loops (all three b8-*): the unclassified loops closing to <= 1e-11 with B8's five
+  docs/research/generic6r_classes.py b8-build10 SEED N EPS LOOPFARM     # e.g. SEED 2, N 25, EPS 1e-3
+      # N random loops built from all ten of B8's conditions (the eight above and the offset conditions L, Q; offsets
+      # from their parametric form, not by closure), verified with loopfarm (or: do they assemble at all?); near
+      # misses with Q off (s scaled by 1 + EPS) and L off (d1, d2 moved by EPS L): do they move?
+      # B8's loops (the first three b8-*): the unclassified loops closing to <= 1e-11 with B8's five
       # visible conditions in some labelling (b8_loops; in g6.sqlite the six of bond fingerprint
       # 6R/4 22 22 11 22 ...)
   docs/research/generic6r_classes.py near DB LOOPFARM FINGERPRINT
@@ -1039,8 +1044,32 @@ def b8_conditions(g):
     return v
 
 
+def b8_offset_conditions(g):
+    """B8's two offset conditions in the A form, with k2 = sin(alpha2)/a2 (= k3), k5 = sin(alpha5)/a5 (= k6) and
+    m_i = a_i / sin(alpha_i) for the joining links 1 and 4:
+      L   m1 (k5 d5 - k2 d4) = m4 (k5 d1 - k2 d2)
+      Q   k2 d2 d4 - k5 d1 d5 = (k5 - k2) (m1 m4 - 1/(k2 k5))        (the quadric for k2 != k5)
+      Q'  m1 d4 d5 - m4 d1 d2 = (m1 - m4) (m1 m4 - 1/(k2 k5))        (the same conic for m1 != m4)
+    L is multiplied by sin(alpha1) sin(alpha4), Q by sin(alpha1) sin(alpha4) k2 k5 and Q' by (sin(alpha1) sin(alpha4))^2
+    k2 k5 (no m and no 1/(k2 k5) left; k2, k5 stay the signed ratios); then L and Q' are lengths, over L (the rms of the a and d), and Q is a reciprocal
+    length, times L. Equivalently (d1, d2, d4, d5) = s (1/k5, 1/k2, 1/k2, 1/k5) + t (m1, m1, m4, m4) with
+    1 + s^2 = k2 k5 m1 m4 (1 + t^2) (b8_parametric_offsets), which also holds when k2 = k5 or m1 = m4. L is needed:
+    Q and Q' alone also admit the plane d4 = -d1, d5 = -d2, where the loop does not move."""
+    a, al, d = g
+    Ls = math.sqrt(sum(x * x for x in a + d) / 6)
+    k2, k5 = math.sin(al[1]) / a[1], math.sin(al[4]) / a[4]
+    s1, s4 = math.sin(al[0]), math.sin(al[3])
+    p1, p4 = a[0] * s4, a[3] * s1  # m1 and m4 times sin(alpha1) sin(alpha4)
+    g0 = k2 * k5 * a[0] * a[3] - s1 * s4  # (m1 m4 - 1/(k2 k5)) times sin(alpha1) sin(alpha4) k2 k5
+    d1, d2, d4, d5 = d[0], d[1], d[3], d[4]
+    return {'L': (p1 * (k5 * d5 - k2 * d4) - p4 * (k5 * d1 - k2 * d2)) / Ls,
+            'Q': (k2 * k5 * s1 * s4 * (k2 * d2 * d4 - k5 * d1 * d5) - (k5 - k2) * g0) * Ls,
+            "Q'": (k2 * k5 * s1 * s4 * (p1 * d4 * d5 - p4 * d1 * d2) - (p1 - p4) * g0) / Ls}
+
+
 def cmd_b8_conditions(db):
-    """Each B8 loop's labelling and the residuals of the eight known conditions."""
+    """Each B8 loop's labelling and the residuals of the ten conditions (the eight of b8_conditions, L and Q of
+    b8_offset_conditions) and of Q'; the summary gives the largest of the ten."""
     loops = list(b8_loops(db))
     for start, fp, rigid, g, form, (r, s) in loops:
         print(f"start {start}: reversal {'yes' if r else 'no'}, shift {s}, "
@@ -1050,16 +1079,20 @@ def cmd_b8_conditions(db):
     if not loops:
         print('no B8 loop')
         return
-    table = {start: b8_conditions(g) for start, fp, rigid, g, form, rs in loops}
+    table = {start: {**b8_conditions(g), **b8_offset_conditions(g)} for start, fp, rigid, g, form, rs in loops}
     names = list(next(iter(table.values())))
+    ten = [n for n in names if n != "Q'"]
     print('condition (A form, lengths over L)'.ljust(36), ' '.join(f"{s:>8d}" for s in table))
     for n in names:
         print(n.ljust(36), ' '.join(f"{table[s][n]:+.1e}" for s in table))
     print('C1: tan(alpha2/2) tan(alpha3/2) = tan(alpha5/2) tan(alpha6/2); C2: (cos alpha2 + cos alpha3)/k2 = '
           '(cos alpha5 + cos alpha6)/k5; C3: tan(alpha1/2)/a1 = tan(alpha4/2)/a4 (each cleared of denominators)')
-    worst = max(((abs(v[n]), s) for s, v in table.items() for n in names))
+    print('L: m1 (k5 d5 - k2 d4) = m4 (k5 d1 - k2 d2); Q: k2 d2 d4 - k5 d1 d5 = (k5 - k2) (m1 m4 - 1/(k2 k5)); '
+          "Q': m1 d4 d5 - m4 d1 d2 = (m1 - m4) (m1 m4 - 1/(k2 k5)) (m = a / sin alpha; b8_offset_conditions)")
+    worst = max(((abs(v[n]), s) for s, v in table.items() for n in ten))
+    worst_q = max(((abs(v["Q'"]), s) for s, v in table.items()))
     print(f"{len(table)} B8 loops, {sum(1 for x in loops if x[4] == 'B')} of them in the B form; largest residual of the "
-          f"{len(names)} conditions {worst[0]:.2g} (start {worst[1]})")
+          f"{len(ten)} conditions {worst[0]:.2g} (start {worst[1]}); of Q' {worst_q[0]:.2g} (start {worst_q[1]})")
 
 
 def b8_frames(a, al, d, th):
@@ -1364,6 +1397,90 @@ def cmd_b8_build(db, seed, count, eps, loopfarm, size=0.005, npose=12):
     print(f"{built} of {count} built verified ({', '.join(dims + [f'{counted[None]} not counted'] * (None in counted))})"
           + f", {closed} of {tried} near misses close (EPS {eps:g}; "
           + ', '.join(f"{n} off: {near[n, True]} of {near[n, True] + near[n, False]}" for n in ('C1', 'C2', 'C3')) + ')')
+
+
+def b8_parametric_offsets(k2, k5, m1, m4, s, t):
+    """B8's offsets in the A form from the parametric form of L and Q: (d1, d2, d4, d5) = s (1/k5, 1/k2, 1/k2, 1/k5) +
+    t (m1, m1, m4, m4), d3 = d6 = 0 (a member when 1 + s^2 = k2 k5 m1 m4 (1 + t^2))."""
+    return [s / k5 + t * m1, s / k2 + t * m1, 0.0, s / k2 + t * m4, s / k5 + t * m4, 0.0]
+
+
+def b8_random_geometry(rng):
+    """A random geometry meeting B8's ten conditions, A form, every twist negative: the dyads' ratio k2 in [-2, -0.4] and
+    twists alpha2, alpha3, alpha5 in (-180, 0) deg (8.6 deg from the ends), alpha6 from C1 and k5 from C2; a1 in
+    [0.3, 2], alpha1, alpha4 as the dyads' twists, a4 from C3; t in [-1.5, 1.5] and s = +-sqrt(k2 k5 m1 m4 (1 + t^2) - 1)
+    (redrawn when alpha6, k5 or a4 fall outside (-180, 0) deg 5.7 deg from the ends, [-5, -0.2), (0.1, 5), or no t of
+    20 gives a real s). Returns a, alpha [rad], k2, k5, m1, m4, s, t."""
+    t2 = lambda x: math.tan(x / 2)
+    while True:
+        k2 = -rng.uniform(0.4, 2.0)
+        al2, al3, al5 = (-rng.uniform(0.15, math.pi - 0.15) for _ in range(3))
+        al6 = 2 * math.atan(t2(al2) * t2(al3) / t2(al5))
+        if not (-math.pi + 0.1 < al6 < -0.1):
+            continue
+        k5 = k2 * (math.cos(al5) + math.cos(al6)) / (math.cos(al2) + math.cos(al3))
+        if k5 >= -0.2 or k5 < -5:
+            continue
+        a1 = rng.uniform(0.3, 2.0)
+        al1, al4 = -rng.uniform(0.15, math.pi - 0.15), -rng.uniform(0.15, math.pi - 0.15)
+        a4 = a1 * t2(al4) / t2(al1)
+        if not 0.1 < a4 < 5:
+            continue
+        a = [a1, math.sin(al2) / k2, math.sin(al3) / k2, a4, math.sin(al5) / k5, math.sin(al6) / k5]
+        m1, m4 = a1 / math.sin(al1), a4 / math.sin(al4)
+        for _ in range(20):
+            t = rng.uniform(-1.5, 1.5)
+            s2 = k2 * k5 * m1 * m4 * (1 + t * t) - 1
+            if s2 > 0:
+                break
+        else:
+            continue
+        return a, [al1, al2, al3, al4, al5, al6], k2, k5, m1, m4, math.copysign(math.sqrt(s2), rng.uniform(-1, 1)), t
+
+
+def cmd_b8_build10(seed, count, eps, loopfarm):
+    """Loops built from all ten of B8's conditions (b8_random_geometry, offsets from b8_parametric_offsets, not solved by
+    closure; random geometry, not near the run's loops), each checked with `loopfarm verify`; one that is not verified
+    is tried with the script's rigid closure from 300 random starts (assemble): does it assemble at all? Near misses of
+    each: s scaled by 1 + EPS (Q off, L kept) and d1, d2 both moved by EPS L (L off, d1 + d4 = d2 + d5 kept; L the rms
+    of the a and d): does `loopfarm verify` find them moving?"""
+    import random
+    rng = random.Random(int(seed))
+    eps = float(eps)
+    built, nowhere, stuck, near, tried, worst = 0, 0, 0, collections.Counter(), 0, 0.0
+    deg = lambda al: [math.degrees(x) for x in al]
+    for i in range(int(count)):
+        a, al, k2, k5, m1, m4, s, t = b8_random_geometry(rng)
+        d = b8_parametric_offsets(k2, k5, m1, m4, s, t)
+        L = math.sqrt(sum(x * x for x in a + d) / 6)
+        res = max(abs(v) for v in {**b8_conditions((a, al, d)), **b8_offset_conditions((a, al, d))}.values())
+        worst = max(worst, res)
+        j = verify(loopfarm, a, deg(al), d)
+        line = (f"{i}: k2 {k2:.3f} k5 {k5:.3f} m1 {m1:.3f} m4 {m4:.3f} s {s:+.3f} t {t:+.3f}; conditions <= {res:.0e}; "
+                f"verified {j['verified']}")
+        if j['verified']:
+            built += 1
+            line += f", E_mean {j['E_mean']:.1g}, local dimension {j['local_dimension']}"
+        elif assemble(a, al, d) is None:
+            nowhere += 1
+            line += f" (rigid residual {j['rigid_residual']:.1g}; assembles nowhere from 300 starts)"
+        else:
+            stuck += 1
+            line += f" (rigid residual {j['rigid_residual']:.1g}; assembles)"
+        for name, dd in (('Q off', b8_parametric_offsets(k2, k5, m1, m4, s * (1 + eps), t)),
+                         ('L off', [d[0] + eps * L, d[1] + eps * L, 0.0, d[3], d[4], 0.0])):
+            jj = verify(loopfarm, a, deg(al), dd)
+            near[name] += bool(jj['verified'])
+            tried += 1
+            off = b8_offset_conditions((a, al, dd))
+            line += (f"; {name} (L {off['L']:+.0e}, Q {off['Q']:+.0e}): verified {jj['verified']}, rigid residual "
+                     f"{jj['rigid_residual']:.1g}")
+        print(line, flush=True)
+    why = ', '.join(x for x in (f"{nowhere} assemble nowhere" * bool(nowhere),
+                                f"{stuck} assemble but do not move" * bool(stuck)) if x)
+    print(f"{built} of {count} built verified" + (f" ({why})" if why else '') + f", {sum(near.values())} of {tried} near "
+          f"misses move (EPS {eps:g}; Q off {near['Q off']}, L off {near['L off']}); the ten conditions hold to "
+          f"<= {worst:.0e} on the built loops")
 
 
 # ---- The near-miss classes: near (trivial set), locked-bennett, triad-reorder ----
@@ -1671,6 +1788,8 @@ if __name__ == '__main__':
         cmd_b8_count(sys.argv[2], sys.argv[3])
     elif len(sys.argv) >= 7 and sys.argv[1] == 'b8-build':
         cmd_b8_build(*sys.argv[2:7])
+    elif len(sys.argv) >= 6 and sys.argv[1] == 'b8-build10':
+        cmd_b8_build10(*sys.argv[2:6])
     elif len(sys.argv) >= 5 and sys.argv[1] == 'near':
         cmd_near(*sys.argv[2:5])
     elif len(sys.argv) >= 5 and sys.argv[1] == 'locked-bennett':
