@@ -1831,6 +1831,102 @@ TEST(Families, OtherFamiliesAndGeneric6RAreNotBennettTriads) {
 }
 
 // ---------------------------------------------------------------------------
+// The class of two Bennett dyads with coupled middle joints (docs/guide/families.md,
+// the pattern B8 of the generic 6R search): not a family of the classifier
+// yet; its ten conditions, found from its members, checked here with the
+// motion tracer. Links 2-3 and 5-6 are Bennett dyads (k = sin alpha / a,
+// d3 = d6 = 0), tan(alpha2/2) tan(alpha3/2) = tan(alpha5/2) tan(alpha6/2),
+// (cos alpha2 + cos alpha3) / k2 = (cos alpha5 + cos alpha6) / k5,
+// tan(alpha1/2) / a1 = tan(alpha4/2) / a4, and with m = a / sin alpha of
+// links 1 and 4 the offsets (d1, d2, d4, d5) = s (1/k5, 1/k2, 1/k2, 1/k5) +
+// t (m1, m1, m4, m4), 1 + s^2 = k2 k5 m1 m4 (1 + t^2).
+
+struct CoupledDyads {
+  LoopGeometry geometry;
+  double k2, k5, m1, m4, s, t;
+};
+
+// The offsets of the parametric form.
+JointVector coupled_dyads_offsets(const CoupledDyads& c, double s, double t) {
+  JointVector d = JointVector::Zero(6);
+  d[0] = s / c.k5 + t * c.m1;
+  d[1] = s / c.k2 + t * c.m1;
+  d[3] = s / c.k2 + t * c.m4;
+  d[4] = s / c.k5 + t * c.m4;
+  return d;
+}
+
+// A random member, every twist negative: the dyads' ratio and three of
+// their twists drawn, alpha6 and k5 solved, a1 and the joining twists drawn,
+// a4 solved, t drawn and s from the hyperbola.
+CoupledDyads coupled_dyads_member(std::mt19937_64& rng) {
+  const auto half_tan = [](double x) { return std::tan(0.5 * x); };
+  for (;;) {
+    CoupledDyads c;
+    c.k2 = -uniform(rng, 0.4, 2.0);
+    const double alpha2 = -uniform(rng, 0.15, kPi - 0.15), alpha3 = -uniform(rng, 0.15, kPi - 0.15);
+    const double alpha5 = -uniform(rng, 0.15, kPi - 0.15);
+    const double alpha6 = 2.0 * std::atan(half_tan(alpha2) * half_tan(alpha3) / half_tan(alpha5));
+    if (!(alpha6 > -kPi + 0.1 && alpha6 < -0.1)) continue;
+    c.k5 = c.k2 * (std::cos(alpha5) + std::cos(alpha6)) / (std::cos(alpha2) + std::cos(alpha3));
+    if (!(c.k5 < -0.2 && c.k5 >= -5.0)) continue;
+    const double a1 = uniform(rng, 0.3, 2.0);
+    const double alpha1 = -uniform(rng, 0.15, kPi - 0.15), alpha4 = -uniform(rng, 0.15, kPi - 0.15);
+    const double a4 = a1 * half_tan(alpha4) / half_tan(alpha1);
+    if (!(a4 > 0.1 && a4 < 5.0)) continue;
+    c.m1 = a1 / std::sin(alpha1);
+    c.m4 = a4 / std::sin(alpha4);
+    c.t = uniform(rng, -1.5, 1.5);
+    const double s2 = c.k2 * c.k5 * c.m1 * c.m4 * (1.0 + c.t * c.t) - 1.0;
+    if (!(s2 > 0.0)) continue;
+    c.s = (uniform(rng, -1.0, 1.0) < 0.0 ? -1.0 : 1.0) * std::sqrt(s2);
+    c.geometry = make_loop(
+        {a1, std::sin(alpha2) / c.k2, std::sin(alpha3) / c.k2, a4, std::sin(alpha5) / c.k5, std::sin(alpha6) / c.k5},
+        {alpha1, alpha2, alpha3, alpha4, alpha5, alpha6}, std::vector<double>(6, 0.0));
+    c.geometry.d = coupled_dyads_offsets(c, c.s, c.t);
+    return c;
+  }
+}
+
+// Built from the ten conditions they move wherever they close at all, their
+// dyads' middle joints turning together (theta3 + theta6 constant), and are
+// not named by the classifier; with the hyperbola's s scaled by 1 + 1e-3, or
+// d1 and d2 moved by 1e-3 L off the plane of the offsets (d1 + d4 = d2 + d5
+// kept), they do not move.
+TEST(Families, CoupledBennettDyadsBuiltFromTheirTenConditionsMoveAndTheirNearMissesDoNot) {
+  std::mt19937_64 rng(141);
+  const std::vector<double> moving(6, 1.0);
+  int verified = 0;
+  for (int i = 0; i < 12; ++i) {
+    const CoupledDyads c = coupled_dyads_member(rng);
+    const std::string tag = "coupled dyads " + std::to_string(i);
+    const VerificationSummary v = verify_motion(c.geometry, nullptr);
+    if (!v.verified) {
+      EXPECT_TRUE(v.motion.circuits.empty() && v.motion.isolated_poses.empty()) << tag << ": " << v.limit;
+      continue;
+    }
+    ++verified;
+    double least = detail::kInf, most = -detail::kInf;
+    for (const JointVector& theta : v.joint_angles) {
+      const double sum = wrap_angle(theta[2] + theta[5] - (v.joint_angles.front()[2] + v.joint_angles.front()[5]));
+      least = std::min(least, sum);
+      most = std::max(most, sum);
+    }
+    EXPECT_LT(most - least, 1e-9) << tag << ": theta3 + theta6 varies";
+    EXPECT_EQ(classify(c.geometry, JointVector::Zero(6), moving).family, Family::unclassified) << tag;
+    LoopGeometry q_off = c.geometry;
+    q_off.d = coupled_dyads_offsets(c, c.s * (1.0 + 1e-3), c.t);
+    EXPECT_FALSE(verify_motion(q_off, nullptr).verified) << tag << ": s off the hyperbola";
+    LoopGeometry l_off = c.geometry;
+    const double L = length_scale(c.geometry);
+    l_off.d[0] += 1e-3 * L;
+    l_off.d[1] += 1e-3 * L;
+    EXPECT_FALSE(verify_motion(l_off, nullptr).verified) << tag << ": d1, d2 off the plane";
+  }
+  EXPECT_GE(verified, 8);
+}
+
+// ---------------------------------------------------------------------------
 // Distances (deflation) of the new families
 
 TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
