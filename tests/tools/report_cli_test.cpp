@@ -664,8 +664,7 @@ TEST_F(ReportCli, TheAtlasesShowABennettLoopWithPositiveTwists) {
   const fs::path page = dir_ / "atlas.html";
   testing::CommandResult r = run_command(kExecutable, "report", {path.string(), "--html", page.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  std::ifstream in(page);
-  const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string html = testing::read_file(page);
   const size_t table = html.find("<table class=\"data params");
   ASSERT_NE(table, std::string::npos);
   const std::string params = html.substr(table, html.find("</table>", table) - table);
@@ -685,8 +684,7 @@ TEST_F(ReportCli, TheAtlasesShowABennettLoopWithPositiveTwists) {
   const fs::path atlas = dir_ / "atlas";
   r = run_command(kExecutable, "report", {path.string(), "--atlas", atlas.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  std::ifstream md_in(atlas / "atlas.md");
-  const std::string md((std::istreambuf_iterator<char>(md_in)), std::istreambuf_iterator<char>());
+  const std::string md = testing::read_file(atlas / "atlas.md");
   EXPECT_NE(md.find("Parameters (conventional form, L = 1, twists in degrees)"), std::string::npos) << md;
   int spread = 0;
   bool representative = false;
@@ -720,6 +718,15 @@ double number_after(const std::string& text, const std::string& label) {
   const size_t start = at + label.size();
   const size_t end = text.find_first_of(", \"", start);
   return to_number(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
+}
+
+// The Markdown atlas `md` recomputes a zero cycle energy for its
+// representative and says which joint drove it (`driven`).
+void expect_atlas_drives_a_zero(const std::string& md, const std::string& driven) {
+  const size_t recomputed = md.find("Cycle energy recomputed here: ");
+  ASSERT_NE(recomputed, std::string::npos) << md;
+  EXPECT_LT(number_after(md.substr(recomputed), "E_mean "), 1e-20) << md.substr(recomputed, 100);
+  EXPECT_NE(md.find(driven), std::string::npos) << md;
 }
 
 // The stored full_turn and input range belong to the labelling the search
@@ -785,8 +792,7 @@ TEST_F(ReportCli, TheAtlasesDriveAJointThatTurnsFullyWhereJointOneRocks) {
     const fs::path page = dir_ / (c.name + ".html");
     testing::CommandResult r = run_command(kExecutable, "report", {path.string(), "--html", page.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    std::ifstream in(page);
-    const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string html = testing::read_file(page);
     EXPECT_LT(number_after(html, "recomputed (360 samples, log axis), E_mean "), 1e-20);
     EXPECT_NE(html.find(driven), std::string::npos) << html.substr(html.find("drawn from the canonical form"), 600);
     EXPECT_NE(html.find(there), std::string::npos) << there;
@@ -797,15 +803,10 @@ TEST_F(ReportCli, TheAtlasesDriveAJointThatTurnsFullyWhereJointOneRocks) {
     const fs::path atlas = dir_ / (c.name + "-atlas");
     r = run_command(kExecutable, "report", {path.string(), "--atlas", atlas.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    std::ifstream md_in(atlas / "atlas.md");
-    const std::string md((std::istreambuf_iterator<char>(md_in)), std::istreambuf_iterator<char>());
-    const size_t recomputed = md.find("Cycle energy recomputed here: ");
-    ASSERT_NE(recomputed, std::string::npos) << md;
-    EXPECT_LT(number_after(md.substr(recomputed), "E_mean "), 1e-20) << md.substr(recomputed, 100);
-    EXPECT_NE(md.find(driven), std::string::npos) << md;
+    const std::string md = testing::read_file(atlas / "atlas.md");
+    expect_atlas_drives_a_zero(md, driven);
     EXPECT_NE(md.find(there), std::string::npos) << there << "\n" << md;
-    std::ifstream svg_in(atlas / (std::to_string(n) + "r_" + c.family + "_motion.svg"));
-    const std::string svg((std::istreambuf_iterator<char>(svg_in)), std::istreambuf_iterator<char>());
+    const std::string svg = testing::read_file(atlas / (std::to_string(n) + "r_" + c.family + "_motion.svg"));
     EXPECT_NE(svg.find(">" + angle + " = 0 deg<"), std::string::npos) << svg.substr(0, 300);
   }
 }
@@ -831,8 +832,7 @@ TEST_F(ReportCli, TheAtlasesDriveJointOneOverItsTracedRangeWhereNoJointTurnsFull
   const fs::path page = dir_ / "rocker.html";
   testing::CommandResult r = run_command(kExecutable, "report", {path.string(), "--html", page.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  std::ifstream in(page);
-  const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string html = testing::read_file(page);
   EXPECT_LT(number_after(html, "recomputed (360 samples, log axis), E_mean "), 1e-20);
   EXPECT_NE(html.find(driven), std::string::npos);
   // The chart spans a window inside joint 1's range (an image of it whole
@@ -849,12 +849,7 @@ TEST_F(ReportCli, TheAtlasesDriveJointOneOverItsTracedRangeWhereNoJointTurnsFull
   const fs::path atlas = dir_ / "rocker-atlas";
   r = run_command(kExecutable, "report", {path.string(), "--atlas", atlas.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  std::ifstream md_in(atlas / "atlas.md");
-  const std::string md((std::istreambuf_iterator<char>(md_in)), std::istreambuf_iterator<char>());
-  const size_t recomputed = md.find("Cycle energy recomputed here: ");
-  ASSERT_NE(recomputed, std::string::npos) << md;
-  EXPECT_LT(number_after(md.substr(recomputed), "E_mean "), 1e-20) << md.substr(recomputed, 100);
-  EXPECT_NE(md.find(driven), std::string::npos) << md;
+  expect_atlas_drives_a_zero(testing::read_file(atlas / "atlas.md"), driven);
 }
 
 }  // namespace
