@@ -191,6 +191,7 @@ StartRecord make_start_record(const StartSummary& summary) {
       case Family::bennett_pair:
       case Family::bennett_dyads:
       case Family::bennett_triads:
+      case Family::coupled_bennett_dyads:
       case Family::sarrus:
       case Family::bricard_octahedral_plane:
       case Family::waldron_hybrid:

@@ -56,6 +56,8 @@ const char* to_string(Family family) {
       return "angle_symmetric_parallel";
     case Family::bennett_triads:
       return "bennett_triads";
+    case Family::coupled_bennett_dyads:
+      return "coupled_bennett_dyads";
   }
   return "unknown";
 }
@@ -81,6 +83,7 @@ int family_joints(Family family) {
     case Family::bennett_pair:
     case Family::bennett_dyads:
     case Family::bennett_triads:
+    case Family::coupled_bennett_dyads:
     case Family::sarrus:
     case Family::bricard_octahedral_plane:
     case Family::waldron_hybrid:
@@ -137,6 +140,11 @@ std::optional<int> family_dimension(Family family, int joints) {
       // 18 parameters, 11 conditions; local_dimension reads 7 on the
       // search's members (docs/guide/families.md).
       return 7;
+    case Family::coupled_bennett_dyads:
+      // 18 parameters, ten independent conditions (Q' repeats Q's conic);
+      // the wrenches reciprocal to the joint screws along the motion count
+      // ten on the search's members (docs/guide/families.md).
+      return 8;
     case Family::sarrus:
       // 18 parameters less five conditions; the first-order count
       // (local_dimension) reads 14 on members (docs/guide/families.md).

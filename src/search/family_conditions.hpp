@@ -23,9 +23,11 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "loopfarm/core/loop.hpp"
@@ -588,6 +590,32 @@ void bennett_pair_conditions(int set, const RepresentationView& w, Sink& c) {
   add_bennett_product(w, c, s2 > 0 ? "a4 sin(alpha5) - a5 sin(alpha4)" : "a4 sin(alpha5) + a5 sin(alpha4)", 3, 4, s2);
 }
 
+// Two Bennett dyads, links i, j and k, l, with the same (cos alpha_i + cos
+// alpha_j) / kappa, kappa = sin(alpha_i) / a_i, as (cos alpha_k + cos
+// alpha_l) / kappa', kappa' = sin(alpha_k) / a_k: ((cos alpha_i + cos
+// alpha_j) a_i sin(alpha_k) - (cos alpha_k + cos alpha_l) a_k sin(alpha_i)) / L.
+template <class RepresentationView, class Sink>
+void add_dyad_invariant(const RepresentationView& w, Sink& c, const char* text, int i, int j, int k, int l) {
+  const int n = w.joints();
+  const Scale& s = w.scale();
+  const auto value = [&] {
+    return (w.cos_alpha(i) + w.cos_alpha(j)) * w.a(i) * w.sin_alpha(k) -
+           (w.cos_alpha(k) + w.cos_alpha(l)) * w.a(k) * w.sin_alpha(i);
+  };
+  c.add([&] { return std::string(text); }, [&] { return value() / s.L; },
+        [&] {
+          GeometryVector g = -(value() / (s.L * s.L)) * s.dL;
+          const double first = w.cos_alpha(i) + w.cos_alpha(j), second = w.cos_alpha(k) + w.cos_alpha(l);
+          g[i] += first * w.sin_alpha(k) / s.L;
+          g[k] += -second * w.sin_alpha(i) / s.L;
+          g[n + i] += (-w.sin_alpha(i) * w.a(i) * w.sin_alpha(k) - second * w.a(k) * w.cos_alpha(i)) / s.L;
+          g[n + j] += -w.sin_alpha(j) * w.a(i) * w.sin_alpha(k) / s.L;
+          g[n + k] += (first * w.a(i) * w.cos_alpha(k) + w.sin_alpha(k) * w.a(k) * w.sin_alpha(i)) / s.L;
+          g[n + l] += w.sin_alpha(l) * w.a(k) * w.sin_alpha(i) / s.L;
+          return g;
+        });
+}
+
 // Two Bennett dyads joined by two equal links (6R, docs/guide/families.md; found
 // by the generic 6R search): links 1, 2 with Bennett's ratio kappa1 =
 // sin(alpha1)/a1 = sin(alpha2)/a2 and no offset between them (d2 = 0), links
@@ -596,8 +624,6 @@ void bennett_pair_conditions(int set, const RepresentationView& w, Sink& c) {
 // offset (d1 = d3, d4 = d6).
 template <class RepresentationView, class Sink>
 void bennett_dyads_conditions(const RepresentationView& w, Sink& c) {
-  const int n = 6;
-  const Scale& s = w.scale();
   add_length(w, c, "a3 - a6", 2, 5, -1.0);
   add_twist(w, c, "alpha3 - alpha6", 2, 5, -1.0);
   add_offset(w, c, "d2", 1, -1, 0.0);
@@ -606,25 +632,9 @@ void bennett_dyads_conditions(const RepresentationView& w, Sink& c) {
   add_offset(w, c, "d4 - d6", 3, 5, -1.0);
   add_bennett_product(w, c, "a1 sin(alpha2) - a2 sin(alpha1)", 0, 1, 1.0);
   add_bennett_product(w, c, "a4 sin(alpha5) - a5 sin(alpha4)", 3, 4, 1.0);
-  // (cos alpha1 + cos alpha2) / kappa1 = (cos alpha4 + cos alpha5) / kappa2,
-  // times sin(alpha1) sin(alpha4), over L.
-  auto value = [&] {
-    return (w.cos_alpha(0) + w.cos_alpha(1)) * w.a(0) * w.sin_alpha(3) -
-           (w.cos_alpha(3) + w.cos_alpha(4)) * w.a(3) * w.sin_alpha(0);
-  };
-  c.add([] { return "((cos(alpha1) + cos(alpha2)) a1 sin(alpha4) - (cos(alpha4) + cos(alpha5)) a4 sin(alpha1)) / L"; },
-        [&] { return value() / s.L; },
-        [&] {
-          GeometryVector g = -(value() / (s.L * s.L)) * s.dL;
-          const double c12 = w.cos_alpha(0) + w.cos_alpha(1), c45 = w.cos_alpha(3) + w.cos_alpha(4);
-          g[0] += c12 * w.sin_alpha(3) / s.L;
-          g[3] += -c45 * w.sin_alpha(0) / s.L;
-          g[n + 0] += (-w.sin_alpha(0) * w.a(0) * w.sin_alpha(3) - c45 * w.a(3) * w.cos_alpha(0)) / s.L;
-          g[n + 1] += -w.sin_alpha(1) * w.a(0) * w.sin_alpha(3) / s.L;
-          g[n + 3] += (c12 * w.a(0) * w.cos_alpha(3) + w.sin_alpha(3) * w.a(3) * w.sin_alpha(0)) / s.L;
-          g[n + 4] += w.sin_alpha(4) * w.a(3) * w.sin_alpha(0) / s.L;
-          return g;
-        });
+  add_dyad_invariant(w, c,
+                     "((cos(alpha1) + cos(alpha2)) a1 sin(alpha4) - (cos(alpha4) + cos(alpha5)) a4 sin(alpha1)) / L", 0,
+                     1, 3, 4);
 }
 
 // Two Bennett-ratio triads (6R, docs/guide/families.md; found by the generic
@@ -689,6 +699,219 @@ void bennett_triads_conditions(const RepresentationView& w, Sink& c) {
         }
         return -0.5 * std::sin(0.5 * w.alpha(i)) * others;
       });
+}
+
+// sin(alpha / 2) and cos(alpha / 2) of a twist in (-pi, pi], from its sine and
+// cosine: the larger of the two from sqrt((1 +- cos alpha) / 2), the other
+// from sin(alpha) = 2 sin(alpha / 2) cos(alpha / 2), so neither loses digits
+// near 0 or pi.
+struct HalfAngle {
+  double sin, cos;
+};
+inline HalfAngle half_angle(double alpha, double sin_alpha, double cos_alpha) {
+  if (cos_alpha >= 0.0) {
+    const double c = std::sqrt(0.5 * (1.0 + cos_alpha));
+    return {0.5 * sin_alpha / c, c};
+  }
+  const double s = std::copysign(std::sqrt(0.5 * (1.0 - cos_alpha)), alpha);
+  return {s, 0.5 * sin_alpha / s};
+}
+
+// A number and its gradient with respect to the lengths a, the sines of the
+// twists and the offsets of one representation (entries k, n + k and 2n + k):
+// the polynomial conditions below are written once over double (their values)
+// and over this (their gradients).
+struct WithGradient {
+  double value;
+  GeometryVector gradient;
+};
+inline WithGradient operator+(const WithGradient& x, const WithGradient& y) {
+  return {x.value + y.value, x.gradient + y.gradient};
+}
+inline WithGradient operator-(const WithGradient& x, const WithGradient& y) {
+  return {x.value - y.value, x.gradient - y.gradient};
+}
+inline WithGradient operator*(const WithGradient& x, const WithGradient& y) {
+  return {x.value * y.value, y.value * x.gradient + x.value * y.gradient};
+}
+
+// Two Bennett dyads with coupled middle joints (6R, docs/guide/families.md;
+// found by the generic 6R search): links 2, 3 a Bennett dyad (k2 = sin
+// alpha2 / a2 = sin alpha3 / a3, signed, d3 = 0) and links 5, 6 another (k5,
+// d6 = 0), joined by links 1 and 4 (m = a / sin alpha), with
+//   d1 + d4 = d2 + d5,
+//   C1 tan(alpha2/2) tan(alpha3/2) = tan(alpha5/2) tan(alpha6/2),
+//   C2 (cos alpha2 + cos alpha3) / k2 = (cos alpha5 + cos alpha6) / k5,
+//   C3 tan(alpha1/2) / a1 = tan(alpha4/2) / a4,
+//   L  m1 (k5 d5 - k2 d4) = m4 (k5 d1 - k2 d2),
+//   Q  k2 d2 d4 - k5 d1 d5 = (k5 - k2) (m1 m4 - 1 / (k2 k5)),
+//   Q' m1 d4 d5 - m4 d1 d2 = (m1 - m4) (m1 m4 - 1 / (k2 k5)):
+// ten conditions (Q' is Q's conic again, kept for where k2 = k5 leaves Q
+// empty). The dyads' middle joints 3 and 6 turn together (theta3 + theta6
+// stays constant). Every condition is unchanged by the mirror image (alpha
+// and d negated), so loops written with axes 2, 4 and 6 flipped and
+// mirrored, as the search also finds them, are members in the
+// representation with those axes flipped: one condition set. C1 and C3 are
+// relative misses of two products (below); the others are cleared of their
+// denominators, L, Q and Q' then cubic in lengths, over L^3.
+template <class RepresentationView, class Sink>
+void coupled_bennett_dyads_conditions(const RepresentationView& w, Sink& c) {
+  const int n = 6;
+  const Scale& s = w.scale();
+  add_offset(w, c, "d3", 2, -1, 0.0);
+  add_offset(w, c, "d6", 5, -1, 0.0);
+  // The dyads' ratios, C1 and C3 as equal products x = y, written (x - y) /
+  // (|x| + |y|) (0 where both vanish, as for zero twists): a relative miss.
+  // A length moved by eps L changes it by eps L / (2 a) at least, a twist in
+  // C1 or C3 by eps / 2 (d log tan(alpha/2) / d alpha = 1 / sin alpha),
+  // whatever the twists' sizes, where the products themselves (as
+  // add_bennett_product writes a ratio) shrink with a small twist.
+  // `derivatives(i)`: dx and dy by parameter i, for i in `parameters`.
+  const auto add_equal_products = [&](const char* text, const auto& products, const auto& derivatives,
+                                      std::initializer_list<int> parameters) {
+    const auto value = [&] {
+      const auto [x, y] = products();
+      const double sum = std::abs(x) + std::abs(y);
+      return sum == 0.0 ? 0.0 : (x - y) / sum;
+    };
+    c.add([&] { return std::string(text); }, value,
+          [&] {
+            const auto [x, y] = products();
+            const double sum = std::abs(x) + std::abs(y), v = value();
+            GeometryVector g = GeometryVector::Zero(3 * n);
+            if (sum == 0.0) return g;
+            const double sx = x < 0.0 ? -1.0 : 1.0, sy = y < 0.0 ? -1.0 : 1.0;
+            for (int i : parameters) {
+              const auto [dx, dy] = derivatives(i);
+              g[i] = (dx - dy - v * (sx * dx + sy * dy)) / sum;
+            }
+            return g;
+          });
+  };
+  const auto add_ratio = [&](const char* text, int i, int j) {
+    add_equal_products(
+        text,
+        [&] {
+          return std::pair{w.a(i) * w.sin_alpha(j), w.a(j) * w.sin_alpha(i)};
+        },
+        [&](int p) {
+          if (p == i) return std::pair{w.sin_alpha(j), 0.0};
+          if (p == j) return std::pair{0.0, w.sin_alpha(i)};
+          if (p == n + j) return std::pair{w.a(i) * w.cos_alpha(j), 0.0};
+          return std::pair{0.0, w.a(j) * w.cos_alpha(i)};  // n + i
+        },
+        {i, j, n + i, n + j});
+  };
+  add_ratio("(a2 sin(alpha3) - a3 sin(alpha2)) / (|a2 sin(alpha3)| + |a3 sin(alpha2)|)", 1, 2);
+  add_ratio("(a5 sin(alpha6) - a6 sin(alpha5)) / (|a5 sin(alpha6)| + |a6 sin(alpha5)|)", 4, 5);
+  c.add([] { return "d1 + d4 - d2 - d5"; }, [&] { return (w.d(0) + w.d(3) - w.d(1) - w.d(4)) / s.L; },
+        [&]() -> GeometryVector {
+          return s.ratio_gradient(2 * n, w.d(0)) + s.ratio_gradient(2 * n + 3, w.d(3)) -
+                 s.ratio_gradient(2 * n + 1, w.d(1)) - s.ratio_gradient(2 * n + 4, w.d(4));
+        });
+  // C2, bennett_dyads' invariant.
+  add_dyad_invariant(
+      w, c, "C2: ((cos(alpha2) + cos(alpha3)) a2 sin(alpha5) - (cos(alpha5) + cos(alpha6)) a5 sin(alpha2)) / L", 1, 2,
+      4, 5);
+  const auto half = [&](int k) { return half_angle(w.alpha(k), w.sin_alpha(k), w.cos_alpha(k)); };
+  // C3: a4 sin(alpha1/2) cos(alpha4/2) = a1 cos(alpha1/2) sin(alpha4/2).
+  add_equal_products(
+      "C3: (a4 sin(alpha1/2) cos(alpha4/2) - a1 cos(alpha1/2) sin(alpha4/2)) / (|a4 sin(alpha1/2) cos(alpha4/2)| + "
+      "|a1 cos(alpha1/2) sin(alpha4/2)|)",
+      [&] {
+        const HalfAngle h1 = half(0), h4 = half(3);
+        return std::pair{w.a(3) * h1.sin * h4.cos, w.a(0) * h1.cos * h4.sin};
+      },
+      [&](int i) {
+        const HalfAngle h1 = half(0), h4 = half(3);
+        switch (i) {
+          case 0:
+            return std::pair{0.0, h1.cos * h4.sin};
+          case 3:
+            return std::pair{h1.sin * h4.cos, 0.0};
+          case n + 0:
+            return std::pair{0.5 * w.a(3) * h1.cos * h4.cos, -0.5 * w.a(0) * h1.sin * h4.sin};
+          default:  // n + 3
+            return std::pair{-0.5 * w.a(3) * h1.sin * h4.sin, 0.5 * w.a(0) * h1.cos * h4.cos};
+        }
+      },
+      {0, 3, n + 0, n + 3});
+  // C1: sin(alpha2/2) sin(alpha3/2) cos(alpha5/2) cos(alpha6/2) =
+  // cos(alpha2/2) cos(alpha3/2) sin(alpha5/2) sin(alpha6/2). Each twist's
+  // half angle enters one side as its sine and the other as its cosine.
+  add_equal_products(
+      "C1: (sin(alpha2/2) sin(alpha3/2) cos(alpha5/2) cos(alpha6/2) - cos(alpha2/2) cos(alpha3/2) sin(alpha5/2) "
+      "sin(alpha6/2)) / (sum of their |.|)",
+      [&] {
+        const HalfAngle h2 = half(1), h3 = half(2), h5 = half(4), h6 = half(5);
+        return std::pair{h2.sin * h3.sin * h5.cos * h6.cos, h2.cos * h3.cos * h5.sin * h6.sin};
+      },
+      [&](int i) {
+        std::array<HalfAngle, 4> h = {half(1), half(2), half(4), half(5)};
+        const int moved = i == n + 1 ? 0 : i == n + 2 ? 1 : i == n + 4 ? 2 : 3;
+        // x's factors: sin, sin, cos, cos; y's: cos, cos, sin, sin.
+        double x = 0.5, y = 0.5;
+        for (int k = 0; k < 4; ++k) {
+          const bool x_sine = k < 2;
+          if (k == moved) {
+            x *= x_sine ? h[k].cos : -h[k].sin;
+            y *= x_sine ? -h[k].sin : h[k].cos;
+          } else {
+            x *= x_sine ? h[k].sin : h[k].cos;
+            y *= x_sine ? h[k].cos : h[k].sin;
+          }
+        }
+        return std::pair{x, y};
+      },
+      {n + 1, n + 2, n + 4, n + 5});
+  // L, Q and Q', written once over the kind of number (`a`, `sin`, `d` give
+  // one of the representation's parameters as one), multiplied out so that
+  // no ratio is left: L by a2 a5 sin(alpha1) sin(alpha4), Q by a2 a5
+  // sin(alpha1) sin(alpha2) sin(alpha4) sin(alpha5), Q' by (sin(alpha1)
+  // sin(alpha4))^2 sin(alpha2) sin(alpha5).
+  const auto offset_line = [](const auto& a, const auto& sin, const auto& d) {
+    return a(0) * sin(3) * (a(1) * sin(4) * d(4) - a(4) * sin(1) * d(3)) -
+           a(3) * sin(0) * (a(1) * sin(4) * d(0) - a(4) * sin(1) * d(1));
+  };
+  const auto offset_conic = [](const auto& a, const auto& sin, const auto& d) {
+    const auto product = sin(0) * sin(1) * sin(3) * sin(4);
+    const auto shared = a(0) * a(3) * sin(1) * sin(4) - a(1) * a(4) * sin(0) * sin(3);
+    return product * (a(4) * sin(1) * d(1) * d(3) - a(1) * sin(4) * d(0) * d(4)) -
+           (a(1) * sin(4) - a(4) * sin(1)) * shared;
+  };
+  const auto offset_conic_partner = [](const auto& a, const auto& sin, const auto& d) {
+    const auto product = sin(0) * sin(1) * sin(3) * sin(4);
+    const auto shared = a(0) * a(3) * sin(1) * sin(4) - a(1) * a(4) * sin(0) * sin(3);
+    return product * (a(0) * sin(3) * d(3) * d(4) - a(3) * sin(0) * d(0) * d(1)) -
+           (a(0) * sin(3) - a(3) * sin(0)) * shared;
+  };
+  const double L3 = s.L * s.L * s.L;
+  const auto add_cubic = [&](const char* text, const auto& expression) {
+    const auto value = [&] {
+      return expression([&](int k) { return w.a(k); }, [&](int k) { return w.sin_alpha(k); },
+                        [&](int k) { return w.d(k); });
+    };
+    c.add([&] { return std::string(text); }, [&] { return value() / L3; },
+          [&] {
+            const auto variable = [&](int index, double x) {
+              WithGradient v{x, GeometryVector::Zero(3 * n)};
+              v.gradient[index] = 1.0;
+              return v;
+            };
+            const WithGradient e = expression([&](int k) { return variable(k, w.a(k)); },
+                                              [&](int k) { return variable(n + k, w.sin_alpha(k)); },
+                                              [&](int k) { return variable(2 * n + k, w.d(k)); });
+            GeometryVector g = e.gradient;  // d sin(alpha) = cos(alpha) d alpha
+            for (int k = 0; k < n; ++k) g[n + k] *= w.cos_alpha(k);
+            return GeometryVector(g / L3 - (3.0 * e.value / (L3 * s.L)) * s.dL);
+          });
+  };
+  add_cubic(
+      "(a1 sin(alpha4) (a2 sin(alpha5) d5 - a5 sin(alpha2) d4) - a4 sin(alpha1) (a2 sin(alpha5) d1 - a5 "
+      "sin(alpha2) d2)) / L^3",
+      offset_line);
+  add_cubic("Q: k2 d2 d4 - k5 d1 d5 - (k5 - k2) (m1 m4 - 1 / (k2 k5)), cleared, / L^3", offset_conic);
+  add_cubic("Q': m1 d4 d5 - m4 d1 d2 - (m1 - m4) (m1 m4 - 1 / (k2 k5)), cleared, / L^3", offset_conic_partner);
 }
 
 // Waldron's hybrid 6R (docs/guide/families.md): two Bennett loops B C D A
@@ -1800,6 +2023,7 @@ inline int condition_sets(Family family, int joints) {
     case Family::bricard_octahedral_collapsible:
     case Family::bennett_dyads:
     case Family::bennett_triads:
+    case Family::coupled_bennett_dyads:
     case Family::waldron_hybrid:
     case Family::double_goldberg:
     case Family::sarrus:
@@ -1821,7 +2045,8 @@ inline int condition_sets(Family family, int joints) {
 constexpr bool reads_cosines(Family family) {
   return family == Family::planar || family == Family::myard || family == Family::goldberg_bent ||
          family == Family::bricard_trihedral || family == Family::bennett_dyads || family == Family::bennett_triads ||
-         family == Family::sarrus || family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid ||
+         family == Family::coupled_bennett_dyads || family == Family::sarrus ||
+         family == Family::bricard_octahedral_plane || family == Family::waldron_hybrid ||
          family == Family::goldberg_6r || family == Family::double_goldberg || family == Family::hooke ||
          family == Family::bricard_octahedral_collapsible || family == Family::angle_symmetric_parallel;
 }
@@ -1872,6 +2097,8 @@ void condition_set(int set, const RepresentationView& w, Sink& c) {
     bennett_dyads_conditions(w, c);
   } else if constexpr (F == Family::bennett_triads) {
     bennett_triads_conditions(w, c);
+  } else if constexpr (F == Family::coupled_bennett_dyads) {
+    coupled_bennett_dyads_conditions(w, c);
   } else if constexpr (F == Family::waldron_hybrid) {
     waldron_hybrid_conditions(w, c);
   } else if constexpr (F == Family::goldberg_6r) {

@@ -98,6 +98,8 @@ double family_distance(Family family, const LoopGeometry& geometry, GeometryVect
       return distance_over_representations<Family::bennett_dyads>(geometry, gradient);
     case Family::bennett_triads:
       return distance_over_representations<Family::bennett_triads>(geometry, gradient);
+    case Family::coupled_bennett_dyads:
+      return distance_over_representations<Family::coupled_bennett_dyads>(geometry, gradient);
     case Family::sarrus:
       return distance_over_representations<Family::sarrus>(geometry, gradient);
     case Family::bricard_octahedral_plane:
@@ -149,6 +151,7 @@ FamilyCheck family_distance_report(Family family, const LoopGeometry& geometry, 
     case Family::bennett_pair:
     case Family::bennett_dyads:
     case Family::bennett_triads:
+    case Family::coupled_bennett_dyads:
     case Family::sarrus:
     case Family::bricard_octahedral_plane:
     case Family::waldron_hybrid:

@@ -79,6 +79,8 @@ Best best_for(Family family, const LoopGeometry& g, bool by_norm, double zero_le
       return best_over_representations<Family::bennett_dyads>(g, by_norm, zero_length);
     case Family::bennett_triads:
       return best_over_representations<Family::bennett_triads>(g, by_norm, zero_length);
+    case Family::coupled_bennett_dyads:
+      return best_over_representations<Family::coupled_bennett_dyads>(g, by_norm, zero_length);
     case Family::sarrus:
       return best_over_representations<Family::sarrus>(g, by_norm, zero_length);
     case Family::bricard_octahedral_plane:
@@ -134,6 +136,7 @@ std::vector<Family> special_families(int n) {
               Family::goldberg_6r,
               Family::double_goldberg,
               Family::bennett_triads,
+              Family::coupled_bennett_dyads,
               Family::bennett_dyads,
               Family::waldron_hybrid,
               Family::sarrus,

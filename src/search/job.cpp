@@ -49,6 +49,7 @@ constexpr DeflatableFamily kDeflatable[] = {
     {"bennett_pair", 6, "Bennett pairs have 6 joints"},
     {"bennett_dyads", 6, "Bennett dyad loops have 6 joints"},
     {"bennett_triads", 6, "Bennett triad loops have 6 joints"},
+    {"coupled_bennett_dyads", 6, "coupled Bennett dyad loops have 6 joints"},
     {"sarrus", 6, "Sarrus loops have 6 joints"},
     {"bricard_octahedral_plane", 6, "Bricard loops have 6 joints"},
     {"waldron_hybrid", 6, "Waldron's hybrid loops have 6 joints"},

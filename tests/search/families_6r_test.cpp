@@ -249,6 +249,7 @@ std::vector<std::pair<std::string, LoopGeometry>> other_6r_members(Family family
         [&] { return angle_symmetric_parallel_member(rng, kParallelPairsKinds[static_cast<size_t>(i) % 2]).geometry; });
   }
   for (int i = 0; i < 4; ++i) add(Family::bennett_triads, [&] { return bennett_triads_geometry(rng); });
+  for (int i = 0; i < 4; ++i) add(Family::coupled_bennett_dyads, [&] { return coupled_bennett_dyads_geometry(rng); });
   return others;
 }
 
@@ -1218,11 +1219,12 @@ TEST(Families, PlanarAndSpherical5RAnd6RKeepTheirFamilies) {
   const Classification c = classified({planar, theta}, v);
   EXPECT_EQ(c.family, Family::planar);
   // Every twist zero satisfies Sarrus's conditions too (its two directions
-  // parallel), and Goldberg 6R's fit and the Bennett triads' conditions
-  // (every Bennett ratio 0 / a holds, and every condition has a factor
-  // sin alpha): all are recorded, the family chosen first.
-  EXPECT_EQ(c.fitting,
-            (std::vector<Family>{Family::planar, Family::goldberg_6r, Family::bennett_triads, Family::sarrus}));
+  // parallel), and Goldberg 6R's fit, the Bennett triads' and the coupled
+  // Bennett dyads' conditions (every Bennett ratio 0 / a holds, and every
+  // other condition has a factor sin alpha or sin(alpha / 2)): all are
+  // recorded, the family chosen first.
+  EXPECT_EQ(c.fitting, (std::vector<Family>{Family::planar, Family::goldberg_6r, Family::bennett_triads,
+                                            Family::coupled_bennett_dyads, Family::sarrus}));
   const LoopGeometry spherical =
       make_loop(std::vector<double>(5, 0.0), {0.9, 1.2, 0.7, 1.4, 1.1}, std::vector<double>(5, 0.0));
   EXPECT_EQ(classify(spherical, JointVector::Zero(5), std::vector<double>(5, 1.0)).family, Family::spherical);
@@ -1235,7 +1237,7 @@ TEST(Families, Generic5RAnd6RAreUnclassifiedWithEveryResidualLarge) {
       const Classification c = classify(g, random_angles(n, seed), std::vector<double>(n, 1.0));
       EXPECT_EQ(c.family, Family::unclassified) << n << " " << seed;
       EXPECT_TRUE(c.fitting.empty()) << n << " " << seed;
-      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 20u);
+      EXPECT_EQ(c.checks.size(), n == 5 ? 8u : 21u);
       for (const FamilyCheck& check : c.checks) EXPECT_GT(check.residual, 1e-3) << to_string(check.family);
     }
   }
@@ -1755,6 +1757,41 @@ TEST(Families, BennettTriadsAreNamedInEveryRepresentation) {
   }
 }
 
+// The Jacobian of a builder's DH parameters (18) by its `count` free
+// parameters, by central differences: `dh(k, h)` is the DH vector with
+// parameter k moved by h.
+template <class Builder>
+Eigen::MatrixXd builder_jacobian(const Builder& dh, int count) {
+  Eigen::MatrixXd J(18, count);
+  for (int k = 0; k < count; ++k) J.col(k) = (dh(k, 1e-6) - dh(k, -1e-6)) / 2e-6;
+  return J;
+}
+
+// A family's dimension from a member built with J's columns free: J has
+// full rank (the builder's parameters move the loop independently), the
+// `count` conditions hold at round-off, their gradients have rank `rank`
+// (so the family has at most 18 - rank parameters) and are orthogonal to
+// J's columns (the builder stays on the conditions): the dimension is J's
+// column count when that equals 18 - rank.
+void expect_free_parameters(const Eigen::MatrixXd& J, const detail::Conditions& conditions, size_t count, int rank,
+                            const std::string& tag) {
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(J).singularValues();
+  EXPECT_GT(sv[J.cols() - 1], 1e-4 * sv[0]) << tag << ": the builder's rank below " << J.cols();
+  ASSERT_EQ(conditions.values.size(), count) << tag;
+  Eigen::MatrixXd G(count, 18);
+  for (size_t r = 0; r < count; ++r) {
+    EXPECT_LT(std::abs(conditions.values[r]), 1e-13) << tag << ": " << conditions.names[r];
+    G.row(static_cast<Eigen::Index>(r)) = conditions.gradients[r].transpose();
+  }
+  const Eigen::VectorXd gv = Eigen::JacobiSVD<Eigen::MatrixXd>(G).singularValues();
+  EXPECT_GT(gv[rank - 1], 1e-4 * gv[0]) << tag << ": the conditions' rank below " << rank;
+  if (static_cast<size_t>(rank) < count) {
+    EXPECT_LT(gv[rank], 1e-9 * gv[0]) << tag << ": the conditions' rank above " << rank;
+  }
+  EXPECT_EQ(J.cols(), 18 - rank) << tag;
+  EXPECT_LT((G * J).norm(), 1e-6 * G.norm() * J.norm()) << tag << ": the builder leaves the conditions";
+}
+
 // Dimension 7: the builder's seven parameters (k1, alpha1..alpha5, d1) move
 // the 18 DH parameters independently (the Jacobian has rank 7), and the
 // eleven conditions' gradients are independent at members (rank 11, so no
@@ -1785,21 +1822,9 @@ TEST(Families, BennettTriadsHaveSevenFreeParameters) {
       if (moved) x << moved->a, moved->alpha, moved->d;
       return x;
     };
-    Eigen::MatrixXd J(18, 7);
-    for (int k = 0; k < 7; ++k) J.col(k) = (dh(k, 1e-6) - dh(k, -1e-6)) / 2e-6;
-    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(J).singularValues();
-    EXPECT_GT(sv[6], 1e-4 * sv[0]) << tag << ": rank below 7";
     detail::Conditions conditions;
     detail::bennett_triads_conditions(detail::WrittenOut(*g), conditions);
-    ASSERT_EQ(conditions.values.size(), 11u) << tag;
-    Eigen::MatrixXd G(11, 18);
-    for (int r = 0; r < 11; ++r) {
-      EXPECT_LT(std::abs(conditions.values[static_cast<size_t>(r)]), 1e-13) << tag << ": " << conditions.names[r];
-      G.row(r) = conditions.gradients[static_cast<size_t>(r)].transpose();
-    }
-    const Eigen::VectorXd gv = Eigen::JacobiSVD<Eigen::MatrixXd>(G).singularValues();
-    EXPECT_GT(gv[10], 1e-4 * gv[0]) << tag << ": the conditions' rank below 11";
-    EXPECT_LT((G * J).norm(), 1e-6 * G.norm() * J.norm()) << tag << ": the builder leaves the conditions";
+    expect_free_parameters(builder_jacobian(dh, 7), conditions, 11, 11, tag);
   }
   EXPECT_EQ(checked, 4);
 }
@@ -1831,75 +1856,101 @@ TEST(Families, OtherFamiliesAndGeneric6RAreNotBennettTriads) {
 }
 
 // ---------------------------------------------------------------------------
-// The class of two Bennett dyads with coupled middle joints (docs/guide/families.md,
-// the pattern B8 of the generic 6R search): not a family of the classifier
-// yet; its ten conditions, found from its members, checked here with the
-// motion tracer. Links 2-3 and 5-6 are Bennett dyads (k = sin alpha / a,
-// d3 = d6 = 0), tan(alpha2/2) tan(alpha3/2) = tan(alpha5/2) tan(alpha6/2),
-// (cos alpha2 + cos alpha3) / k2 = (cos alpha5 + cos alpha6) / k5,
-// tan(alpha1/2) / a1 = tan(alpha4/2) / a4, and with m = a / sin alpha of
-// links 1 and 4 the offsets (d1, d2, d4, d5) = s (1/k5, 1/k2, 1/k2, 1/k5) +
-// t (m1, m1, m4, m4), 1 + s^2 = k2 k5 m1 m4 (1 + t^2).
+// coupled_bennett_dyads: the class B8 of the generic 6R search
+// (docs/guide/families.md, "Two Bennett dyads with coupled middle joints"),
+// its ten conditions found from its members and checked here with the motion
+// tracer. With k = sin alpha / a (signed) and, for the joining links 1 and 4,
+// m = a / sin alpha: links 2, 3 a Bennett dyad (k2 = k3, d3 = 0) and links
+// 5, 6 another (k5 = k6, d6 = 0); d1 + d4 = d2 + d5;
+//   tan(alpha2/2) tan(alpha3/2) = tan(alpha5/2) tan(alpha6/2),
+//   (cos alpha2 + cos alpha3) / k2 = (cos alpha5 + cos alpha6) / k5,
+//   tan(alpha1/2) / a1 = tan(alpha4/2) / a4,
+//   m1 (k5 d5 - k2 d4) = m4 (k5 d1 - k2 d2),
+//   k2 d2 d4 - k5 d1 d5 = (k5 - k2) (m1 m4 - 1 / (k2 k5)).
 
-struct CoupledDyads {
-  LoopGeometry geometry;
-  double k2, k5, m1, m4, s, t;
-};
-
-// The offsets of the parametric form.
-JointVector coupled_dyads_offsets(const CoupledDyads& c, double s, double t) {
-  JointVector d = JointVector::Zero(6);
-  d[0] = s / c.k5 + t * c.m1;
-  d[1] = s / c.k2 + t * c.m1;
-  d[3] = s / c.k2 + t * c.m4;
-  d[4] = s / c.k5 + t * c.m4;
-  return d;
+// The ten conditions' residuals (left side minus right) in this labelling,
+// written with the ratios and the half-angle tangents themselves, not
+// cleared of denominators as family_conditions.hpp writes them.
+std::array<double, 10> coupled_dyads_residuals(const LoopGeometry& g) {
+  const auto k = [&](int i) { return std::sin(g.alpha[i]) / g.a[i]; };
+  const auto m = [&](int i) { return g.a[i] / std::sin(g.alpha[i]); };
+  const auto tan_half = [&](int i) { return std::tan(0.5 * g.alpha[i]); };
+  const auto& d = g.d;
+  const double k2 = k(1), k5 = k(4), m1 = m(0), m4 = m(3);
+  return {d[2],
+          d[5],
+          k(1) - k(2),
+          k(4) - k(5),
+          d[0] + d[3] - d[1] - d[4],
+          tan_half(1) * tan_half(2) - tan_half(4) * tan_half(5),
+          (std::cos(g.alpha[1]) + std::cos(g.alpha[2])) / k2 - (std::cos(g.alpha[4]) + std::cos(g.alpha[5])) / k5,
+          tan_half(0) / g.a[0] - tan_half(3) / g.a[3],
+          m1 * (k5 * d[4] - k2 * d[3]) - m4 * (k5 * d[0] - k2 * d[1]),
+          k2 * d[1] * d[3] - k5 * d[0] * d[4] - (k5 - k2) * (m1 * m4 - 1.0 / (k2 * k5))};
 }
 
-// A random member, every twist negative: the dyads' ratio and three of
-// their twists drawn, alpha6 and k5 solved, a1 and the joining twists drawn,
-// a4 solved, t drawn and s from the hyperbola.
-CoupledDyads coupled_dyads_member(std::mt19937_64& rng) {
-  const auto half_tan = [](double x) { return std::tan(0.5 * x); };
-  for (;;) {
-    CoupledDyads c;
-    c.k2 = -uniform(rng, 0.4, 2.0);
-    const double alpha2 = -uniform(rng, 0.15, kPi - 0.15), alpha3 = -uniform(rng, 0.15, kPi - 0.15);
-    const double alpha5 = -uniform(rng, 0.15, kPi - 0.15);
-    const double alpha6 = 2.0 * std::atan(half_tan(alpha2) * half_tan(alpha3) / half_tan(alpha5));
-    if (!(alpha6 > -kPi + 0.1 && alpha6 < -0.1)) continue;
-    c.k5 = c.k2 * (std::cos(alpha5) + std::cos(alpha6)) / (std::cos(alpha2) + std::cos(alpha3));
-    if (!(c.k5 < -0.2 && c.k5 >= -5.0)) continue;
-    const double a1 = uniform(rng, 0.3, 2.0);
-    const double alpha1 = -uniform(rng, 0.15, kPi - 0.15), alpha4 = -uniform(rng, 0.15, kPi - 0.15);
-    const double a4 = a1 * half_tan(alpha4) / half_tan(alpha1);
-    if (!(a4 > 0.1 && a4 < 5.0)) continue;
-    c.m1 = a1 / std::sin(alpha1);
-    c.m4 = a4 / std::sin(alpha4);
-    c.t = uniform(rng, -1.5, 1.5);
-    const double s2 = c.k2 * c.k5 * c.m1 * c.m4 * (1.0 + c.t * c.t) - 1.0;
-    if (!(s2 > 0.0)) continue;
-    c.s = (uniform(rng, -1.0, 1.0) < 0.0 ? -1.0 : 1.0) * std::sqrt(s2);
-    c.geometry = make_loop(
-        {a1, std::sin(alpha2) / c.k2, std::sin(alpha3) / c.k2, a4, std::sin(alpha5) / c.k5, std::sin(alpha6) / c.k5},
-        {alpha1, alpha2, alpha3, alpha4, alpha5, alpha6}, std::vector<double>(6, 0.0));
-    c.geometry.d = coupled_dyads_offsets(c, c.s, c.t);
-    return c;
+// Starts 114 and 3846 of jobs/generic-6r.toml, in the labelling where the
+// dyads are links 2-3 and 5-6 (offsets d3, d6 of 1e-15 or less set to 0).
+// Start 3846 is in the other form the search finds: d1 + d2 = d4 + d5, the
+// first written with axes 2, 4 and 6 flipped and mirrored.
+LoopGeometry search_b8_114() {
+  return LoopGeometry::from_degrees(
+      std::vector<double>{0.9990742250807565, 0.9875515423475921, 1.0169035770273032, 1.0055341905577002,
+                          0.9831795367024473, 1.0032627444273041},
+      std::vector<double>{-66.67805963599552, -105.0376589461594, -83.96601272559839, -67.0175977871257,
+                          -101.79468079407363, -87.29029500977431},
+      std::vector<double>{-0.013842932626797994, 0.06749268019628987, 0, 0.04983255594537359, -0.03150305687771452, 0});
+}
+LoopGeometry search_b8_3846() {
+  return LoopGeometry::from_degrees(
+      std::vector<double>{0.9844316004817011, 0.3042750933596505, 1.2849219297835957, 1.3574945500275204,
+                          1.1544084938366366, 0.3023234939518641},
+      std::vector<double>{-80.70879432965594, -166.39161112330765, -83.50489277454984, -63.28144704971678,
+                          -89.82660131005586, -164.81806735367473},
+      std::vector<double>{-0.07435716153609594, 0.11150246029669164, 0, -0.011303211857753584, 0.0484485106183532, 0});
+}
+
+// The search's loops move and are classified coupled_bennett_dyads; start
+// 114 meets the conditions as labelled, start 3846 once axes 2, 4 and 6 are
+// flipped (the conditions are unchanged by the mirror image, so the flip
+// alone brings it to them).
+TEST(Families, TheSearchsB8LoopsMeetTheirConditionsAndAreCoupledBennettDyads) {
+  const LoopGeometry b_form = search_b8_3846();
+  EXPECT_GT(std::abs(coupled_dyads_residuals(b_form)[4]), 1e-2);  // d1 + d4 = d2 + d5 does not hold as labelled
+  EXPECT_LT(std::abs(b_form.d[0] + b_form.d[1] - b_form.d[3] - b_form.d[4]), 1e-12);
+  LoopGeometry flipped = b_form;
+  for (int joint : {1, 3, 5}) flipped = axis_flipped(flipped, joint);
+  for (const auto& [g, tag] : {std::pair{search_b8_114(), "start 114"}, std::pair{flipped, "start 3846 flipped"}}) {
+    const std::array<double, 10> r = coupled_dyads_residuals(g);
+    for (size_t i = 0; i < r.size(); ++i) EXPECT_LT(std::abs(r[i]), 1e-12) << tag << ": condition " << i;
+  }
+  for (const auto& [g, tag] : {std::pair{search_b8_114(), "start 114"}, std::pair{b_form, "start 3846"}}) {
+    EXPECT_TRUE(verify_motion(g, nullptr).verified) << tag;
+    const Classification c = classify(g, JointVector::Zero(6), std::vector<double>(6, 1.0));
+    EXPECT_EQ(c.family, Family::coupled_bennett_dyads) << tag << ": " << c.detail;
+    EXPECT_LT(c.residual, 1e-12) << tag;
+    EXPECT_NE(c.detail.find("joints 3 and 6 turn together"), std::string::npos) << tag << ": " << c.detail;
   }
 }
 
-// Built from the ten conditions they move wherever they close at all, their
-// dyads' middle joints turning together (theta3 + theta6 constant), and are
-// not named by the classifier; with the hyperbola's s scaled by 1 + 1e-3, or
-// d1 and d2 moved by 1e-3 L off the plane of the offsets (d1 + d4 = d2 + d5
-// kept), they do not move.
-TEST(Families, CoupledBennettDyadsBuiltFromTheirTenConditionsMoveAndTheirNearMissesDoNot) {
+// Built from the ten conditions, with every sign of the dyads' and the
+// joining links' twists, they move wherever they close at all (real
+// assembly is an inequality besides the conditions), their dyads' middle
+// joints turning together (theta3 + theta6 constant), and are classified
+// coupled_bennett_dyads; with the conic's s scaled by 1 + 1e-3 (Q off), or
+// d1 and d2 moved by 1e-3 L (L off, d1 + d4 = d2 + d5 kept), they do not
+// move and are not.
+TEST(Families, CoupledBennettDyadsBuiltFromTheirConditionsMoveAndTheirNearMissesDoNot) {
   std::mt19937_64 rng(141);
   const std::vector<double> moving(6, 1.0);
   int verified = 0;
   for (int i = 0; i < 12; ++i) {
-    const CoupledDyads c = coupled_dyads_member(rng);
+    const CoupledBennettDyads c = coupled_bennett_dyads_draw(rng);
     const std::string tag = "coupled dyads " + std::to_string(i);
+    const std::array<double, 10> r = coupled_dyads_residuals(c.geometry);
+    for (size_t j = 0; j < r.size(); ++j) ASSERT_LT(std::abs(r[j]), 1e-11) << tag << ": condition " << j;
+    const Classification named = classify(c.geometry, JointVector::Zero(6), moving);
+    EXPECT_EQ(named.family, Family::coupled_bennett_dyads) << tag << ": " << named.detail;
     const VerificationSummary v = verify_motion(c.geometry, nullptr);
     if (!v.verified) {
       EXPECT_TRUE(v.motion.circuits.empty() && v.motion.isolated_poses.empty()) << tag << ": " << v.limit;
@@ -1913,17 +1964,107 @@ TEST(Families, CoupledBennettDyadsBuiltFromTheirTenConditionsMoveAndTheirNearMis
       most = std::max(most, sum);
     }
     EXPECT_LT(most - least, 1e-9) << tag << ": theta3 + theta6 varies";
-    EXPECT_EQ(classify(c.geometry, JointVector::Zero(6), moving).family, Family::unclassified) << tag;
     LoopGeometry q_off = c.geometry;
-    q_off.d = coupled_dyads_offsets(c, c.s * (1.0 + 1e-3), c.t);
-    EXPECT_FALSE(verify_motion(q_off, nullptr).verified) << tag << ": s off the hyperbola";
+    q_off.d = coupled_bennett_dyads_offsets(c, c.s * (1.0 + 1e-3), c.t);
     LoopGeometry l_off = c.geometry;
     const double L = length_scale(c.geometry);
     l_off.d[0] += 1e-3 * L;
     l_off.d[1] += 1e-3 * L;
-    EXPECT_FALSE(verify_motion(l_off, nullptr).verified) << tag << ": d1, d2 off the plane";
+    for (const auto& [off, what] : {std::pair{q_off, "s off the conic"}, std::pair{l_off, "d1, d2 off the plane"}}) {
+      EXPECT_FALSE(verify_motion(off, nullptr).verified) << tag << ": " << what;
+      EXPECT_NE(classify(off, JointVector::Zero(6), moving).family, Family::coupled_bennett_dyads)
+          << tag << ": " << what;
+    }
   }
   EXPECT_GE(verified, 8);
+}
+
+// Members drawn at random (coupled_bennett_dyads_geometry), closed by the
+// rigid closure from random guesses: verified movable and classified in
+// random representations; near misses in a1, alpha2 and d1 rigid.
+TEST(Families, CoupledBennettDyadsMoveAndAreClassified) {
+  expect_6r_family(coupled_bennett_dyads_geometry, Family::coupled_bennett_dyads, {0, 6 + 1, 12 + 0}, 151, 8, 6);
+}
+
+// Members in a pose: verified from it, every one of the eleven conditions
+// at round-off, far from the other families of Bennett dyads, named so in
+// every representation, at scales 1e-3 and 1e3, and as a search's zero is
+// analysed.
+TEST(Families, CoupledBennettDyadsAreNamedInEveryRepresentation) {
+  std::mt19937_64 rng(152);
+  for (int i = 0; i < 4; ++i) {
+    const Posed m = coupled_bennett_dyads_member(rng);
+    const std::string tag = "coupled_bennett_dyads " + std::to_string(i);
+    expect_constructed_member(m, Family::coupled_bennett_dyads, 11, "joints 3 and 6 turn together",
+                              {Family::bennett_dyads, Family::bennett_triads, Family::waldron_hybrid}, i < 2, rng, tag);
+  }
+}
+
+// Dimension 8: the builder's eight parameters (k2, alpha2, alpha3, alpha5,
+// a1, alpha1, alpha4, t) move the 18 DH parameters independently (the
+// Jacobian has rank 8), and the eleven conditions' gradients have rank 10 at
+// members (Q' adds nothing where Q holds with k2 != k5), so no more than 18 -
+// 10 = 8; the wrenches reciprocal to the joint screws count 10 conditions on
+// the search's members (docs/guide/families.md).
+TEST(Families, CoupledBennettDyadsHaveEightFreeParameters) {
+  std::mt19937_64 rng(153);
+  for (int i = 0; i < 4; ++i) {
+    const std::string tag = "coupled_bennett_dyads " + std::to_string(i);
+    const CoupledBennettDyads member = coupled_bennett_dyads_draw(rng);
+    const LoopGeometry& g = member.geometry;
+    CoupledBennettDyadsParameters p;
+    p.k2 = member.k2;
+    p.alpha2 = g.alpha[1];
+    p.alpha3 = g.alpha[2];
+    p.alpha5 = g.alpha[4];
+    p.a1 = g.a[0];
+    p.alpha1 = g.alpha[0];
+    p.alpha4 = g.alpha[3];
+    p.t = member.t;
+    p.s_sign = member.s;
+    const auto dh = [&](int k, double h) {
+      CoupledBennettDyadsParameters moved = p;
+      double* fields[] = {&moved.k2, &moved.alpha2, &moved.alpha3, &moved.alpha5,
+                          &moved.a1, &moved.alpha1, &moved.alpha4, &moved.t};
+      *fields[k] += h;
+      const std::optional<CoupledBennettDyads> c = coupled_bennett_dyads_loop(moved);
+      EXPECT_TRUE(c.has_value()) << tag << " parameter " << k;
+      GeometryVector x = GeometryVector::Zero(18);
+      if (c) x << c->geometry.a, c->geometry.alpha, c->geometry.d;
+      return x;
+    };
+    detail::Conditions conditions;
+    detail::coupled_bennett_dyads_conditions(detail::WrittenOut(g), conditions);
+    expect_free_parameters(builder_jacobian(dh, 8), conditions, 11, 10, tag);
+  }
+}
+
+// Near misses: one DH parameter of a member moved by 1e-2, 1e-4, 1e-6 and
+// 1e-8 (x L for lengths and offsets, rad for twists): not verified from the
+// member's pose, the residual at least eps / 10, and down to 1e-6 not
+// classified coupled_bennett_dyads.
+TEST(Families, CoupledBennettDyadsNearMissesAreRigidAndNotClassified) {
+  std::mt19937_64 rng(154);
+  // a1, alpha2, d3, a4, alpha5, d6, d1, alpha6
+  const std::array<int, 8> parameters = {0, 6 + 1, 12 + 2, 3, 6 + 4, 12 + 5, 12 + 0, 6 + 5};
+  for (size_t i = 0; i < parameters.size(); ++i) {
+    const Posed m = coupled_bennett_dyads_member(rng);
+    const std::string tag =
+        "coupled_bennett_dyads near miss " + std::to_string(i) + ", parameter " + std::to_string(parameters[i]);
+    expect_rigid_near_misses_down_to_1e8(m, Family::coupled_bennett_dyads, parameters[i], tag);
+  }
+}
+
+// The other families' members and generic 6R loops keep their families and
+// are far from two coupled Bennett dyads, but for the Bennett pairs: shifted
+// by one link, a pair's links read (b, beta), (a, alpha), (c, gamma), (b,
+// beta), (c, gamma), (a, alpha), two dyads of one ratio (k2 = k5) joined by
+// two equal links (m1 = m4), every offset 0, and every condition holds
+// (bennett_pair, tried first, keeps its name).
+TEST(Families, OtherFamiliesAndGeneric6RAreNotCoupledBennettDyads) {
+  std::mt19937_64 rng(155);
+  expect_far_from(Family::coupled_bennett_dyads, other_6r_members(Family::coupled_bennett_dyads, rng, 160),
+                  {"bennett_pair"});
 }
 
 // ---------------------------------------------------------------------------
@@ -1960,7 +2101,9 @@ TEST(Families, DistanceIsZeroOnMembersAndTheNumericPathEqualsTheReport) {
       {Family::angle_symmetric_parallel, angle_symmetric_parallel_member(rng, ParallelPairsKind::general).geometry},
       {Family::angle_symmetric_parallel, angle_symmetric_parallel_member(rng, ParallelPairsKind::half_turn).geometry},
       {Family::bennett_triads, bennett_triads_geometry(rng)},
-      {Family::bennett_triads, search_t7_plus()}};
+      {Family::bennett_triads, search_t7_plus()},
+      {Family::coupled_bennett_dyads, coupled_bennett_dyads_geometry(rng)},
+      {Family::coupled_bennett_dyads, search_b8_3846()}};
   for (const Case& c : cases) {
     const int n = c.member.joints();
     EXPECT_LT(family_distance(c.family, c.member), 1e-12) << to_string(c.family);
@@ -2011,7 +2154,7 @@ TEST(Families, DistanceNeedsTheRightJointCountAndIsAllocationFree) {
   for (Family f : {Family::bricard_line_symmetric, Family::bricard_plane_symmetric, Family::bricard_trihedral,
                    Family::bennett_pair, Family::bennett_dyads, Family::waldron_hybrid, Family::goldberg_6r,
                    Family::hooke, Family::double_goldberg, Family::bricard_octahedral_collapsible,
-                   Family::angle_symmetric_parallel, Family::bennett_triads}) {
+                   Family::angle_symmetric_parallel, Family::bennett_triads, Family::coupled_bennett_dyads}) {
     sum += family_distance(f, g6, &gradient);
   }
   EXPECT_EQ(testing::allocations() - before, 0);

@@ -559,6 +559,99 @@ inline Posed bennett_triads_member(std::mt19937_64& rng) {
   }
 }
 
+// Two Bennett dyads with coupled middle joints (coupled_bennett_dyads) from
+// their conditions, the only construction known: the dyads' signed ratio k2
+// = sin alpha / a and twists alpha2, alpha3, alpha5 given, alpha6 from
+// tan(alpha2/2) tan(alpha3/2) = tan(alpha5/2) tan(alpha6/2) and k5 from
+// (cos alpha2 + cos alpha3) / k2 = (cos alpha5 + cos alpha6) / k5; the
+// joining links' a1, alpha1, alpha4 given and a4 from tan(alpha1/2) / a1 =
+// tan(alpha4/2) / a4; with m = a / sin alpha of links 1 and 4, the offsets
+// (d1, d2, d4, d5) = s (1/k5, 1/k2, 1/k2, 1/k5) + t (m1, m1, m4, m4), d3 = d6
+// = 0, t given and s = +-sqrt(k2 k5 m1 m4 (1 + t^2) - 1) (`s_sign`). Eight
+// free parameters.
+struct CoupledBennettDyadsParameters {
+  double k2, alpha2, alpha3, alpha5, a1, alpha1, alpha4, t;
+  double s_sign = 1.0;
+};
+struct CoupledBennettDyads {
+  LoopGeometry geometry;
+  double k2, k5, m1, m4, s, t;
+};
+
+// The offsets of the conic's parametric form at (s, t).
+inline JointVector coupled_bennett_dyads_offsets(const CoupledBennettDyads& c, double s, double t) {
+  JointVector d = JointVector::Zero(6);
+  d[0] = s / c.k5 + t * c.m1;
+  d[1] = s / c.k2 + t * c.m1;
+  d[3] = s / c.k2 + t * c.m4;
+  d[4] = s / c.k5 + t * c.m4;
+  return d;
+}
+
+// None where a length comes out negative or s imaginary.
+inline std::optional<CoupledBennettDyads> coupled_bennett_dyads_loop(const CoupledBennettDyadsParameters& p) {
+  const auto half_tan = [](double x) { return std::tan(0.5 * x); };
+  const double alpha6 = 2.0 * std::atan(half_tan(p.alpha2) * half_tan(p.alpha3) / half_tan(p.alpha5));
+  CoupledBennettDyads c;
+  c.k2 = p.k2;
+  c.k5 = p.k2 * (std::cos(p.alpha5) + std::cos(alpha6)) / (std::cos(p.alpha2) + std::cos(p.alpha3));
+  const double a4 = p.a1 * half_tan(p.alpha4) / half_tan(p.alpha1);
+  const std::vector<double> a = {p.a1, std::sin(p.alpha2) / c.k2, std::sin(p.alpha3) / c.k2,
+                                 a4,   std::sin(p.alpha5) / c.k5, std::sin(alpha6) / c.k5};
+  if (!(*std::min_element(a.begin(), a.end()) > 0.0)) return std::nullopt;
+  c.m1 = p.a1 / std::sin(p.alpha1);
+  c.m4 = a4 / std::sin(p.alpha4);
+  c.t = p.t;
+  const double s2 = c.k2 * c.k5 * c.m1 * c.m4 * (1.0 + c.t * c.t) - 1.0;
+  if (!(s2 > 0.0)) return std::nullopt;
+  c.s = std::copysign(std::sqrt(s2), p.s_sign);
+  c.geometry = make_loop(a, {p.alpha1, p.alpha2, p.alpha3, p.alpha4, p.alpha5, alpha6}, std::vector<double>(6, 0.0));
+  c.geometry.d = coupled_bennett_dyads_offsets(c, c.s, c.t);
+  return c;
+}
+
+// A random one: the two dyads' twists of one sign and the two joining
+// links' of one sign, each sign drawn (a dyad's twists take its ratio's
+// sign, the lengths being positive; dyads of opposite signs make s
+// imaginary, joining links of opposite signs a4 negative), |k2| in [0.4,
+// 2], the twists 0.15 rad or more from 0 and pi, a1 in [0.3, 2], t in
+// [-1.5, 1.5]; redrawn unless alpha6 is 0.1 rad or more from 0 and pi, |k5|
+// lies in [0.2, 5] and a4 in [0.1, 5].
+inline CoupledBennettDyads coupled_bennett_dyads_draw(std::mt19937_64& rng) {
+  const auto sign = [&] { return uniform(rng, -1.0, 1.0) < 0.0 ? -1.0 : 1.0; };
+  for (;;) {
+    const double dyads = sign(), joining = sign();
+    const auto twist = [&](double s) { return s * uniform(rng, 0.15, kPi - 0.15); };
+    CoupledBennettDyadsParameters p;
+    p.k2 = dyads * uniform(rng, 0.4, 2.0);
+    p.alpha2 = twist(dyads);
+    p.alpha3 = twist(dyads);
+    p.alpha5 = twist(dyads);
+    p.a1 = uniform(rng, 0.3, 2.0);
+    p.alpha1 = twist(joining);
+    p.alpha4 = twist(joining);
+    p.t = uniform(rng, -1.5, 1.5);
+    p.s_sign = sign();
+    const std::optional<CoupledBennettDyads> c = coupled_bennett_dyads_loop(p);
+    if (!c) continue;
+    const double alpha6 = std::abs(c->geometry.alpha[5]), k5 = std::abs(c->k5), a4 = c->geometry.a[3];
+    if (alpha6 > 0.1 && alpha6 < kPi - 0.1 && k5 >= 0.2 && k5 <= 5.0 && a4 > 0.1 && a4 < 5.0) return *c;
+  }
+}
+
+inline LoopGeometry coupled_bennett_dyads_geometry(std::mt19937_64& rng) {
+  return coupled_bennett_dyads_draw(rng).geometry;
+}
+
+// One in a closed pose, found by the rigid closure from random guesses.
+inline Posed coupled_bennett_dyads_member(std::mt19937_64& rng) {
+  for (;;) {
+    const LoopGeometry g = coupled_bennett_dyads_geometry(rng);
+    JointVector theta;
+    if (closed_pose(g, rng, theta)) return {g, theta};
+  }
+}
+
 // A Sarrus loop from its mechanism (constructions.hpp: two chains of parallel
 // axes between a base and a top), not from its conditions: random axis
 // directions, points and links, read off the axes at the top's travel 0.

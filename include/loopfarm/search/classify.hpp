@@ -31,6 +31,11 @@
 //              alpha / a with no offsets inside (d2 = d3 = d5 = d6 = 0), d4 =
 //              -d1, and the same (1 + sum of cos alpha) / k and product of
 //              cos(alpha / 2) over k for both (docs/guide/families.md)
+//   coupled_bennett_dyads (n = 6) two Bennett dyads (links 2-3 and 5-6 of a
+//              representation, d3 = d6 = 0) joined by links 1 and 4, with
+//              three relations between their twists and lengths and the
+//              offsets on a conic: the dyads' middle joints turn together
+//              (docs/guide/families.md)
 //   waldron_hybrid (n = 6) Waldron's hybrid: two Bennett dyads (links 1-2
 //              and 4-5 of a representation, no offset at joints 2 and 5)
 //              whose fourth axes, found in the fused links 3 and 6, are one
@@ -153,6 +158,8 @@ enum class Family {
   angle_symmetric_parallel,
   // 6R: two triads of links of one Bennett ratio each (found by the generic search)
   bennett_triads,
+  // 6R: two Bennett dyads whose middle joints turn together (found by the generic search)
+  coupled_bennett_dyads,
 };
 const char* to_string(Family family);
 
@@ -184,6 +191,7 @@ inline constexpr Family kAllFamilies[] = {
     Family::cubic_321,
     Family::angle_symmetric_parallel,
     Family::bennett_triads,
+    Family::coupled_bennett_dyads,
 };
 // The family whose to_string is `name`, or none.
 std::optional<Family> family_from_string(std::string_view name);
@@ -239,7 +247,7 @@ struct Classification {
   // bennett, planar, spherical, trivial, in this order; then for n = 5
   // degenerate, myard, goldberg, goldberg_bent and for n = 6 degenerate, bricard_trihedral,
   // bricard_plane_symmetric, bricard_line_symmetric, bennett_pair, goldberg_6r,
-  // double_goldberg, bennett_triads, bennett_dyads, waldron_hybrid, sarrus,
+  // double_goldberg, bennett_triads, coupled_bennett_dyads, bennett_dyads, waldron_hybrid, sarrus,
   // angle_symmetric_parallel, bricard_octahedral_plane,
   // bricard_octahedral_collapsible, cubic_321, hooke (the order they are tried).
   std::vector<FamilyCheck> checks;

@@ -148,9 +148,9 @@ struct SearchSection {
 // the known families"). Families are named "planar", "spherical", "trivial"
 // (any n), "bennett" (n = 4), "goldberg", "myard", "goldberg_bent" (n = 5),
 // "bricard_line_symmetric", "bricard_plane_symmetric", "bricard_trihedral",
-// "bennett_pair", "bennett_dyads", "bennett_triads", "sarrus", "bricard_octahedral_plane", "waldron_hybrid",
-// "goldberg_6r", "double_goldberg", "hooke", "bricard_octahedral_collapsible", "angle_symmetric_parallel" (n = 6):
-// those family_distance measures.
+// "bennett_pair", "bennett_dyads", "bennett_triads", "coupled_bennett_dyads", "sarrus", "bricard_octahedral_plane",
+// "waldron_hybrid", "goldberg_6r", "double_goldberg", "hooke", "bricard_octahedral_collapsible",
+// "angle_symmetric_parallel" (n = 6): those family_distance measures.
 struct SteeringSection {
   bool nontrivial = false;                    // every joint must move over the cycle
   double min_travel = 0.0872664625997164788;  // [rad] (5 deg): what "moves" means
