@@ -117,12 +117,12 @@ std::string special_detail(Family family, const Best& best, const LoopGeometry& 
     const double L = length_scale(w);
     const double k2 = std::sin(w.alpha[1]) / w.a[1], k5 = std::sin(w.alpha[4]) / w.a[4];
     const double tangents = std::tan(0.5 * w.alpha[1]) * std::tan(0.5 * w.alpha[2]);
-    char buffer[512];
+    char buffer[640];
     std::snprintf(buffer, sizeof buffer,
                   "Bennett dyads (links 2-3 and 5-6 of the best representation, sin alpha / a = %.4g and %.4g / L, "
                   "d3 = d6 = 0) joined by links 1 and 4, with the same tan(alpha/2) tan(beta/2) = %.4g and (cos "
                   "alpha + cos beta) / k = %.4g L, tan(alpha/2) / a = %.4g / L on the joining links, offsets d1, d2, "
-                  "d4, d5 = %.4g, %.4g, %.4g, %.4g L; joints 3 and 6 turn together",
+                  "d4, d5 = %.4g, %.4g, %.4g, %.4g L; the dyads' middle joints (3 and 6 there) turn together",
                   k2 * L, k5 * L, tangents, (std::cos(w.alpha[1]) + std::cos(w.alpha[2])) / k2 / L,
                   std::tan(0.5 * w.alpha[0]) / w.a[0] * L, w.d[0] / L, w.d[1] / L, w.d[3] / L, w.d[4] / L);
     return buffer;

@@ -1220,9 +1220,9 @@ TEST(Families, PlanarAndSpherical5RAnd6RKeepTheirFamilies) {
   EXPECT_EQ(c.family, Family::planar);
   // Every twist zero satisfies Sarrus's conditions too (its two directions
   // parallel), and Goldberg 6R's fit, the Bennett triads' and the coupled
-  // Bennett dyads' conditions (every Bennett ratio 0 / a holds, and every
-  // other condition has a factor sin alpha or sin(alpha / 2)): all are
-  // recorded, the family chosen first.
+  // Bennett dyads' conditions (with every offset 0, every Bennett ratio 0 / a
+  // holds, and every condition on twists has a factor sin alpha or
+  // sin(alpha / 2)): all are recorded, the family chosen first.
   EXPECT_EQ(c.fitting, (std::vector<Family>{Family::planar, Family::goldberg_6r, Family::bennett_triads,
                                             Family::coupled_bennett_dyads, Family::sarrus}));
   const LoopGeometry spherical =
@@ -1772,9 +1772,10 @@ Eigen::MatrixXd builder_jacobian(const Builder& dh, int count) {
 // `count` conditions hold at round-off, their gradients have rank `rank`
 // (so the family has at most 18 - rank parameters) and are orthogonal to
 // J's columns (the builder stays on the conditions): the dimension is J's
-// column count when that equals 18 - rank.
-void expect_free_parameters(const Eigen::MatrixXd& J, const detail::Conditions& conditions, size_t count, int rank,
-                            const std::string& tag) {
+// column count (the callers pass 18 - rank columns), which family_dimension
+// must give.
+void expect_free_parameters(Family family, const Eigen::MatrixXd& J, const detail::Conditions& conditions, size_t count,
+                            int rank, const std::string& tag) {
   const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(J).singularValues();
   EXPECT_GT(sv[J.cols() - 1], 1e-4 * sv[0]) << tag << ": the builder's rank below " << J.cols();
   ASSERT_EQ(conditions.values.size(), count) << tag;
@@ -1788,7 +1789,7 @@ void expect_free_parameters(const Eigen::MatrixXd& J, const detail::Conditions& 
   if (static_cast<size_t>(rank) < count) {
     EXPECT_LT(gv[rank], 1e-9 * gv[0]) << tag << ": the conditions' rank above " << rank;
   }
-  EXPECT_EQ(J.cols(), 18 - rank) << tag;
+  EXPECT_EQ(family_dimension(family, 6), std::optional<int>(static_cast<int>(J.cols()))) << tag;
   EXPECT_LT((G * J).norm(), 1e-6 * G.norm() * J.norm()) << tag << ": the builder leaves the conditions";
 }
 
@@ -1824,7 +1825,7 @@ TEST(Families, BennettTriadsHaveSevenFreeParameters) {
     };
     detail::Conditions conditions;
     detail::bennett_triads_conditions(detail::WrittenOut(*g), conditions);
-    expect_free_parameters(builder_jacobian(dh, 7), conditions, 11, 11, tag);
+    expect_free_parameters(Family::bennett_triads, builder_jacobian(dh, 7), conditions, 11, 11, tag);
   }
   EXPECT_EQ(checked, 4);
 }
@@ -1929,7 +1930,8 @@ TEST(Families, TheSearchsB8LoopsMeetTheirConditionsAndAreCoupledBennettDyads) {
     const Classification c = classify(g, JointVector::Zero(6), std::vector<double>(6, 1.0));
     EXPECT_EQ(c.family, Family::coupled_bennett_dyads) << tag << ": " << c.detail;
     EXPECT_LT(c.residual, 1e-12) << tag;
-    EXPECT_NE(c.detail.find("joints 3 and 6 turn together"), std::string::npos) << tag << ": " << c.detail;
+    EXPECT_NE(c.detail.find("middle joints (3 and 6 there) turn together"), std::string::npos)
+        << tag << ": " << c.detail;
   }
 }
 
@@ -1970,7 +1972,19 @@ TEST(Families, CoupledBennettDyadsBuiltFromTheirConditionsMoveAndTheirNearMisses
     const double L = length_scale(c.geometry);
     l_off.d[0] += 1e-3 * L;
     l_off.d[1] += 1e-3 * L;
-    for (const auto& [off, what] : {std::pair{q_off, "s off the conic"}, std::pair{l_off, "d1, d2 off the plane"}}) {
+    // Q and the offsets' sum without L: d4 = -d1, d5 = -d2 with d1 d2 = m1 m4
+    // - 1 / (k2 k5) meets both (and every condition but L) and assembles, yet
+    // does not move.
+    LoopGeometry q_only = c.geometry;
+    q_only.d[0] = 0.5 * L;
+    q_only.d[1] = (c.m1 * c.m4 - 1.0 / (c.k2 * c.k5)) / q_only.d[0];
+    q_only.d[3] = -q_only.d[0];
+    q_only.d[4] = -q_only.d[1];
+    const std::array<double, 10> q_only_residuals = coupled_dyads_residuals(q_only);
+    EXPECT_LT(std::abs(q_only_residuals[9]), 1e-12) << tag << ": Q";
+    EXPECT_GT(std::abs(q_only_residuals[8]), 1e-6) << tag << ": L";
+    for (const auto& [off, what] : {std::pair{q_off, "s off the conic"}, std::pair{l_off, "d1, d2 off the plane"},
+                                    std::pair{q_only, "Q without L"}}) {
       EXPECT_FALSE(verify_motion(off, nullptr).verified) << tag << ": " << what;
       EXPECT_NE(classify(off, JointVector::Zero(6), moving).family, Family::coupled_bennett_dyads)
           << tag << ": " << what;
@@ -1995,7 +2009,7 @@ TEST(Families, CoupledBennettDyadsAreNamedInEveryRepresentation) {
   for (int i = 0; i < 4; ++i) {
     const Posed m = coupled_bennett_dyads_member(rng);
     const std::string tag = "coupled_bennett_dyads " + std::to_string(i);
-    expect_constructed_member(m, Family::coupled_bennett_dyads, 11, "joints 3 and 6 turn together",
+    expect_constructed_member(m, Family::coupled_bennett_dyads, 11, "middle joints (3 and 6 there) turn together",
                               {Family::bennett_dyads, Family::bennett_triads, Family::waldron_hybrid}, i < 2, rng, tag);
   }
 }
@@ -2012,16 +2026,7 @@ TEST(Families, CoupledBennettDyadsHaveEightFreeParameters) {
     const std::string tag = "coupled_bennett_dyads " + std::to_string(i);
     const CoupledBennettDyads member = coupled_bennett_dyads_draw(rng);
     const LoopGeometry& g = member.geometry;
-    CoupledBennettDyadsParameters p;
-    p.k2 = member.k2;
-    p.alpha2 = g.alpha[1];
-    p.alpha3 = g.alpha[2];
-    p.alpha5 = g.alpha[4];
-    p.a1 = g.a[0];
-    p.alpha1 = g.alpha[0];
-    p.alpha4 = g.alpha[3];
-    p.t = member.t;
-    p.s_sign = member.s;
+    const CoupledBennettDyadsParameters p = coupled_bennett_dyads_parameters(member);
     const auto dh = [&](int k, double h) {
       CoupledBennettDyadsParameters moved = p;
       double* fields[] = {&moved.k2, &moved.alpha2, &moved.alpha3, &moved.alpha5,
@@ -2035,7 +2040,7 @@ TEST(Families, CoupledBennettDyadsHaveEightFreeParameters) {
     };
     detail::Conditions conditions;
     detail::coupled_bennett_dyads_conditions(detail::WrittenOut(g), conditions);
-    expect_free_parameters(builder_jacobian(dh, 8), conditions, 11, 10, tag);
+    expect_free_parameters(Family::coupled_bennett_dyads, builder_jacobian(dh, 8), conditions, 11, 10, tag);
   }
 }
 
@@ -2065,6 +2070,34 @@ TEST(Families, OtherFamiliesAndGeneric6RAreNotCoupledBennettDyads) {
   std::mt19937_64 rng(155);
   expect_far_from(Family::coupled_bennett_dyads, other_6r_members(Family::coupled_bennett_dyads, rng, 160),
                   {"bennett_pair"});
+}
+
+// With equal joining links (alpha4 = alpha1, so a4 = a1 by C3, and d1 = d5,
+// d2 = d4 on the hyperbola) a member is a bennett_dyads loop too, shifted by
+// one link: the joining links are that family's two equal links, each
+// dyad's end joints sit at one offset, and C2 is its invariant. So the
+// bennett_dyads loops that also meet C1 and Q are coupled_bennett_dyads
+// loops; that family, tried first, names them, and `fitting` lists both.
+TEST(Families, CoupledBennettDyadsWithEqualJoiningLinksAreBennettDyadsToo) {
+  std::mt19937_64 rng(156);
+  const std::vector<double> moving(6, 1.0);
+  int verified = 0;
+  for (int i = 0; i < 8; ++i) {
+    CoupledBennettDyadsParameters p = coupled_bennett_dyads_parameters(coupled_bennett_dyads_draw(rng));
+    p.alpha4 = p.alpha1;
+    const std::optional<CoupledBennettDyads> c = coupled_bennett_dyads_loop(p);
+    if (!c) continue;
+    const LoopGeometry& g = c->geometry;
+    const std::string tag = "equal joining links " + std::to_string(i);
+    EXPECT_NEAR(g.a[3], g.a[0], 1e-15) << tag;
+    EXPECT_NEAR(g.d[4], g.d[0], 1e-12) << tag;
+    EXPECT_NEAR(g.d[3], g.d[1], 1e-12) << tag;
+    const Classification named = classify(g, JointVector::Zero(6), moving);
+    EXPECT_EQ(named.family, Family::coupled_bennett_dyads) << tag << ": " << named.detail;
+    EXPECT_NE(std::find(named.fitting.begin(), named.fitting.end(), Family::bennett_dyads), named.fitting.end()) << tag;
+    verified += verify_motion(g, nullptr).verified ? 1 : 0;
+  }
+  EXPECT_GE(verified, 5);
 }
 
 // ---------------------------------------------------------------------------

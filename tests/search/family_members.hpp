@@ -639,6 +639,22 @@ inline CoupledBennettDyads coupled_bennett_dyads_draw(std::mt19937_64& rng) {
   }
 }
 
+// The builder's parameters of a loop it built.
+inline CoupledBennettDyadsParameters coupled_bennett_dyads_parameters(const CoupledBennettDyads& c) {
+  const LoopGeometry& g = c.geometry;
+  CoupledBennettDyadsParameters p;
+  p.k2 = c.k2;
+  p.alpha2 = g.alpha[1];
+  p.alpha3 = g.alpha[2];
+  p.alpha5 = g.alpha[4];
+  p.a1 = g.a[0];
+  p.alpha1 = g.alpha[0];
+  p.alpha4 = g.alpha[3];
+  p.t = c.t;
+  p.s_sign = c.s;
+  return p;
+}
+
 inline LoopGeometry coupled_bennett_dyads_geometry(std::mt19937_64& rng) {
   return coupled_bennett_dyads_draw(rng).geometry;
 }
