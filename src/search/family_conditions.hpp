@@ -746,8 +746,8 @@ inline WithGradient operator*(const WithGradient& x, const WithGradient& y) {
 //   L  m1 (k5 d5 - k2 d4) = m4 (k5 d1 - k2 d2),
 //   Q  k2 d2 d4 - k5 d1 d5 = (k5 - k2) (m1 m4 - 1 / (k2 k5)),
 //   Q' m1 d4 d5 - m4 d1 d2 = (m1 - m4) (m1 m4 - 1 / (k2 k5)):
-// ten conditions and Q' (Q's conic again, kept for where k2 = k5 leaves Q
-// empty). The dyads' middle joints 3 and 6 turn together (theta3 + theta6
+// ten conditions and Q' (Q's conic again, kept for k2 = k5, where Q holds
+// on all of L's plane). The dyads' middle joints 3 and 6 turn together (theta3 + theta6
 // stays constant). Every condition is unchanged by the mirror image (alpha
 // and d negated), so loops written with axes 2, 4 and 6 flipped and
 // mirrored, as the search also finds them, are members in the

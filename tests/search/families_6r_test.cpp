@@ -2100,6 +2100,39 @@ TEST(Families, CoupledBennettDyadsWithEqualJoiningLinksAreBennettDyadsToo) {
   EXPECT_GE(verified, 5);
 }
 
+// Where k2 = k5 and m1 = m4 (equal joining links, the second dyad the first
+// with its links swapped: the Bennett pairs' corner) L is the offsets' sum
+// again, and Q and Q' read d2 d4 = d1 d5 and d4 d5 = d1 d2: the offsets lie
+// on the line d1 = d2 = d4 = d5 or in the plane d4 = -d1, d5 = -d2. Loops
+// on either move and are named; with offsets off both (u + v, u + w, u - v,
+// u - w, all three nonzero) they do not, and are not.
+TEST(Families, CoupledBennettDyadsInTheBennettPairsCornerMoveOnALineAndAPlaneOfOffsets) {
+  std::mt19937_64 rng(157);
+  const std::vector<double> moving(6, 1.0);
+  for (int i = 0; i < 4; ++i) {
+    const double k = -uniform(rng, 0.4, 2.0), alpha2 = -uniform(rng, 0.3, kPi - 0.3),
+                 alpha3 = -uniform(rng, 0.3, kPi - 0.3), a1 = uniform(rng, 0.5, 1.5),
+                 alpha1 = -uniform(rng, 0.3, kPi - 0.3);
+    const double a2 = std::sin(alpha2) / k, a3 = std::sin(alpha3) / k;
+    const double u = uniform(rng, 0.1, 0.4), v = uniform(rng, 0.1, 0.4), w = -uniform(rng, 0.1, 0.4);
+    const auto loop = [&](double d1, double d2, double d4, double d5) {
+      return make_loop({a1, a2, a3, a1, a3, a2}, {alpha1, alpha2, alpha3, alpha1, alpha3, alpha2},
+                       {d1, d2, 0.0, d4, d5, 0.0});
+    };
+    const std::string tag = "corner " + std::to_string(i);
+    for (const LoopGeometry& g : {loop(u, u, u, u), loop(v, w, -v, -w)}) {
+      const std::array<double, 10> r = coupled_dyads_residuals(g);
+      for (size_t j = 0; j < r.size(); ++j) EXPECT_LT(std::abs(r[j]), 1e-12) << tag << ": condition " << j;
+      EXPECT_TRUE(verify_motion(g, nullptr).verified) << tag;
+      EXPECT_EQ(classify(g, JointVector::Zero(6), moving).family, Family::coupled_bennett_dyads) << tag;
+    }
+    const LoopGeometry off = loop(u + v, u + w, u - v, u - w);
+    EXPECT_GT(std::abs(coupled_dyads_residuals(off)[9]), 1e-3) << tag << ": Q";
+    EXPECT_FALSE(verify_motion(off, nullptr).verified) << tag << ": off the line and the plane";
+    EXPECT_NE(classify(off, JointVector::Zero(6), moving).family, Family::coupled_bennett_dyads) << tag;
+  }
+}
+
 // ---------------------------------------------------------------------------
 // Distances (deflation) of the new families
 
