@@ -1973,8 +1973,7 @@ TEST(Families, CoupledBennettDyadsBuiltFromTheirConditionsMoveAndTheirNearMisses
     l_off.d[0] += 1e-3 * L;
     l_off.d[1] += 1e-3 * L;
     // Q and the offsets' sum without L: d4 = -d1, d5 = -d2 with d1 d2 = m1 m4
-    // - 1 / (k2 k5) meets both (and every condition but L) and assembles, yet
-    // does not move.
+    // - 1 / (k2 k5) meets both (and every condition but L), yet does not move.
     LoopGeometry q_only = c.geometry;
     q_only.d[0] = 0.5 * L;
     q_only.d[1] = (c.m1 * c.m4 - 1.0 / (c.k2 * c.k5)) / q_only.d[0];
